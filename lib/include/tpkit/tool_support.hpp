@@ -1,0 +1,47 @@
+// What every tpkit tool's main() shares: --help from the embedded man page, one catch of every error
+// as "tool: file:line: reason", the exit codes (0 success, 1 bad input, 2 usage) and the progress bar.
+//
+//   extern const char* const tpkit_man_page;   // generated from man/TOOL.1 by the build
+//   int main(int argc, char** argv) {
+//     return tpkit::run_tool("tp-foo", argc, argv, [&](CLI::App& app) {
+//       ... app.add_option(...) ...
+//       return [&]() { ... library calls, writes ...; return 0; };   // runs after parsing
+//     });
+//   }
+#pragma once
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+
+namespace tpkit {
+
+// Called with the app to declare options; returns the body to run once the command line is parsed.
+using ToolSetup = std::function<std::function<int()>(CLI::App&)>;
+
+// Parses the command line and runs the body. -h/--help prints the man page as text. With the
+// environment variable TPKIT_CHECK_HELP=1, --help also checks that every option of the app is named
+// in the man page (the tool tests use this) and fails otherwise.
+int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& setup, const char* man_page);
+
+// The man page (a small roff subset: .TH .SH .SS .PP .TP .IP .B .I .BR .IR .RS .RE .nf .fi .EX .EE)
+// rendered as plain text for a terminal.
+std::string render_man_page(const char* roff);
+
+// A progress bar on stderr, drawn only when stderr is a terminal. Thread-safe add().
+class Progress {
+ public:
+  Progress(std::string label, long total);
+  ~Progress();
+  void add(long n = 1);
+  void done();
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+// Warnings go to stderr as "tool: warning: ..."; the tool name is set by run_tool.
+void warn(const std::string& message);
+const std::string& tool_name();
+
+}  // namespace tpkit

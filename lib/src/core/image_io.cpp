@@ -1,0 +1,252 @@
+#include "tpkit/image_io.hpp"
+
+#include <OpenImageIO/imageio.h>
+#include <tiffio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+
+#include "tpkit/error.hpp"
+
+namespace tpkit {
+
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+namespace {
+std::unique_ptr<ImageInput> open_input(const std::string& path) {
+  auto in = ImageInput::open(path);
+  if (!in) {
+    std::string err = OIIO::geterror();
+    if (err.empty()) err = "cannot open as an image";
+    // OIIO messages often repeat the path; keep them short
+    if (err.find("not exist") != std::string::npos || err.find("No such file") != std::string::npos)
+      err = "no such file";
+    else if (err.find("ould not find") != std::string::npos || err.find("format") != std::string::npos ||
+             err.find("not a") != std::string::npos)
+      err = "not an image file that OpenImageIO can read (" + err + ")";
+    throw InputError(path, 0, err);
+  }
+  return in;
+}
+
+std::string temp_name(const std::string& path) {
+  // keep the extension last: OIIO picks the format from it
+  std::random_device rd;
+  std::string stem = path, ext;
+  auto dot = path.find_last_of('.');
+  auto slash = path.find_last_of('/');
+  if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) {
+    stem = path.substr(0, dot);
+    ext = path.substr(dot);
+  }
+  return stem + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(rd() % 100000) + ext;
+}
+}  // namespace
+
+ImageInfo image_info(const std::string& path) {
+  auto in = open_input(path);
+  const ImageSpec& s = in->spec();
+  ImageInfo info;
+  info.path = path;
+  info.width = s.width;
+  info.height = s.height;
+  info.bands = s.nchannels;
+  info.format = s.format.c_str();
+  info.bits = s.get_int_attribute("oiio:BitsPerSample", static_cast<int>(s.format.size() * 8));
+  std::string nd = s.get_string_attribute("GDAL_NODATA");
+  if (!nd.empty()) {
+    char* end = nullptr;
+    double v = std::strtod(nd.c_str(), &end);
+    if (end != nd.c_str()) info.nodata = v;
+  }
+  in->close();
+  return info;
+}
+
+Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h) {
+  auto in = open_input(path);
+  const ImageSpec& s = in->spec();
+  if (band < 0 || band >= s.nchannels)
+    throw InputError(path, 0, "band " + std::to_string(band + 1) + " does not exist (the image has " +
+                                  std::to_string(s.nchannels) + ")");
+  long xa = std::max(0L, x0), ya = std::max(0L, y0);
+  long xb = std::min<long>(s.width, x0 + w), yb = std::min<long>(s.height, y0 + h);
+  Raster r;
+  r.x0 = xa;
+  r.y0 = ya;
+  r.width = std::max(0L, xb - xa);
+  r.height = std::max(0L, yb - ya);
+  if (r.width == 0 || r.height == 0) return r;
+  r.data.resize(static_cast<size_t>(r.width) * r.height);
+  if (s.tile_width > 0) {
+    // tiled files: read the tile-aligned cover of the region, keep the region
+    const long tw = s.tile_width, th = std::max(1, s.tile_height);
+    long ax = (xa / tw) * tw, ay = (ya / th) * th;
+    long bx = std::min<long>(s.width, ((xb + tw - 1) / tw) * tw), by = std::min<long>(s.height, ((yb + th - 1) / th) * th);
+    std::vector<float> buf(static_cast<size_t>(bx - ax) * (by - ay));
+    if (!in->read_tiles(0, 0, static_cast<int>(ax), static_cast<int>(bx), static_cast<int>(ay), static_cast<int>(by), 0, 1,
+                        band, band + 1, TypeDesc::FLOAT, buf.data()))
+      throw InputError(path, 0, "read error: " + in->geterror());
+    for (long yy = ya; yy < yb; ++yy)
+      std::copy_n(buf.data() + static_cast<size_t>(yy - ay) * (bx - ax) + (xa - ax), r.width,
+                  r.data.data() + static_cast<size_t>(yy - ya) * r.width);
+  } else {
+    // strips: read full rows a block at a time, keep the columns asked for
+    const long block = std::max(1L, std::min<long>(r.height, (1L << 22) / std::max(1, s.width)));
+    std::vector<float> rows(static_cast<size_t>(s.width) * block);
+    for (long y = ya; y < yb; y += block) {
+      long ye = std::min(yb, y + block);
+      if (!in->read_scanlines(0, 0, static_cast<int>(y), static_cast<int>(ye), 0, band, band + 1, TypeDesc::FLOAT,
+                              rows.data()))
+        throw InputError(path, 0, "read error: " + in->geterror());
+      for (long yy = y; yy < ye; ++yy)
+        std::copy_n(rows.data() + static_cast<size_t>(yy - y) * s.width + xa, r.width,
+                    r.data.data() + static_cast<size_t>(yy - ya) * r.width);
+    }
+  }
+  in->close();
+  return r;
+}
+
+Raster read_band(const std::string& path, int band) {
+  ImageInfo info = image_info(path);
+  return read_region(path, band, 0, 0, info.width, info.height);
+}
+
+struct TiffWriterU16::Impl {
+  std::string path, tmp;
+  long width = 0, height = 0, next_row = 0;
+  std::unique_ptr<ImageOutput> out;
+  bool closed = false;
+};
+
+TiffWriterU16::TiffWriterU16(const std::string& path, long width, long height,
+                             const std::vector<std::pair<std::string, std::string>>& tags)
+    : impl_(new Impl) {
+  impl_->path = path;
+  impl_->tmp = temp_name(path);
+  impl_->width = width;
+  impl_->height = height;
+  impl_->out = ImageOutput::create(impl_->tmp);
+  if (!impl_->out) throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
+  ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, TypeDesc::UINT16);
+  spec.attribute("compression", "zip");
+  spec.attribute("tiff:RowsPerStrip", 64);
+  for (const auto& kv : tags) spec.attribute(kv.first, kv.second);
+  if (!impl_->out->open(impl_->tmp, spec)) throw InputError(path, 0, "cannot open for writing: " + impl_->out->geterror());
+}
+
+TiffWriterU16::~TiffWriterU16() {
+  if (!impl_->closed) {
+    if (impl_->out) impl_->out->close();
+    std::remove(impl_->tmp.c_str());
+  }
+}
+
+void TiffWriterU16::write_rows(long y0, long rows, const uint16_t* data) {
+  if (y0 != impl_->next_row) throw std::logic_error("TiffWriterU16: strips out of order");
+  if (!impl_->out->write_scanlines(static_cast<int>(y0), static_cast<int>(y0 + rows), 0, TypeDesc::UINT16, data))
+    throw InputError(impl_->path, 0, "write error: " + impl_->out->geterror());
+  impl_->next_row = y0 + rows;
+}
+
+void TiffWriterU16::close() {
+  if (impl_->closed) return;
+  if (impl_->next_row != impl_->height) throw std::logic_error("TiffWriterU16: image not complete");
+  if (!impl_->out->close()) throw InputError(impl_->path, 0, "write error: " + impl_->out->geterror());
+  if (std::rename(impl_->tmp.c_str(), impl_->path.c_str()) != 0) {
+    std::remove(impl_->tmp.c_str());
+    throw InputError(impl_->path, 0, "cannot rename the temporary output onto it");
+  }
+  impl_->closed = true;
+}
+
+namespace {
+template <class T>
+void write_whole(const std::string& path, long width, long height, const std::vector<T>& data, TypeDesc type) {
+  if (static_cast<long>(data.size()) != width * height) throw std::logic_error("write_image: size mismatch");
+  std::string tmp = temp_name(path);
+  auto out = ImageOutput::create(tmp);
+  if (!out) throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
+  ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, type);
+  bool ok = out->open(tmp, spec) && out->write_image(type, data.data()) && out->close();
+  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::string err = out->geterror();
+    std::remove(tmp.c_str());
+    throw InputError(path, 0, "cannot write image" + (err.empty() ? std::string() : ": " + err));
+  }
+}
+}  // namespace
+
+void write_image_u8(const std::string& path, long width, long height, const std::vector<uint8_t>& data) {
+  write_whole(path, width, height, data, TypeDesc::UINT8);
+}
+void write_image_u16(const std::string& path, long width, long height, const std::vector<uint16_t>& data) {
+  write_whole(path, width, height, data, TypeDesc::UINT16);
+}
+
+namespace {
+// RPC00B term order of the 20 cubic monomials in normalized (P = lat, L = lon, H = height).
+double rpc_poly(const std::array<double, 20>& c, double L, double P, double H) {
+  const double t[20] = {1,         L,         P,         H,         L * P,     L * H,     P * H,
+                        L * L,     P * P,     H * H,     P * L * H, L * L * L, L * P * P, L * H * H,
+                        L * L * P, P * P * P, P * H * H, L * L * H, P * P * H, H * H * H};
+  double s = 0;
+  for (int i = 0; i < 20; ++i) s += c[i] * t[i];
+  return s;
+}
+}  // namespace
+
+std::array<double, 2> Rpc::project(double lon, double lat, double h) const {
+  double L = (lon - lon_off) / lon_scale, P = (lat - lat_off) / lat_scale, H = (h - height_off) / height_scale;
+  double line = rpc_poly(line_num, L, P, H) / rpc_poly(line_den, L, P, H) * line_scale + line_off;
+  double samp = rpc_poly(samp_num, L, P, H) / rpc_poly(samp_den, L, P, H) * samp_scale + samp_off;
+  return {samp, line};
+}
+
+std::optional<Rpc> read_rpc(const std::string& path) {
+  TIFFSetWarningHandler(nullptr);
+  TIFFSetErrorHandler(nullptr);
+  TIFF* tif = TIFFOpen(path.c_str(), "r");
+  if (!tif) throw InputError(path, 0, "not a TIFF file (no RPC tag can be read)");
+  uint32_t count = 0;
+  double* v = nullptr;
+  int ok = TIFFGetField(tif, TIFFTAG_RPCCOEFFICIENT, &count, &v);
+  std::optional<Rpc> out;
+  if (ok) {
+    if (count != 92 || !v) {
+      TIFFClose(tif);
+      throw InputError(path, 0, "RPC tag 50844 holds " + std::to_string(count) + " values instead of 92");
+    }
+    Rpc r;
+    r.err_bias = v[0];
+    r.err_rand = v[1];
+    r.line_off = v[2];
+    r.samp_off = v[3];
+    r.lat_off = v[4];
+    r.lon_off = v[5];
+    r.height_off = v[6];
+    r.line_scale = v[7];
+    r.samp_scale = v[8];
+    r.lat_scale = v[9];
+    r.lon_scale = v[10];
+    r.height_scale = v[11];
+    for (int i = 0; i < 20; ++i) {
+      r.line_num[i] = v[12 + i];
+      r.line_den[i] = v[32 + i];
+      r.samp_num[i] = v[52 + i];
+      r.samp_den[i] = v[72 + i];
+    }
+    out = r;
+  }
+  TIFFClose(tif);
+  return out;
+}
+
+}  // namespace tpkit

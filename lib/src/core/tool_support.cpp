@@ -1,0 +1,297 @@
+#include "tpkit/tool_support.hpp"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+
+#include "tpkit/error.hpp"
+
+namespace tpkit {
+
+namespace {
+std::string g_tool = "tpkit";
+
+std::string strip_fonts(std::string s) {
+  // \fB \fI \fR \fP font changes, \- and \(em escapes, \e backslash
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '\\' && i + 1 < s.size()) {
+      char c = s[i + 1];
+      if (c == 'f' && i + 2 < s.size()) {
+        i += 2;
+        continue;
+      }
+      if (c == '-') { out += '-'; ++i; continue; }
+      if (c == 'e') { out += '\\'; ++i; continue; }
+      if (c == '&') { ++i; continue; }
+      if (c == ' ') { out += ' '; ++i; continue; }
+      if (c == '(' && i + 3 < s.size()) {
+        std::string code = s.substr(i + 2, 2);
+        if (code == "em") out += "--";
+        else if (code == "mu") out += "x";
+        else if (code == "+-") out += "+-";
+        else if (code == "*b") out += "β";
+        else if (code == "*a") out += "α";
+        else if (code == "*g") out += "γ";
+        else if (code == "*r") out += "ρ";
+        else if (code == "*s") out += "σ";
+        else if (code == "*h") out += "θ";
+        else if (code == "<=") out += "<=";
+        else if (code == ">=") out += ">=";
+        else out += code;
+        i += 3;
+        continue;
+      }
+    }
+    out += s[i];
+  }
+  return out;
+}
+
+// Alternating-font macros (.BR a b c) join their words without spaces; quotes group words.
+std::string join_alternating(const std::string& args) {
+  std::string out, word;
+  bool q = false;
+  for (char c : args) {
+    if (c == '"') { q = !q; continue; }
+    if (c == ' ' && !q) {
+      out += word;
+      word.clear();
+      continue;
+    }
+    word += c;
+  }
+  return out + word;
+}
+
+std::string unquote(const std::string& s) {
+  std::string out;
+  for (char c : s)
+    if (c != '"') out += c;
+  return out;
+}
+}  // namespace
+
+const std::string& tool_name() { return g_tool; }
+
+void warn(const std::string& message) { std::cerr << g_tool << ": warning: " << message << std::endl; }
+
+std::string render_man_page(const char* roff) {
+  std::istringstream in(roff ? roff : "");
+  std::ostringstream out;
+  std::string line;
+  int indent = 7;
+  int rs = 0;
+  bool nofill = false;
+  bool tp_pending = false;
+  std::string para;
+  auto flush = [&]() {
+    if (para.empty()) return;
+    // wrap at 100 columns
+    std::istringstream ws(para);
+    std::string w, cur;
+    int ind = indent + rs;
+    while (ws >> w) {
+      if (!cur.empty() && static_cast<int>(cur.size() + 1 + w.size()) + ind > 100) {
+        out << std::string(ind, ' ') << cur << '\n';
+        cur.clear();
+      }
+      cur += (cur.empty() ? "" : " ") + w;
+    }
+    if (!cur.empty()) out << std::string(ind, ' ') << cur << '\n';
+    para.clear();
+  };
+  while (std::getline(in, line)) {
+    if (line.rfind(".\\\"", 0) == 0 || line.rfind("'\\\"", 0) == 0) continue;  // comment
+    if (!line.empty() && line[0] == '.') {
+      std::string mac = line.substr(1, line.find(' ') == std::string::npos ? std::string::npos : line.find(' ') - 1);
+      std::string args = line.find(' ') == std::string::npos ? "" : line.substr(line.find(' ') + 1);
+      if (mac == "TH") {
+        std::istringstream a(args);
+        std::string name, sec;
+        a >> name >> sec;
+        out << name << "(" << sec << ")\n";
+      } else if (mac == "SH" || mac == "SS") {
+        flush();
+        out << '\n' << (mac == "SS" ? "   " : "") << strip_fonts(unquote(args)) << '\n';
+        indent = 7;
+      } else if (mac == "PP" || mac == "P" || mac == "LP") {
+        flush();
+        out << '\n';
+        indent = 7;
+      } else if (mac == "TP" || mac == "IP") {
+        flush();
+        out << '\n';
+        indent = 7;
+        if (mac == "TP") tp_pending = true;
+        else if (!args.empty()) {
+          out << std::string(7 + rs, ' ') << strip_fonts(unquote(args)) << '\n';
+          indent = 11;
+        } else indent = 11;
+      } else if (mac == "B" || mac == "I") {
+        para += (para.empty() ? "" : " ") + strip_fonts(unquote(args));
+      } else if (mac == "BR" || mac == "IR" || mac == "RB" || mac == "BI" || mac == "IB" || mac == "RI") {
+        para += (para.empty() ? "" : " ") + strip_fonts(join_alternating(args));
+      } else if (mac == "RS") {
+        flush();
+        rs += 4;
+      } else if (mac == "RE") {
+        flush();
+        rs = rs >= 4 ? rs - 4 : 0;
+      } else if (mac == "nf" || mac == "EX") {
+        flush();
+        nofill = true;
+      } else if (mac == "fi" || mac == "EE") {
+        nofill = false;
+      } else if (mac == "br" || mac == "sp") {
+        flush();
+        if (mac == "sp") out << '\n';
+      }
+      if (tp_pending && (mac == "B" || mac == "I" || mac == "BR" || mac == "IR" || mac == "BI" || mac == "RB")) {
+        out << std::string(7 + rs, ' ') << para << '\n';
+        para.clear();
+        indent = 11;
+        tp_pending = false;
+      }
+      continue;
+    }
+    if (nofill) {
+      out << std::string(indent + rs, ' ') << strip_fonts(line) << '\n';
+      continue;
+    }
+    if (tp_pending) {
+      out << std::string(7 + rs, ' ') << strip_fonts(line) << '\n';
+      indent = 11;
+      tp_pending = false;
+      continue;
+    }
+    if (line.empty()) {
+      flush();
+      out << '\n';
+      continue;
+    }
+    para += (para.empty() ? "" : " ") + strip_fonts(line);
+  }
+  flush();
+  return out.str();
+}
+
+namespace {
+class ManFormatter : public CLI::Formatter {
+ public:
+  explicit ManFormatter(std::string text) : text_(std::move(text)) {}
+  std::string make_help(const CLI::App*, std::string, CLI::AppFormatMode) const override { return text_; }
+
+ private:
+  std::string text_;
+};
+
+// Every option's long names must appear in the page (as "--name", after escapes are removed).
+std::string undocumented_options(const CLI::App& app, const std::string& page) {
+  std::string missing;
+  for (const CLI::Option* o : app.get_options()) {
+    for (const auto& ln : o->get_lnames()) {
+      if (ln == "help") continue;
+      if (page.find("--" + ln) == std::string::npos) missing += " --" + ln;
+    }
+    for (const auto& sn : o->get_snames()) {
+      if (sn == "h") continue;
+      std::string s = "-" + sn;
+      if (page.find(s + " ") == std::string::npos && page.find(s + ",") == std::string::npos &&
+          page.find(s + "\n") == std::string::npos)
+        missing += " -" + sn;
+    }
+  }
+  return missing;
+}
+}  // namespace
+
+int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& setup, const char* man_page) {
+  g_tool = tool;
+  std::string text = render_man_page(man_page);
+  try {
+    CLI::App app(tool, tool);
+    app.formatter(std::make_shared<ManFormatter>(text));
+    app.set_help_flag("-h,--help", "print the manual page and exit");
+    auto body = setup(app);
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::CallForHelp&) {
+      const char* chk = std::getenv("TPKIT_CHECK_HELP");
+      if (chk && std::string(chk) == "1") {
+        std::string missing = undocumented_options(app, text);
+        if (!missing.empty()) {
+          std::cerr << tool << ": options missing from the man page:" << missing << "\n";
+          return 2;
+        }
+      }
+      std::cout << text;
+      return 0;
+    } catch (const CLI::ParseError& e) {
+      std::cerr << tool << ": " << e.what() << "\n" << tool << ": see '" << tool << " --help'\n";
+      return 2;
+    }
+    return body();
+  } catch (const UsageError& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    return 2;
+  } catch (const InputError& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    return 1;
+  } catch (const NumericalError& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << tool << ": out of memory\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    return 1;
+  }
+}
+
+struct Progress::Impl {
+  std::string label;
+  long total;
+  std::atomic<long> count{0};
+  std::mutex m;
+  int last_pct = -1;
+  bool tty;
+  bool finished = false;
+};
+
+Progress::Progress(std::string label, long total) : impl_(new Impl) {
+  impl_->label = std::move(label);
+  impl_->total = total > 0 ? total : 1;
+  impl_->tty = ::isatty(2);
+}
+
+Progress::~Progress() {
+  done();
+  delete impl_;
+}
+
+void Progress::add(long n) {
+  long c = impl_->count += n;
+  if (!impl_->tty) return;
+  int pct = static_cast<int>(100 * std::min(c, impl_->total) / impl_->total);
+  std::lock_guard<std::mutex> lock(impl_->m);
+  if (pct == impl_->last_pct || impl_->finished) return;
+  impl_->last_pct = pct;
+  int w = 30, f = pct * w / 100;
+  std::cerr << '\r' << g_tool << ": " << impl_->label << " [" << std::string(f, '#') << std::string(w - f, '.') << "] "
+            << pct << "%" << std::flush;
+}
+
+void Progress::done() {
+  std::lock_guard<std::mutex> lock(impl_->m);
+  if (impl_->finished) return;
+  impl_->finished = true;
+  if (impl_->tty && impl_->last_pct >= 0) std::cerr << "\r\033[K" << std::flush;
+}
+
+}  // namespace tpkit
