@@ -68,6 +68,9 @@ struct Rpc {
   // tpkit pixels. RPC00B line/sample are taken with (0, 0) at the centre of the top-left pixel, as in
   // the data this project uses; conversion to other conventions happens here only.
   std::array<double, 2> project(double lon, double lat, double h) const;
+  // Inverse at a given height: the (longitude, latitude) in degrees whose projection is pixel (x, y),
+  // by Gauss-Newton on project(); throws NumericalError when it does not converge.
+  std::array<double, 2> localize(double x, double y, double h) const;
 };
 
 // The RPC of a TIFF file, or nothing when the tag is absent. Throws InputError for a malformed tag.

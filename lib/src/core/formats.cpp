@@ -1,5 +1,7 @@
 #include "tpkit/formats.hpp"
 
+#include <Eigen/LU>
+
 #include <cmath>
 #include <sstream>
 

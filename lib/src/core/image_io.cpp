@@ -5,8 +5,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 
 #include "tpkit/error.hpp"
@@ -84,30 +86,50 @@ Raster read_region(const std::string& path, int band, long x0, long y0, long w, 
   r.height = std::max(0L, yb - ya);
   if (r.width == 0 || r.height == 0) return r;
   r.data.resize(static_cast<size_t>(r.width) * r.height);
+  // OIIO would normalize integer data when asked for float: read the native type and convert here,
+  // so that values keep the image's own radiometry (e.g. 0..4095 for 12-bit data in 16-bit words).
+  const TypeDesc native = s.format;
+  const size_t bpp = native.size();
+  auto to_float = [&](const unsigned char* src, size_t n, float* dst) {
+    for (size_t i = 0; i < n; ++i) {
+      const unsigned char* p = src + i * bpp;
+      switch (native.basetype) {
+        case TypeDesc::UINT8: dst[i] = *p; break;
+        case TypeDesc::INT8: dst[i] = *reinterpret_cast<const int8_t*>(p); break;
+        case TypeDesc::UINT16: { uint16_t v; std::memcpy(&v, p, 2); dst[i] = v; break; }
+        case TypeDesc::INT16: { int16_t v; std::memcpy(&v, p, 2); dst[i] = v; break; }
+        case TypeDesc::UINT32: { uint32_t v; std::memcpy(&v, p, 4); dst[i] = static_cast<float>(v); break; }
+        case TypeDesc::INT32: { int32_t v; std::memcpy(&v, p, 4); dst[i] = static_cast<float>(v); break; }
+        case TypeDesc::FLOAT: std::memcpy(&dst[i], p, 4); break;
+        case TypeDesc::DOUBLE: { double v; std::memcpy(&v, p, 8); dst[i] = static_cast<float>(v); break; }
+        default: throw InputError(path, 0, std::string("unsupported sample type ") + native.c_str());
+      }
+    }
+  };
   if (s.tile_width > 0) {
     // tiled files: read the tile-aligned cover of the region, keep the region
     const long tw = s.tile_width, th = std::max(1, s.tile_height);
     long ax = (xa / tw) * tw, ay = (ya / th) * th;
     long bx = std::min<long>(s.width, ((xb + tw - 1) / tw) * tw), by = std::min<long>(s.height, ((yb + th - 1) / th) * th);
-    std::vector<float> buf(static_cast<size_t>(bx - ax) * (by - ay));
+    std::vector<unsigned char> buf(static_cast<size_t>(bx - ax) * (by - ay) * bpp);
     if (!in->read_tiles(0, 0, static_cast<int>(ax), static_cast<int>(bx), static_cast<int>(ay), static_cast<int>(by), 0, 1,
-                        band, band + 1, TypeDesc::FLOAT, buf.data()))
+                        band, band + 1, native, buf.data()))
       throw InputError(path, 0, "read error: " + in->geterror());
     for (long yy = ya; yy < yb; ++yy)
-      std::copy_n(buf.data() + static_cast<size_t>(yy - ay) * (bx - ax) + (xa - ax), r.width,
-                  r.data.data() + static_cast<size_t>(yy - ya) * r.width);
+      to_float(buf.data() + (static_cast<size_t>(yy - ay) * (bx - ax) + (xa - ax)) * bpp, r.width,
+               r.data.data() + static_cast<size_t>(yy - ya) * r.width);
   } else {
     // strips: read full rows a block at a time, keep the columns asked for
     const long block = std::max(1L, std::min<long>(r.height, (1L << 22) / std::max(1, s.width)));
-    std::vector<float> rows(static_cast<size_t>(s.width) * block);
+    std::vector<unsigned char> rows(static_cast<size_t>(s.width) * block * bpp);
     for (long y = ya; y < yb; y += block) {
       long ye = std::min(yb, y + block);
-      if (!in->read_scanlines(0, 0, static_cast<int>(y), static_cast<int>(ye), 0, band, band + 1, TypeDesc::FLOAT,
+      if (!in->read_scanlines(0, 0, static_cast<int>(y), static_cast<int>(ye), 0, band, band + 1, native,
                               rows.data()))
         throw InputError(path, 0, "read error: " + in->geterror());
       for (long yy = y; yy < ye; ++yy)
-        std::copy_n(rows.data() + static_cast<size_t>(yy - y) * s.width + xa, r.width,
-                    r.data.data() + static_cast<size_t>(yy - ya) * r.width);
+        to_float(rows.data() + (static_cast<size_t>(yy - y) * s.width + xa) * bpp, r.width,
+                 r.data.data() + static_cast<size_t>(yy - ya) * r.width);
     }
   }
   in->close();
@@ -208,6 +230,25 @@ std::array<double, 2> Rpc::project(double lon, double lat, double h) const {
   double line = rpc_poly(line_num, L, P, H) / rpc_poly(line_den, L, P, H) * line_scale + line_off;
   double samp = rpc_poly(samp_num, L, P, H) / rpc_poly(samp_den, L, P, H) * samp_scale + samp_off;
   return {samp, line};
+}
+
+std::array<double, 2> Rpc::localize(double x, double y, double h) const {
+  double lon = lon_off, lat = lat_off;
+  const double d = 1e-7;
+  for (int it = 0; it < 50; ++it) {
+    auto f = project(lon, lat, h);
+    double rx = x - f[0], ry = y - f[1];
+    if (std::hypot(rx, ry) < 1e-9) return {lon, lat};
+    auto fl = project(lon + d, lat, h), fp = project(lon, lat + d, h);
+    double a = (fl[0] - f[0]) / d, b = (fp[0] - f[0]) / d, c = (fl[1] - f[1]) / d, e = (fp[1] - f[1]) / d;
+    double det = a * e - b * c;
+    if (!(std::fabs(det) > 0)) break;
+    lon += (e * rx - b * ry) / det;
+    lat += (-c * rx + a * ry) / det;
+  }
+  auto f = project(lon, lat, h);
+  if (std::hypot(x - f[0], y - f[1]) < 1e-6) return {lon, lat};
+  throw NumericalError("RPC localization did not converge");
 }
 
 std::optional<Rpc> read_rpc(const std::string& path) {

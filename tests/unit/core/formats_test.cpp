@@ -1,0 +1,148 @@
+// Round trips and rejections of every file kind, and atomic writing.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/formats.hpp"
+
+using namespace tpkit;
+namespace fs = std::filesystem;
+
+namespace {
+fs::path scratch(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("tpkit-formats-test-" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d / name;
+}
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+TEST(Formats, TracksRoundTrip) {
+  Tracks t;
+  t.images = {{"v1.tif", 100, 200}, {"v2.tif", 100, 200}, {"v3.tif", 100, 200}};
+  meta_set(t.meta, "source", "unit test");
+  t.xy.resize(2, 6);
+  t.xy << 1.25, 2.5, 3, 4, 5, 6, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6;
+  t.id = {7, 9};
+  t.extra.names = {"X"};
+  t.extra.values.resize(2, 1);
+  t.extra.values << 100.5, -3;
+  auto p = scratch("a.tracks");
+  save_tracks(p.string(), t);
+  std::string text = slurp(p);
+  EXPECT_EQ(text.rfind("# tpkit tracks 1\n# image1: v1.tif 100 200\n", 0), 0u) << text;
+  EXPECT_NE(text.find("# columns: track x1 y1 x2 y2 x3 y3 X\n7 1.25 2.5 3 4 5 6 100.5\n"), std::string::npos);
+  auto r = read_tracks(p.string());
+  EXPECT_EQ(r.views(), 3);
+  EXPECT_EQ(r.images[2].path, "v3.tif");
+  EXPECT_EQ(r.id[1], 9);
+  EXPECT_TRUE(r.xy.isApprox(t.xy, 0));
+  EXPECT_EQ(meta_get(r.meta, "source"), "unit test");
+  EXPECT_EQ(r.extra.values(0, 0), 100.5);
+  EXPECT_EQ(r.line[1], 8);  // header: kind, 3 images, 1 meta, columns; records on lines 7 and 8
+}
+
+TEST(Formats, TrifocalNormalizedAndRoundTrip) {
+  Trifocal t;
+  for (int i = 0; i < 3; ++i) t.T[i] = Eigen::Matrix3d::Random() * (i + 1);
+  t.T[2](1, 1) = -50;  // largest entry negative: the writer flips the sign
+  meta_set(t.meta, "method", "test");
+  auto p = scratch("a.trifocal");
+  save_trifocal(p.string(), t);
+  auto r = read_trifocal(p.string());
+  double n2 = 0;
+  for (int i = 0; i < 3; ++i) n2 += r.T[i].squaredNorm();
+  EXPECT_NEAR(n2, 1, 1e-15);
+  EXPECT_GT(r.T[2](1, 1), 0);
+  double s = r.T[2](1, 1) / t.T[2](1, 1);
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE((t.T[i] * s).isApprox(r.T[i], 1e-15));
+  EXPECT_EQ(meta_get(r.meta, "method"), "test");
+}
+
+TEST(Formats, HomographyAndCamerasRoundTrip) {
+  Homography h;
+  h.H << 1, 2, 3, 4, 5, 6, 7, 8, 10;
+  auto ph = scratch("a.homography");
+  save_homography(ph.string(), h);
+  EXPECT_TRUE(read_homography(ph.string()).H.isApprox(h.H, 0));
+  Cameras c;
+  c.P.resize(3);
+  for (auto& P : c.P) P.setRandom();
+  auto pc = scratch("a.cameras");
+  save_cameras(pc.string(), c);
+  auto rc = read_cameras(pc.string());
+  ASSERT_EQ(rc.P.size(), 3u);
+  for (int v = 0; v < 3; ++v) EXPECT_TRUE(rc.P[v].isApprox(c.P[v], 0));
+}
+
+TEST(Formats, MatrixKindsRejectBadShapes) {
+  auto bad = [](const std::string& text, auto reader) {
+    auto p = scratch("bad.txt");
+    { std::ofstream(p) << text; }
+    try {
+      reader(p.string());
+    } catch (const InputError& e) {
+      return std::string(e.what()).substr(p.string().size());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(bad("# tpkit trifocal 1\n1 2 3 4 5 6 7 8 9\n1 2 3 4 5 6 7 8 9\n", read_trifocal),
+            ": a trifocal file holds three records (T_1, T_2, T_3); found 2 records");
+  EXPECT_EQ(bad("# tpkit trifocal 1\n1 2 3 4 5 6 7 8\n", read_trifocal), ":2: expected 9 numbers (T_i row-major), found 8");
+  EXPECT_EQ(bad("# tpkit homography 1\n1 0 0\n0 1 0\n0 0 1\n0 0 1\n", read_homography),
+            ":5: a homography file holds three records (the rows of H); found 4 records");
+  EXPECT_EQ(bad("# tpkit homography 1\n1 0 0\n2 0 0\n0 0 0\n", read_homography), ":2: the homography is singular");
+  EXPECT_EQ(bad("# tpkit cameras 1\n1 0 0 0\n0 1 0 0\n0 0 0 1\n", read_cameras),
+            ":2: camera 1 has no '# view 1' line");
+  EXPECT_EQ(bad("# tpkit points 1\n# columns: x y\n1 2\n3\n", read_points), ":4: missing column 'y' (1 fields, 2 columns)");
+  EXPECT_EQ(bad("# tpkit homography 1\n1 0 0\n0 1 0\n0 0 1\n", read_trifocal),
+            ":1: wrong header kind: expected 'trifocal', found 'homography'");
+}
+
+TEST(Formats, AtomicOutputLeavesNoFileOnFailure) {
+  auto p = scratch("never.txt");
+  fs::remove(p);
+  try {
+    AtomicOutput out(p.string());
+    out.stream() << "half of it";
+    throw std::runtime_error("fail midway");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_FALSE(fs::exists(p));
+  for (auto& e : fs::directory_iterator(p.parent_path()))
+    EXPECT_EQ(e.path().filename().string().find("never.txt.tmp"), std::string::npos) << e.path();
+  // an existing file is replaced only on commit
+  { std::ofstream(p) << "old"; }
+  {
+    AtomicOutput out(p.string());
+    out.stream() << "new";
+    EXPECT_EQ(slurp(p), "old");
+    out.commit();
+  }
+  EXPECT_EQ(slurp(p), "new");
+  // a non-finite trifocal is refused before anything is written
+  Trifocal t;
+  for (auto& Ti : t.T) Ti.setZero();
+  auto pt = scratch("zero.trifocal");
+  EXPECT_THROW(save_trifocal(pt.string(), t), NumericalError);
+  EXPECT_FALSE(fs::exists(pt));
+}
+
+TEST(Formats, MissingFileIsAnInputError) {
+  try {
+    read_points("/nonexistent/dir/x.points");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "/nonexistent/dir/x.points: cannot open for reading");
+  }
+}
