@@ -33,6 +33,9 @@ std::string strip_fonts(std::string s) {
         std::string code = s.substr(i + 2, 2);
         if (code == "em") out += "--";
         else if (code == "mu") out += "x";
+        else if (code == "bu") out += "*";
+        else if (code == "aq") out += "'";
+        else if (code == "dq") out += "\"";
         else if (code == "+-") out += "+-";
         else if (code == "*b") out += "β";
         else if (code == "*a") out += "α";
@@ -129,8 +132,18 @@ std::string render_man_page(const char* roff) {
         indent = 7;
         if (mac == "TP") tp_pending = true;
         else if (!args.empty()) {
-          out << std::string(7 + rs, ' ') << strip_fonts(unquote(args)) << '\n';
-          indent = 11;
+          // .IP TAG [WIDTH]: the tag is the first (possibly quoted) argument
+          std::string tag;
+          if (args[0] == '"') tag = args.substr(1, args.find('"', 1) - 1);
+          else tag = args.substr(0, args.find(' '));
+          tag = strip_fonts(tag);
+          if (tag.size() <= 3) {
+            para = tag;  // a bullet: the paragraph continues on the same line
+            indent = 9;
+          } else {
+            out << std::string(7 + rs, ' ') << tag << '\n';
+            indent = 11;
+          }
         } else indent = 11;
       } else if (mac == "B" || mac == "I") {
         para += (para.empty() ? "" : " ") + strip_fonts(unquote(args));

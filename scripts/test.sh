@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# The whole test suite, complete on its own on a fresh Debian 12 machine (as root): installs what is
+# missing, builds in Release and runs every test; then builds the tests with AddressSanitizer +
+# UndefinedBehaviorSanitizer and runs them (tests labelled 'slow' are left to the Release run); then
+# builds the libFuzzer targets of the text-format readers and runs each for a short while.
+#   TPKIT_FUZZ_SECONDS (default 20)  time per fuzz target; 0 skips the fuzzers
+#   TPKIT_SKIP_ASAN=1                skip the sanitizer build
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh --test
+jobs=$(nproc 2>/dev/null || echo 2)
+start=$(date +%s)
+stamp() { echo "== $1 ($(( $(date +%s) - start )) s)"; }
+
+stamp "Release build"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$jobs"
+
+if [ "${TPKIT_SKIP_ASAN:-0}" != 1 ]; then
+  stamp "AddressSanitizer + UndefinedBehaviorSanitizer build"
+  cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTPKIT_SANITIZE=ON -DTPKIT_BENCH=OFF >/dev/null
+  cmake --build build-asan -j"$jobs"
+  stamp "sanitizer tests"
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+  LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 \
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --test-dir build-asan -j"$jobs" -LE slow --output-on-failure --timeout 900
+fi
+
+fuzz_seconds=${TPKIT_FUZZ_SECONDS:-20}
+if [ "$fuzz_seconds" != 0 ]; then
+  stamp "libFuzzer targets of the readers"
+  cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DTPKIT_FUZZ=ON -DTPKIT_TESTS=OFF -DTPKIT_BENCH=OFF >/dev/null
+  cmake --build build-fuzz -j"$jobs" --target fuzz_readers
+  for kind in matches tracks points trifocal homography cameras; do
+    corpus=$(mktemp -d)
+    cp fuzz/corpus/"$kind"/* "$corpus"/
+    echo "fuzz_$kind: ${fuzz_seconds} s"
+    (cd "$corpus" && "$OLDPWD"/build-fuzz/bin/fuzz_"$kind" -max_total_time="$fuzz_seconds" -print_final_stats=1 "$corpus" 2>&1 | tail -n 3)
+    rm -rf "$corpus"
+  done
+fi
+
+stamp "Release tests (all)"
+ctest --test-dir build -j"$jobs" --output-on-failure --timeout 1200
+stamp "done"
