@@ -1,6 +1,9 @@
 # Driver of one tool test (see tpkit_tool_test in tests/CMakeLists.txt).
 # The command runs under bash in a fresh scratch folder WORK with BIN first on PATH; $SRC and $SHARED
 # name the source tree and ../shared.
+foreach(v CMD STDERR_MATCH STDOUT_MATCH FILE_MATCH)
+  string(REPLACE "@SEMI@" ";" ${v} "${${v}}")
+endforeach()
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 set(ENV{PATH} "${BIN}:$ENV{PATH}")
