@@ -1,0 +1,165 @@
+// Benchmark of cluster-homog's library (issue 6): success rates, iterations and times on the paper's
+// setup (Navy et al. 2005, section 6), robustness to extra/missing points, the correspondence-free
+// search, and time against the cluster size. Prints plain tables on stdout.
+//
+//   bench_cluster [--trials N] [--section paper|robust|scratch|scale|all] [--max-n N]
+//
+// Clusters: A = n points uniform in [0, 512]^2 pixels (image 1), B = h(A) (+ noise), h = eq. 4 as the
+// section 4 model gives it (physical_homography.hpp). Success: final cost <= 0.25 px and h within
+// 0.5 px of the truth on a 5 x 5 grid over A's bounding box.
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "tpkit/cluster_cost.hpp"
+#include "tpkit/cluster_optimize.hpp"
+#include "tpkit/cluster_search.hpp"
+#include "tpkit/cluster_synth.hpp"
+#include "tpkit/physical_homography.hpp"
+
+using namespace tpkit;
+
+namespace {
+
+PhysicalParams paper_start() {
+  PhysicalParams p = paper_physical_params();
+  p.view[0].px += 200;
+  p.view[0].py -= 50;
+  p.view[0].alpha -= 0.17;
+  p.view[0].beta -= 0.05;
+  p.view[0].gamma += 0.5;
+  return p;
+}
+
+struct Stats {
+  int trials = 0, ok = 0;
+  double iters = 0, evals = 0, secs = 0, worst_secs = 0;
+  std::vector<double> it_ok;
+};
+
+void run_case(const char* label, int trials, const ClusterSynthOptions& base, const OptimizeOptions& oo,
+              CostOptions co, bool with_init) {
+  Stats s;
+  Eigen::Matrix3d truth = physical_homography(paper_physical_params());
+  for (int t = 0; t < trials; ++t) {
+    ClusterSynthOptions so = base;
+    so.seed = 1000 + static_cast<uint64_t>(t);
+    ClusterPair cp = synth_cluster_pair(truth, so);
+    ClusterCost cost(cp.A, cp.B, co);
+    OptimizeStart st;
+    if (with_init) {
+      st.has_physical = true;
+      st.physical = paper_start();
+    }
+    OptimizeOptions o = oo;
+    o.seed = static_cast<uint64_t>(t + 1);
+    OptimizeResult r = optimize_clusters(cost, st, o);
+    double diff = homography_max_difference(r.H, truth, extent_grid(cp.A));
+    bool ok = r.cost <= 0.25 && diff <= 0.5;
+    s.trials++;
+    s.ok += ok;
+    s.iters += static_cast<double>(r.iterations);
+    s.evals += static_cast<double>(r.evaluations);
+    s.secs += r.seconds;
+    s.worst_secs = std::max(s.worst_secs, r.seconds);
+    if (ok) s.it_ok.push_back(static_cast<double>(r.iterations));
+  }
+  std::sort(s.it_ok.begin(), s.it_ok.end());
+  double med = s.it_ok.empty() ? 0 : s.it_ok[s.it_ok.size() / 2];
+  std::printf("%-44s %4d/%-4d %6.1f%%  iter mean %7.0f  median(ok) %7.0f  evals %8.0f  time mean %8.2f ms  max %8.2f ms\n",
+              label, s.ok, s.trials, 100.0 * s.ok / std::max(1, s.trials), s.iters / s.trials, med, s.evals / s.trials,
+              1e3 * s.secs / s.trials, 1e3 * s.worst_secs);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int trials = 100;
+  long max_n = 100000;
+  std::string section = "all";
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--trials") && i + 1 < argc) trials = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--section") && i + 1 < argc) section = argv[++i];
+    else if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
+    else {
+      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|scale|all] [--max-n N]\n");
+      return 2;
+    }
+  }
+  bool all = section == "all";
+  ClusterSynthOptions paper;  // 100 points in [0, 512]^2, exact h
+  OptimizeOptions o;
+  if (all || section == "paper") {
+    std::printf("== paper setup: n=100, h = eq. 4, start P1+(200,-50) m, alpha1-0.17, beta1-0.05, gamma1+0.5, noise 0\n");
+    o.optimizer = OptimizerKind::Random;
+    o.param = Parameterization::Physical;
+    run_case("random (paper s6), physical, 12 free", trials, paper, o, {}, true);
+    o.param = Parameterization::Math;
+    run_case("random (paper s6), math", trials, paper, o, {}, true);
+    o.optimizer = OptimizerKind::Default;
+    o.param = Parameterization::Physical;
+    run_case("default, physical, 12 free", trials, paper, o, {}, true);
+    o.free_intrinsics = true;
+    run_case("default, physical, 20 free", trials, paper, o, {}, true);
+    o.free_intrinsics = false;
+    o.param = Parameterization::Math;
+    run_case("default, math", trials, paper, o, {}, true);
+    ClusterSynthOptions noisy = paper;
+    noisy.noise = 0.1;
+    o.param = Parameterization::Physical;
+    run_case("default, physical, noise 0.1 px", trials, noisy, o, {}, true);
+  }
+  if (all || section == "robust") {
+    std::printf("== robustness: 20%% extra points in each cluster, 30%% missing from B, noise 0.1 px, --trim 0.45\n");
+    ClusterSynthOptions rb = paper;
+    rb.extra = 0.2, rb.missing = 0.3, rb.noise = 0.1;
+    CostOptions trim{0.45, 0};
+    o.optimizer = OptimizerKind::Default;
+    o.param = Parameterization::Physical;
+    run_case("default, physical, with init", trials, rb, o, trim, true);
+    o.param = Parameterization::Math;
+    run_case("default, math, with init", trials, rb, o, trim, true);
+  }
+  if (all || section == "scratch") {
+    std::printf("== from scratch (no init): default optimizer = correspondence-free search + local refinement\n");
+    ClusterSynthOptions sc = paper;
+    sc.noise = 0.1;
+    o.optimizer = OptimizerKind::Default;
+    o.param = Parameterization::Math;
+    run_case("scratch, eq. 4, noise 0.1 px", trials, sc, o, {}, false);
+    run_case("scratch, eq. 4, noise 0.1 px, --trim 0.1", trials, sc, o, {0.1, 0}, false);
+    sc.extra = 0.2, sc.missing = 0.3;
+    run_case("scratch, + 20% extra / 30% missing, --trim 0.45", trials, sc, o, {0.45, 0}, false);
+  }
+  if (all || section == "scale") {
+    std::printf("== time against n (default optimizer, physical, paper start, noise 0.1 px; and from scratch)\n");
+    for (long n : {100L, 1000L, 10000L, 100000L}) {
+      if (n > max_n) break;
+      ClusterSynthOptions sn = paper;
+      sn.n = static_cast<int>(n);
+      sn.noise = 0.1;
+      int tr = n <= 1000 ? 10 : (n <= 10000 ? 3 : 1);
+      char label[80];
+      o.optimizer = OptimizerKind::Default;
+      o.param = Parameterization::Physical;
+      std::snprintf(label, sizeof label, "n=%ld default physical with init", n);
+      run_case(label, tr, sn, o, {}, true);
+      o.param = Parameterization::Math;
+      std::snprintf(label, sizeof label, "n=%ld from scratch", n);
+      run_case(label, tr, sn, o, {}, false);
+      // One cost evaluation.
+      ClusterPair cp = synth_cluster_pair(physical_homography(paper_physical_params()), sn);
+      ClusterCost cost(cp.A, cp.B);
+      auto t0 = std::chrono::steady_clock::now();
+      int reps = n <= 1000 ? 200 : 5;
+      double sink = 0;
+      for (int k = 0; k < reps; ++k) sink += cost(cp.truth);
+      double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / reps;
+      std::printf("n=%-6ld one cost evaluation (eq. 3, KD-trees): %.3f ms (cost at truth %.3f px)\n", n, ms, sink / reps);
+    }
+  }
+  return 0;
+}

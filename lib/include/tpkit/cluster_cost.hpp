@@ -1,0 +1,78 @@
+// The symmetric nearest-neighbour cost of Navy et al. (2005), eq. 3, between two point clusters:
+//   C(h) = 1/N sum_i min_j d(h(P_i), P'_j) + 1/N' sum_j min_i d(h^-1(P'_j), P_i)
+// with cluster A = {P_i} in image 1 and cluster B = {P'_j} in image 2 (pixels, x = column, y = row),
+// h the homography x_B ~ H x_A. Each term is a mean distance in pixels: forward ones in image-2
+// pixels, backward ones in image-1 pixels. Nearest neighbours come from nanoflann KD-trees built once
+// per cluster, so one evaluation is O((N + N') log N) instead of the paper's O(N N').
+//
+// Robust variants, for clusters with extra and missing points:
+//   trim F      each direction averages only the smallest (1 - F) fraction of its distances
+//   truncate T  each distance is replaced by min(d, T) pixels
+// Points that h sends to (or beyond) the line at infinity count as the largest distance (see cap()).
+#pragma once
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tpkit {
+
+struct CostOptions {
+  double trim = 0;      // fraction in [0, 1) of the largest distances left out in each direction
+  double truncate = 0;  // pixels; 0 = no truncation
+};
+
+// One nearest-neighbour pair under h: point ia of A and ib of B; d is the distance in pixels measured
+// in the image of the query (forward: |h(A_ia) - B_ib| in image 2; backward: |h^-1(B_ib) - A_ia|).
+struct NnPair {
+  int ia, ib;
+  double d;
+  bool forward;
+};
+
+class ClusterCost {
+ public:
+  // A: n x 2 pixels of image 1, B: m x 2 pixels of image 2; each needs at least one point.
+  ClusterCost(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B, CostOptions opt = {});
+  ~ClusterCost();
+  ClusterCost(const ClusterCost&) = delete;
+  ClusterCost& operator=(const ClusterCost&) = delete;
+
+  // Eq. 3 (with the robust variant of the options); H is x_B ~ H x_A. +inf if H is singular.
+  double operator()(const Eigen::Matrix3d& H) const;
+  double cost(const Eigen::Matrix3d& H, const CostOptions& opt) const;
+  // The same estimated from a subset of A (forward terms) and of B (backward terms), indices into A and B;
+  // a null subset means all points.
+  double cost(const Eigen::Matrix3d& H, const CostOptions& opt, const std::vector<int>* sub_a,
+              const std::vector<int>* sub_b) const;
+  // Every nearest-neighbour pair of both directions under H (n forward then m backward).
+  std::vector<NnPair> pairs(const Eigen::Matrix3d& H) const;
+  // Forward-only mean of min(d, tol) over a subset of A (indices), for quick hypothesis scoring.
+  double forward_truncated(const Eigen::Matrix3d& H, const std::vector<int>& subset, double tol) const;
+  // Nearest neighbour in B of an image-2 point / in A of an image-1 point: index, squared distance.
+  int nearest_b(const double* q, double* d2) const;
+  int nearest_a(const double* q, double* d2) const;
+
+  const Eigen::MatrixX2d& a() const { return A_; }
+  const Eigen::MatrixX2d& b() const { return B_; }
+  const CostOptions& options() const { return opt_; }
+  // Distance used for a point mapped to infinity: the larger bounding-box diagonal of A and B.
+  double cap() const { return cap_; }
+
+ private:
+  struct Trees;
+  Eigen::MatrixX2d A_, B_;
+  CostOptions opt_;
+  double cap_ = 1;
+  std::unique_ptr<Trees> trees_;
+};
+
+// Throws InputError(source, 0, reason) unless the cluster can define a homography: at least 4 points,
+// all finite, not all on one line (spread across the principal axis above 1e-6 of the spread along it).
+void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source);
+
+// Largest distance between h and a reference homography over the points of `pts` (image 1), in
+// image-2 pixels (used for "h within 0.5 px of the truth over the cluster's extent").
+double homography_max_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d& ref, const Eigen::MatrixX2d& pts);
+
+}  // namespace tpkit

@@ -1,0 +1,76 @@
+// Minimizers of the cluster cost (cluster_cost.hpp) over the homography x_B ~ H x_A between cluster A
+// (image 1 pixels) and cluster B (image 2 pixels), in one of two parameterizations:
+//   math      the 8 coefficients of H with h33 = 1 (the paper's "straight" method, section 3); random
+//             steps act on H expressed in normalized coordinates (each cluster centred, mean distance
+//             sqrt 2), +-0.05 per coefficient, since the paper gives no step for this method
+//   physical  the parameters of physical_homography.hpp (12 extrinsic ones free, or all 20)
+// Optimizers:
+//   random    Navy et al. section 6: each iteration perturbs one free parameter drawn at random, by a
+//             uniform step in +-1 m (px, py, rho), +-pi/10 rad (angles), +-1 % (res), +-1 px (cx, cy),
+//             and keeps it when the cost decreases; stops at the target cost or the iteration limit.
+//   default   global phase then local refinement: a (1+1) evolution strategy with step-size adaptation
+//             from the start (cost estimated on at most 400 points per direction), then the robust local
+//             refinement of H on the nearest-neighbour pairs (refine_on_pairs) until the pairs stop
+//             changing; when that does not reach the target, the correspondence-free search
+//             (cluster_search.hpp) supplies more starting points and the best result is kept.
+//   none      evaluates the start only.
+// Deterministic for a seed.
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+
+#include "tpkit/cluster_cost.hpp"
+#include "tpkit/physical_homography.hpp"
+
+namespace tpkit {
+
+enum class Parameterization { Math, Physical };
+enum class OptimizerKind { None, Random, Default };
+
+struct OptimizeOptions {
+  Parameterization param = Parameterization::Physical;
+  OptimizerKind optimizer = OptimizerKind::Default;
+  bool free_intrinsics = false;  // physical: 20 free parameters instead of 12
+  double target = 0.25;          // cost (pixels) at which the search stops
+  long max_iterations = 10000;   // random: iteration limit; default: evaluations of the global phase
+  uint64_t seed = 1;
+  bool search_fallback = true;   // default: use cluster_search when the start does not reach the target
+  bool allow_reflection = false; // cluster_search: also mirror-image maps
+};
+
+// Where the optimization starts: physical parameters (from --init) and/or a homography.
+struct OptimizeStart {
+  bool has_physical = false;
+  PhysicalParams physical;
+  bool has_H = false;
+  Eigen::Matrix3d H = Eigen::Matrix3d::Identity();
+};
+
+struct OptimizeResult {
+  Eigen::Matrix3d H = Eigen::Matrix3d::Identity();  // x_B ~ H x_A, h33 = 1
+  bool has_physical = false;
+  PhysicalParams physical;   // parameters giving H (physical parameterization only)
+  double cost = 0;           // final cost (the ClusterCost's options), pixels
+  double start_cost = 0;
+  long iterations = 0;       // random: iterations; default: global evaluations + local rounds
+  long evaluations = 0;      // cost evaluations (full or subsampled)
+  int local_rounds = 0;      // rounds of refine_on_pairs
+  double seconds = 0;
+  bool reached_target = false;
+  std::string method;        // what produced the result ("random", "global+local", "search+local", ...)
+};
+
+OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& start, const OptimizeOptions& opt);
+
+// Local refinement of H on nearest-neighbour pairs (both directions, residual h(A_i) - B_j in image-2
+// pixels) with a Cauchy loss of scale max(1.4826 median distance, 0.1 px), solved by Ceres (LM) on the
+// 8 coefficients of H in normalized coordinates; repeated until the pair set stops changing (or
+// max_rounds). Keeps the best H by the cost. `rounds` (if given) gets the number of rounds.
+Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H, int max_rounds = 30,
+                                int* rounds = nullptr);
+
+// Similarity that centres pts and scales their mean distance to the centre to sqrt 2.
+Eigen::Matrix3d normalizing_transform(const Eigen::MatrixX2d& pts);
+
+}  // namespace tpkit

@@ -1,0 +1,198 @@
+// See cluster_cost.hpp.
+#include "tpkit/cluster_cost.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nanoflann.hpp>
+
+#include "tpkit/error.hpp"
+
+namespace tpkit {
+
+namespace {
+struct Cloud {
+  const Eigen::MatrixX2d* m;
+  size_t kdtree_get_point_count() const { return static_cast<size_t>(m->rows()); }
+  double kdtree_get_pt(size_t i, size_t d) const { return (*m)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(d)); }
+  template <class BBox>
+  bool kdtree_get_bbox(BBox&) const {
+    return false;
+  }
+};
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>, Cloud, 2, int>;
+
+double diag(const Eigen::MatrixX2d& m) {
+  if (m.rows() == 0) return 1;
+  return std::max(1.0, (m.colwise().maxCoeff() - m.colwise().minCoeff()).norm());
+}
+
+// Mean of the (robust) distances of one direction.
+double robust_mean(std::vector<double>& d, const CostOptions& o) {
+  if (d.empty()) return 0;
+  if (o.truncate > 0)
+    for (double& x : d) x = std::min(x, o.truncate);
+  size_t keep = d.size();
+  if (o.trim > 0) {
+    keep = std::max<size_t>(1, static_cast<size_t>(std::ceil((1.0 - o.trim) * static_cast<double>(d.size()))));
+    keep = std::min(keep, d.size());
+    std::nth_element(d.begin(), d.begin() + (keep - 1), d.end());
+  }
+  double s = 0;
+  for (size_t i = 0; i < keep; ++i) s += d[i];
+  return s / static_cast<double>(keep);
+}
+}  // namespace
+
+struct ClusterCost::Trees {
+  Cloud ca, cb;
+  Tree ta, tb;
+  Trees(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B)
+      : ca{&A}, cb{&B}, ta(2, ca, nanoflann::KDTreeSingleIndexAdaptorParams(10)),
+        tb(2, cb, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {
+    ta.buildIndex();
+    tb.buildIndex();
+  }
+};
+
+ClusterCost::ClusterCost(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B, CostOptions opt)
+    : A_(A), B_(B), opt_(opt) {
+  if (A_.rows() < 1 || B_.rows() < 1) throw InputError("a cluster is empty");
+  if (!A_.allFinite() || !B_.allFinite()) throw InputError("a cluster has a non-finite coordinate");
+  if (!(opt.trim >= 0 && opt.trim < 1)) throw UsageError("trim must be in [0, 1)");
+  if (!(opt.truncate >= 0)) throw UsageError("truncate must be >= 0");
+  cap_ = std::max(diag(A_), diag(B_));
+  trees_ = std::make_unique<Trees>(A_, B_);
+}
+
+ClusterCost::~ClusterCost() = default;
+
+int ClusterCost::nearest_b(const double* q, double* d2) const {
+  int idx = 0;
+  nanoflann::KNNResultSet<double, int> rs(1);
+  rs.init(&idx, d2);
+  trees_->tb.findNeighbors(rs, q, nanoflann::SearchParams(10));
+  return idx;
+}
+
+int ClusterCost::nearest_a(const double* q, double* d2) const {
+  int idx = 0;
+  nanoflann::KNNResultSet<double, int> rs(1);
+  rs.init(&idx, d2);
+  trees_->ta.findNeighbors(rs, q, nanoflann::SearchParams(10));
+  return idx;
+}
+
+namespace {
+// Maps p by H; false if it goes to infinity.
+inline bool map_point(const Eigen::Matrix3d& H, double x, double y, double* q) {
+  double w = H(2, 0) * x + H(2, 1) * y + H(2, 2);
+  if (!(std::abs(w) > 1e-300)) return false;
+  q[0] = (H(0, 0) * x + H(0, 1) * y + H(0, 2)) / w;
+  q[1] = (H(1, 0) * x + H(1, 1) * y + H(1, 2)) / w;
+  return std::isfinite(q[0]) && std::isfinite(q[1]) && std::abs(q[0]) < 1e150 && std::abs(q[1]) < 1e150;
+}
+}  // namespace
+
+double ClusterCost::operator()(const Eigen::Matrix3d& H) const { return cost(H, opt_); }
+
+double ClusterCost::cost(const Eigen::Matrix3d& H, const CostOptions& opt) const { return cost(H, opt, nullptr, nullptr); }
+
+double ClusterCost::cost(const Eigen::Matrix3d& H, const CostOptions& opt, const std::vector<int>* sub_a,
+                         const std::vector<int>* sub_b) const {
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
+  if (!H.allFinite() || !lu.isInvertible()) return std::numeric_limits<double>::infinity();
+  Eigen::Matrix3d Hi = lu.inverse();
+  std::vector<double> d;
+  double q[2], d2;
+  auto one = [&](const Eigen::Matrix3d& M, const Eigen::MatrixX2d& P, Eigen::Index i, bool fwd) {
+    if (map_point(M, P(i, 0), P(i, 1), q)) {
+      if (fwd)
+        nearest_b(q, &d2);
+      else
+        nearest_a(q, &d2);
+      d.push_back(std::min(std::sqrt(d2), cap_ * 10));
+    } else {
+      d.push_back(cap_ * 10);
+    }
+  };
+  d.reserve(static_cast<size_t>(std::max(A_.rows(), B_.rows())));
+  if (sub_a)
+    for (int i : *sub_a) one(H, A_, i, true);
+  else
+    for (Eigen::Index i = 0; i < A_.rows(); ++i) one(H, A_, i, true);
+  double c = robust_mean(d, opt);
+  d.clear();
+  if (sub_b)
+    for (int j : *sub_b) one(Hi, B_, j, false);
+  else
+    for (Eigen::Index j = 0; j < B_.rows(); ++j) one(Hi, B_, j, false);
+  return c + robust_mean(d, opt);
+}
+
+double ClusterCost::forward_truncated(const Eigen::Matrix3d& H, const std::vector<int>& subset, double tol) const {
+  double s = 0, q[2], d2;
+  for (int i : subset) {
+    if (map_point(H, A_(i, 0), A_(i, 1), q)) {
+      nearest_b(q, &d2);
+      s += std::min(std::sqrt(d2), tol);
+    } else {
+      s += tol;
+    }
+  }
+  return subset.empty() ? tol : s / static_cast<double>(subset.size());
+}
+
+std::vector<NnPair> ClusterCost::pairs(const Eigen::Matrix3d& H) const {
+  std::vector<NnPair> out;
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
+  if (!H.allFinite() || !lu.isInvertible()) return out;
+  Eigen::Matrix3d Hi = lu.inverse();
+  double q[2], d2;
+  out.reserve(static_cast<size_t>(A_.rows() + B_.rows()));
+  for (Eigen::Index i = 0; i < A_.rows(); ++i)
+    if (map_point(H, A_(i, 0), A_(i, 1), q)) {
+      int j = nearest_b(q, &d2);
+      out.push_back({static_cast<int>(i), j, std::sqrt(d2), true});
+    }
+  for (Eigen::Index j = 0; j < B_.rows(); ++j)
+    if (map_point(Hi, B_(j, 0), B_(j, 1), q)) {
+      int i = nearest_a(q, &d2);
+      out.push_back({i, static_cast<int>(j), std::sqrt(d2), false});
+    }
+  return out;
+}
+
+void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source) {
+  if (pts.rows() < 4)
+    throw InputError(source, 0, "the cluster has " + std::to_string(pts.rows()) + " point" + (pts.rows() == 1 ? "" : "s") +
+                                    "; a homography needs at least 4");
+  if (!pts.allFinite()) throw InputError(source, 0, "the cluster has a non-finite coordinate");
+  Eigen::Vector2d c = pts.colwise().mean().transpose();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+    Eigen::Vector2d d = pts.row(i).transpose() - c;
+    cov += d * d.transpose();
+  }
+  double tr = cov.trace(), det = cov.determinant();
+  double disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
+  double lmax = tr / 2 + disc;
+  double lmin = lmax > 0 ? det / lmax : 0;
+  if (!(lmax > 0)) throw InputError(source, 0, "all points of the cluster coincide");
+  if (!(lmin > 1e-12 * lmax)) throw InputError(source, 0, "the cluster is collinear (all points on one line); a homography needs a 2-D spread");
+}
+
+double homography_max_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d& ref, const Eigen::MatrixX2d& pts) {
+  double worst = 0;
+  for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+    Eigen::Vector3d x(pts(i, 0), pts(i, 1), 1.0);
+    Eigen::Vector3d a = H * x, b = ref * x;
+    double e = std::hypot(a(0) / a(2) - b(0) / b(2), a(1) / a(2) - b(1) / b(2));
+    if (!std::isfinite(e)) return std::numeric_limits<double>::infinity();
+    worst = std::max(worst, e);
+  }
+  return worst;
+}
+
+}  // namespace tpkit

@@ -1,0 +1,347 @@
+// See cluster_optimize.hpp.
+#include "tpkit/cluster_optimize.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "tpkit/cluster_search.hpp"
+#include "tpkit/cluster_synth.hpp"
+#include "tpkit/error.hpp"
+
+namespace tpkit {
+
+Eigen::Matrix3d normalizing_transform(const Eigen::MatrixX2d& pts) {
+  Eigen::Vector2d c = pts.colwise().mean().transpose();
+  double md = 0;
+  for (Eigen::Index i = 0; i < pts.rows(); ++i) md += (pts.row(i).transpose() - c).norm();
+  md /= std::max<double>(1, static_cast<double>(pts.rows()));
+  double s = md > 0 ? std::sqrt(2.0) / md : 1.0;
+  Eigen::Matrix3d T;
+  T << s, 0, -s * c(0), 0, s, -s * c(1), 0, 0, 1;
+  return T;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The free parameters of one parameterization and the map to H.
+struct Space {
+  Parameterization param;
+  Eigen::Matrix3d TA, TB, TBi;
+  std::array<double, kPhysicalParamCount> base{};
+  std::vector<int> free;  // physical: indices into the 20 parameters
+
+  int size() const { return param == Parameterization::Math ? 8 : static_cast<int>(free.size()); }
+
+  Eigen::Matrix3d H(const Eigen::VectorXd& x) const {
+    if (param == Parameterization::Math) {
+      Eigen::Matrix3d Hn;
+      Hn << x(0), x(1), x(2), x(3), x(4), x(5), x(6), x(7), 1.0;
+      return normalized_homography(TBi * Hn * TA);
+    }
+    auto p = base;
+    for (size_t k = 0; k < free.size(); ++k) p[free[k]] = x(static_cast<Eigen::Index>(k));
+    return normalized_homography(physical_homography_t(p.data()));
+  }
+  Eigen::VectorXd from_H(const Eigen::Matrix3d& H) const {
+    Eigen::Matrix3d Hn = TB * H * TA.inverse();
+    Hn /= Hn(2, 2);
+    Eigen::VectorXd x(8);
+    x << Hn(0, 0), Hn(0, 1), Hn(0, 2), Hn(1, 0), Hn(1, 1), Hn(1, 2), Hn(2, 0), Hn(2, 1);
+    return x;
+  }
+  Eigen::VectorXd from_physical(const PhysicalParams& p) {
+    base = p.array();
+    Eigen::VectorXd x(static_cast<Eigen::Index>(free.size()));
+    for (size_t k = 0; k < free.size(); ++k) x(static_cast<Eigen::Index>(k)) = base[free[k]];
+    return x;
+  }
+  PhysicalParams physical(const Eigen::VectorXd& x) const {
+    auto p = base;
+    for (size_t k = 0; k < free.size(); ++k) p[free[k]] = x(static_cast<Eigen::Index>(k));
+    return PhysicalParams::from_array(p.data());
+  }
+  // Half-range of the paper's random deformation for free parameter k.
+  double paper_step(int k) const {
+    if (param == Parameterization::Math) return 0.05;
+    int i = free[k] % kViewParamCount;
+    switch (i) {
+      case 0: case 1: case 2: return 1.0;                     // metres
+      case 3: case 4: case 5: case 7: return M_PI / 10;       // radians
+      case 6: return 0.01 * base[free[k]];                    // 1 % of res
+      default: return 1.0;                                    // pixels
+    }
+  }
+  // Initial standard deviation of the evolution strategy for free parameter k.
+  double es_step(int k) const {
+    if (param == Parameterization::Math) return 0.02;
+    int v = free[k] / kViewParamCount, i = free[k] % kViewParamCount;
+    double res = base[v * kViewParamCount + 6];
+    switch (i) {
+      case 0: case 1: return 5 * res;
+      case 2: return 1e-3 * base[free[k]];
+      case 3: case 4: case 5: return 0.05;
+      case 7: return 0.01;
+      case 6: return 0.01 * base[free[k]];
+      default: return 2.0;
+    }
+  }
+  // Physical parameters must stay a camera looking down (see physical_params_problem).
+  bool valid(const Eigen::VectorXd& x) const {
+    if (param == Parameterization::Math) return x.allFinite();
+    return physical_params_problem(physical(x)).empty();
+  }
+};
+
+std::vector<int> subset(Eigen::Index n, int max, std::mt19937_64& rng) {
+  std::vector<int> idx(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) idx[static_cast<size_t>(i)] = static_cast<int>(i);
+  if (n > max) {
+    std::shuffle(idx.begin(), idx.end(), rng);
+    idx.resize(static_cast<size_t>(max));
+    std::sort(idx.begin(), idx.end());
+  }
+  return idx;
+}
+
+struct PairResidual {
+  double ax, ay, bx, by, inv_scale;  // normalized coordinates; inv_scale turns them into pixels of B
+  template <class T>
+  bool operator()(const T* h, T* r) const {
+    T w = h[6] * ax + h[7] * ay + T(1);
+    r[0] = ((h[0] * ax + h[1] * ay + h[2]) / w - bx) * inv_scale;
+    r[1] = ((h[3] * ax + h[4] * ay + h[5]) / w - by) * inv_scale;
+    return true;
+  }
+};
+
+}  // namespace
+
+Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds, int* rounds) {
+  const Eigen::MatrixX2d &A = cost.a(), &B = cost.b();
+  Eigen::Matrix3d TA = normalizing_transform(A), TB = normalizing_transform(B);
+  Eigen::Matrix3d TBi = TB.inverse();
+  double kB = TB(0, 0);
+  Eigen::MatrixX2d An(A.rows(), 2), Bn(B.rows(), 2);
+  for (Eigen::Index i = 0; i < A.rows(); ++i) An.row(i) << TA(0, 0) * A(i, 0) + TA(0, 2), TA(1, 1) * A(i, 1) + TA(1, 2);
+  for (Eigen::Index j = 0; j < B.rows(); ++j) Bn.row(j) << TB(0, 0) * B(j, 0) + TB(0, 2), TB(1, 1) * B(j, 1) + TB(1, 2);
+  Eigen::Matrix3d H = H0, best = H0;
+  double best_cost = cost(H0);
+  std::vector<std::pair<long long, bool>> prev;
+  int r = 0;
+  for (; r < max_rounds; ++r) {
+    auto pairs = cost.pairs(H);
+    if (pairs.size() < 4) break;
+    std::vector<std::pair<long long, bool>> key;
+    key.reserve(pairs.size());
+    for (const auto& p : pairs) key.emplace_back(static_cast<long long>(p.ia) * (B.rows() + 1) + p.ib, p.forward);
+    std::sort(key.begin(), key.end());
+    if (key == prev) break;
+    prev = key;
+    std::vector<double> d;
+    for (const auto& p : pairs) d.push_back(p.d);
+    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+    double scale = std::max(1.4826 * d[d.size() / 2], 0.1);
+    Eigen::Matrix3d Hn = TB * H * TA.inverse();
+    if (!(std::abs(Hn(2, 2)) > 1e-12)) break;
+    Hn /= Hn(2, 2);
+    double h[8] = {Hn(0, 0), Hn(0, 1), Hn(0, 2), Hn(1, 0), Hn(1, 1), Hn(1, 2), Hn(2, 0), Hn(2, 1)};
+    ceres::Problem::Options po;
+    po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    ceres::Problem problem(po);
+    ceres::CauchyLoss loss(scale);
+    for (const auto& p : pairs) {
+      auto* f = new ceres::AutoDiffCostFunction<PairResidual, 2, 8>(
+          new PairResidual{An(p.ia, 0), An(p.ia, 1), Bn(p.ib, 0), Bn(p.ib, 1), 1.0 / kB});
+      problem.AddResidualBlock(f, &loss, h);
+    }
+    ceres::Solver::Options o;
+    o.linear_solver_type = ceres::DENSE_QR;
+    o.max_num_iterations = 25;
+    o.num_threads = 1;
+    o.logging_type = ceres::SILENT;
+    ceres::Solver::Summary s;
+    ceres::Solve(o, &problem, &s);
+    Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
+    H = normalized_homography(TBi * Hn * TA);
+    if (!H.allFinite()) break;
+    double c = cost(H);
+    if (c < best_cost) best_cost = c, best = H;
+  }
+  if (rounds) *rounds = r + 1;
+  return best;
+}
+
+OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& start, const OptimizeOptions& opt) {
+  auto t0 = Clock::now();
+  OptimizeResult res;
+  std::mt19937_64 rng(opt.seed);
+  Space sp;
+  sp.param = opt.param;
+  sp.TA = normalizing_transform(cost.a());
+  sp.TB = normalizing_transform(cost.b());
+  sp.TBi = sp.TB.inverse();
+  for (int v = 0; v < 2; ++v)
+    for (int i = 0; i < kViewParamCount; ++i)
+      if (i < 6 || opt.free_intrinsics) sp.free.push_back(v * kViewParamCount + i);
+
+  bool have_start = start.has_physical || start.has_H;
+  if (opt.param == Parameterization::Physical && !start.has_physical && opt.optimizer == OptimizerKind::Random)
+    throw UsageError("the random optimizer in physical parameters needs a start: --init with physical parameters");
+  if (!have_start && opt.optimizer != OptimizerKind::Default)
+    throw UsageError("this optimizer needs a start (--init); only the default optimizer searches from scratch");
+  // Physical parameterization without physical start: search/refine in H, express in parameters at the end.
+  if (opt.param == Parameterization::Physical && !start.has_physical) sp.param = Parameterization::Math;
+
+  Eigen::VectorXd x;
+  if (have_start) {
+    if (sp.param == Parameterization::Physical) {
+      std::string why = physical_params_problem(start.physical);
+      if (!why.empty()) throw InputError(why);
+      x = sp.from_physical(start.physical);
+    } else {
+      Eigen::Matrix3d H0 = start.has_H ? start.H : physical_homography(start.physical);
+      x = sp.from_H(H0);
+    }
+  }
+  long evals = 0;
+  auto full = [&](const Eigen::VectorXd& y) {
+    ++evals;
+    if (!sp.valid(y)) return std::numeric_limits<double>::infinity();
+    return cost(sp.H(y));
+  };
+
+  double c = have_start ? full(x) : std::numeric_limits<double>::infinity();
+  res.start_cost = c;
+  Eigen::Matrix3d bestH = have_start ? sp.H(x) : Eigen::Matrix3d::Identity();
+  Eigen::VectorXd bestx = x;
+  double best = c;
+
+  if (opt.optimizer == OptimizerKind::Random) {
+    std::uniform_int_distribution<int> pick(0, sp.size() - 1);
+    std::uniform_real_distribution<double> u(-1, 1);
+    long it = 0;
+    while (best > opt.target && it < opt.max_iterations) {
+      ++it;
+      int k = pick(rng);
+      Eigen::VectorXd y = bestx;
+      y(k) += u(rng) * sp.paper_step(k);
+      double cy = full(y);
+      if (cy < best) best = cy, bestx = y;
+    }
+    bestH = sp.H(bestx);
+    res.iterations = it;
+    res.method = "random";
+  } else if (opt.optimizer == OptimizerKind::Default) {
+    std::vector<int> sa = subset(cost.a().rows(), 400, rng), sb = subset(cost.b().rows(), 400, rng);
+    bool sub = sa.size() < static_cast<size_t>(cost.a().rows()) || sb.size() < static_cast<size_t>(cost.b().rows());
+    auto quick = [&](const Eigen::VectorXd& y) {
+      ++evals;
+      if (!sp.valid(y)) return std::numeric_limits<double>::infinity();
+      return sub ? cost.cost(sp.H(y), cost.options(), &sa, &sb) : cost(sp.H(y));
+    };
+    std::normal_distribution<double> g(0, 1);
+    long budget = std::min<long>(opt.max_iterations, 3000), used = 0;
+    if (have_start) {
+      // Rounds of (1+1)-ES from the current best, each followed by the local refinement.
+      Eigen::VectorXd xs = x;
+      double cs = quick(xs);
+      for (int round = 0; round < 6 && used < budget && best > opt.target; ++round) {
+        double s = 1.0;
+        int since = 0;
+        Eigen::VectorXd sig(sp.size());
+        for (int k = 0; k < sp.size(); ++k) sig(k) = sp.es_step(k);
+        long round_budget = 150 + 100 * round;
+        for (long e = 0; e < round_budget && used < budget; ++e, ++used) {
+          Eigen::VectorXd y = xs;
+          for (int k = 0; k < sp.size(); ++k) y(k) += s * sig(k) * g(rng);
+          double cy = quick(y);
+          if (cy < cs) {
+            cs = cy, xs = y, s *= 1.5, since = 0;
+          } else {
+            s *= 0.9;
+            ++since;
+          }
+          if (s < 1e-3 || since > 60) break;
+        }
+        int rounds = 0;
+        Eigen::Matrix3d Hr = refine_on_pairs(cost, sp.H(xs), 30, &rounds);
+        res.local_rounds += rounds;
+        double cr = cost(Hr);
+        ++evals;
+        if (cr < best) best = cr, bestH = Hr, bestx = xs;
+        // Next round restarts from the refined H where the parameterization allows it.
+        if (sp.param == Parameterization::Math) {
+          xs = sp.from_H(bestH);
+          cs = quick(xs);
+        }
+      }
+      res.method = "global+local";
+    }
+    if (best > opt.target && opt.search_fallback) {
+      SearchOptions so;
+      so.seed = opt.seed;
+      so.allow_reflection = opt.allow_reflection;
+      long tried = 0;
+      auto hyps = search_hypotheses(cost, so, &tried);
+      evals += tried;
+      for (const auto& hy : hyps) {
+        int rounds = 0;
+        Eigen::Matrix3d Hr = refine_on_pairs(cost, hy.H, 30, &rounds);
+        res.local_rounds += rounds;
+        double cr = cost(Hr);
+        ++evals;
+        if (cr < best) {
+          best = cr, bestH = Hr;
+          res.method = "search+local";
+        }
+        if (best <= opt.target) break;
+      }
+    }
+    if (!std::isfinite(best)) throw NumericalError("no homography found: every hypothesis failed");
+    res.iterations = used + res.local_rounds;
+  } else {
+    res.method = "none";
+  }
+  res.H = normalized_homography(bestH);
+  res.cost = best;
+  res.evaluations = evals;
+  res.reached_target = best <= opt.target;
+  // Physical parameters of the result.
+  if (opt.param == Parameterization::Physical) {
+    if (sp.param == Parameterization::Physical && opt.optimizer != OptimizerKind::Default) {
+      res.physical = sp.physical(bestx);
+      res.has_physical = true;
+    } else {
+      PhysicalParams st;
+      bool fi = opt.free_intrinsics;
+      if (sp.param == Parameterization::Physical) {
+        st = sp.physical(bestx);
+      } else {
+        // Nadir-looking start; image scale ratio from the determinant of H's linear part.
+        st.view[0].res = 1, st.view[1].res = 1;
+        double det = std::abs(res.H(0, 0) * res.H(1, 1) - res.H(0, 1) * res.H(1, 0));
+        if (det > 0) st.view[1].res = 1.0 / std::sqrt(det);
+        st.view[0].beta = st.view[1].beta = 1.4;
+        fi = true;
+      }
+      double rms = 1;
+      PhysicalParams fit = fit_physical_params(res.H, st, extent_grid(cost.a()), fi, &rms);
+      if (rms < 0.01 && physical_params_problem(fit).empty()) {
+        res.physical = fit;
+        res.has_physical = true;
+      }
+    }
+  }
+  res.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace tpkit

@@ -1,0 +1,96 @@
+// See cluster_scan.hpp.
+#include "tpkit/cluster_scan.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/svg_plot.hpp"
+
+namespace tpkit {
+
+std::vector<ScanRow> scan_cost(const ClusterCost& cost, const std::string& param, const Eigen::Matrix3d& H,
+                               const PhysicalParams* phys, double lo, double hi, int steps) {
+  if (steps < 2) throw UsageError("--steps must be at least 2");
+  if (!(lo < hi) || !std::isfinite(lo) || !std::isfinite(hi)) throw UsageError("--range needs LO < HI, both finite");
+  int pi = physical_param_index(param);
+  int hr = -1, hc = -1;
+  if (pi < 0) {
+    if (param.size() == 3 && param[0] == 'h' && param[1] >= '1' && param[1] <= '3' && param[2] >= '1' && param[2] <= '3')
+      hr = param[1] - '1', hc = param[2] - '1';
+    else
+      throw UsageError("unknown scan parameter '" + param + "' (h11 ... h33, or px1 py1 rho1 alpha1 beta1 gamma1 res1 theta1 cx1 cy1 and the same with 2)");
+  }
+  if (pi >= 0 && !phys) throw UsageError("scanning a physical parameter needs physical parameters (--param physical with --init)");
+  std::vector<ScanRow> rows;
+  Eigen::Matrix3d Hn = normalized_homography(H);
+  auto base = phys ? phys->array() : std::array<double, kPhysicalParamCount>{};
+  for (int s = 0; s < steps; ++s) {
+    double v = lo + (hi - lo) * s / (steps - 1);
+    Eigen::Matrix3d M;
+    if (pi >= 0) {
+      auto p = base;
+      p[pi] = v;
+      if (!physical_params_problem(PhysicalParams::from_array(p.data())).empty()) continue;
+      M = physical_homography_t(p.data());
+    } else {
+      M = Hn;
+      M(hr, hc) = v;
+    }
+    double c = cost(M);
+    if (std::isfinite(c)) rows.push_back({v, c});
+  }
+  return rows;
+}
+
+void save_scan(const std::string& path, const std::vector<ScanRow>& rows, const std::string& param,
+               const std::vector<ImageRef>& images, Meta meta) {
+  meta_set(meta, "parameter", param);
+  AtomicOutput out(path);
+  write_header(out.stream(), "scan", 1, images, meta, {"value", "cost"});
+  for (const auto& r : rows) write_record(out.stream(), {r.value, r.cost});
+  out.commit();
+}
+
+void plot_scan(const std::string& path, const std::vector<ScanRow>& rows, const std::string& param,
+               const std::string& title) {
+  if (rows.empty()) throw NumericalError("nothing to plot: every scanned value gave a singular homography");
+  double xmin = rows.front().value, xmax = rows.back().value, ymax = 0;
+  for (const auto& r : rows) ymax = std::max(ymax, r.cost);
+  if (!(ymax > 0)) ymax = 1;
+  SvgPlot plot(720, 460, title);
+  int p = plot.panel({70, 50, 620, 350, xmin, xmax, 0, ymax * 1.05, false, false, "", param, "cost (pixels)"});
+  std::vector<double> x, y;
+  for (const auto& r : rows) x.push_back(r.value), y.push_back(r.cost);
+  plot.polyline(p, x, y, "#1f5fa8", 1.5);
+  plot.save(path);
+}
+
+std::vector<MutualPair> mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H) {
+  auto pairs = cost.pairs(H);
+  std::vector<int> fwd(static_cast<size_t>(cost.a().rows()), -1), bwd(static_cast<size_t>(cost.b().rows()), -1);
+  std::vector<double> dist(static_cast<size_t>(cost.a().rows()), 0);
+  for (const auto& p : pairs) {
+    if (p.forward)
+      fwd[static_cast<size_t>(p.ia)] = p.ib, dist[static_cast<size_t>(p.ia)] = p.d;
+    else
+      bwd[static_cast<size_t>(p.ib)] = p.ia;
+  }
+  std::vector<MutualPair> out;
+  for (size_t i = 0; i < fwd.size(); ++i)
+    if (fwd[i] >= 0 && bwd[static_cast<size_t>(fwd[i])] == static_cast<int>(i))
+      out.push_back({static_cast<int>(i), fwd[i], dist[i]});
+  return out;
+}
+
+void save_pairs(const std::string& path, const ClusterCost& cost, const std::vector<MutualPair>& pairs,
+                const std::vector<ImageRef>& images, const Meta& meta) {
+  AtomicOutput out(path);
+  write_header(out.stream(), "pairs", 1, images, meta, {"x1", "y1", "x2", "y2", "d"});
+  for (const auto& p : pairs)
+    write_record(out.stream(), {cost.a()(p.ia, 0), cost.a()(p.ia, 1), cost.b()(p.ib, 0), cost.b()(p.ib, 1), p.d});
+  out.commit();
+}
+
+}  // namespace tpkit

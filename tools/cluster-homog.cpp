@@ -1,0 +1,134 @@
+// cluster-homog: the homography between two point clusters with no known correspondences
+// (Navy et al. 2005), see man/cluster-homog.1. Options -> library (cluster_*.hpp) -> files.
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "tpkit/cluster_cost.hpp"
+#include "tpkit/cluster_init.hpp"
+#include "tpkit/cluster_optimize.hpp"
+#include "tpkit/cluster_scan.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/formats.hpp"
+#include "tpkit/tool_support.hpp"
+
+extern const char* const tpkit_man_page;
+
+namespace {
+struct Opts {
+  std::string a, b, out = "-", init, pairs, scan, plot, param = "physical", optimizer = "default";
+  uint64_t seed = 1;
+  double trim = 0, truncate = 0, target = 0.25;
+  long max_iterations = 10000;
+  bool free_intrinsics = false, reflection = false;
+  std::vector<double> range;
+  int steps = 101;
+};
+
+std::string num(double v) { return tpkit::format_number(v); }
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace tpkit;
+  return run_tool("cluster-homog", argc, argv, [&](CLI::App& app) -> std::function<int()> {
+    auto o = std::make_shared<Opts>();
+    app.add_option("A", o->a, "cluster of image 1 (points file)")->required();
+    app.add_option("B", o->b, "cluster of image 2 (points file)")->required();
+    app.add_option("-o,--output", o->out, "homography file (or scan table with --scan); - for stdout");
+    app.add_option("--param", o->param, "math | physical")->check(CLI::IsMember({"math", "physical"}));
+    app.add_option("--init", o->init, "key = value file of starting values");
+    app.add_option("--optimizer", o->optimizer, "default | random | none")
+        ->check(CLI::IsMember({"default", "random", "none"}));
+    app.add_option("--seed", o->seed, "seed of every random choice");
+    app.add_option("--trim", o->trim, "fraction of the largest distances left out in each direction");
+    app.add_option("--truncate", o->truncate, "distances capped at this many pixels");
+    app.add_option("--target", o->target, "cost in pixels at which the search stops");
+    app.add_option("--max-iterations", o->max_iterations, "iteration limit");
+    app.add_flag("--free-intrinsics", o->free_intrinsics, "20 free physical parameters instead of 12");
+    app.add_flag("--allow-reflection", o->reflection, "the search also tries mirror-image maps");
+    app.add_option("--pairs", o->pairs, "write the mutual nearest-neighbour pairs under the final h");
+    app.add_option("--scan", o->scan, "parameter to scan");
+    app.add_option("--range", o->range, "LO HI of the scan")->expected(2);
+    app.add_option("--steps", o->steps, "values of the scan");
+    app.add_option("--plot", o->plot, "SVG figure of the scan");
+    return [o]() {
+      if (!o->scan.empty() && o->range.size() != 2) throw UsageError("--scan needs --range LO HI");
+      if (o->scan.empty() && (!o->range.empty() || !o->plot.empty())) throw UsageError("--range and --plot go with --scan");
+      if (!(o->trim >= 0 && o->trim < 1)) throw UsageError("--trim must be in [0, 1)");
+      if (!(o->truncate >= 0)) throw UsageError("--truncate must be >= 0");
+      if (!(o->target >= 0)) throw UsageError("--target must be >= 0");
+      if (o->max_iterations < 0) throw UsageError("--max-iterations must be >= 0");
+      Points A = read_points(o->a), B = read_points(o->b);
+      validate_cluster(A.xy, o->a);
+      validate_cluster(B.xy, o->b);
+      OptimizeStart start;
+      if (!o->init.empty()) {
+        ClusterInit ci = read_cluster_init_file(o->init);
+        start.has_physical = ci.has_physical, start.physical = ci.physical;
+        start.has_H = ci.has_H, start.H = ci.H;
+      }
+      OptimizeOptions oo;
+      oo.param = o->param == "math" ? Parameterization::Math : Parameterization::Physical;
+      oo.optimizer = o->optimizer == "random" ? OptimizerKind::Random
+                     : o->optimizer == "none" ? OptimizerKind::None
+                                              : OptimizerKind::Default;
+      oo.free_intrinsics = o->free_intrinsics;
+      oo.target = o->target;
+      oo.max_iterations = o->max_iterations;
+      oo.seed = o->seed;
+      oo.allow_reflection = o->reflection;
+      CostOptions co{o->trim, o->truncate};
+      ClusterCost cost(A.xy, B.xy, co);
+      OptimizeResult r = optimize_clusters(cost, start, oo);
+
+      Homography h;
+      if (!A.images.empty()) h.images.push_back(A.images.front());
+      if (!B.images.empty()) {
+        if (h.images.empty()) h.images.push_back(ImageRef{});
+        h.images.push_back(B.images.front());
+      }
+      h.H = r.H;
+      Meta& m = h.meta;
+      m.emplace_back("method", "cluster-homog (Navy et al. 2005, eq. 3 cost)");
+      m.emplace_back("cluster1", o->a + " (" + std::to_string(A.size()) + " points)");
+      m.emplace_back("cluster2", o->b + " (" + std::to_string(B.size()) + " points)");
+      m.emplace_back("parameterization", o->param + (o->free_intrinsics ? " (20 free)" : ""));
+      m.emplace_back("optimizer", o->optimizer + " (" + r.method + ")");
+      m.emplace_back("seed", std::to_string(o->seed));
+      m.emplace_back("trim", num(o->trim));
+      m.emplace_back("truncate", num(o->truncate));
+      m.emplace_back("cost_start", std::isfinite(r.start_cost) ? num(r.start_cost) : "none (no start)");
+      m.emplace_back("cost", num(r.cost));
+      m.emplace_back("target", num(o->target));
+      m.emplace_back("reached_target", r.reached_target ? "yes" : "no");
+      m.emplace_back("iterations", std::to_string(r.iterations));
+      m.emplace_back("evaluations", std::to_string(r.evaluations));
+      m.emplace_back("local_rounds", std::to_string(r.local_rounds));
+      m.emplace_back("time_s", num(r.seconds));
+      if (r.has_physical) {
+        auto a = r.physical.array();
+        for (int i = 0; i < kPhysicalParamCount; ++i) m.emplace_back(physical_param_names()[i], num(a[i]));
+      }
+      std::ostringstream msg;
+      msg << "cost " << r.cost << " px (start " << r.start_cost << "), " << r.iterations << " iterations, "
+          << r.seconds * 1e3 << " ms, " << r.method;
+      std::fprintf(stderr, "cluster-homog: %s\n", msg.str().c_str());
+      if (!r.reached_target) warn("the cost did not reach the target of " + num(o->target) + " px");
+
+      if (!o->scan.empty()) {
+        PhysicalParams* phys = r.has_physical ? &r.physical : nullptr;
+        PhysicalParams from_init = start.physical;
+        if (!phys && start.has_physical && o->optimizer == "none") phys = &from_init;
+        auto rows = scan_cost(cost, o->scan, r.H, phys, o->range[0], o->range[1], o->steps);
+        if (rows.empty()) throw NumericalError("every scanned value gave a singular homography");
+        if (!o->plot.empty())
+          plot_scan(o->plot, rows, o->scan, "cluster cost against " + o->scan + " (" + o->param + " parameters)");
+        save_scan(o->out, rows, o->scan, h.images, m);
+      } else {
+        save_homography(o->out, h);
+      }
+      if (!o->pairs.empty()) save_pairs(o->pairs, cost, mutual_pairs(cost, r.H), h.images, m);
+      return 0;
+    };
+  }, tpkit_man_page);
+}
