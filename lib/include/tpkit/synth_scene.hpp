@@ -26,6 +26,7 @@ struct SynthParams {
   std::string camera = "affine"; // "affine" or "perspective"
   long points = 2000;            // truth tracks to write
   double noise = 2.0;            // sensor noise sigma, DN (12-bit range)
+  long supersample = 4;          // rendering: n x n samples per pixel (box pixel response)
 };
 
 // Throws UsageError naming the bad parameter (size < 16, relief < 0, gsd <= 0, unknown camera, ...).
@@ -65,8 +66,10 @@ class SynthScene {
   Eigen::Vector2d height_gradient(double X, double Y) const;
   // Ground albedo in [0, 1] at X, Y (m): band-limited, continuous.
   double albedo(double X, double Y) const;
-  // Albedo times Lambertian slope shading (sun fixed in the scene), in [0, 1]; view independent.
+  // Albedo times slope shading (ambient + Lambert, sun fixed in the scene), in [0, 1]; view independent.
   double radiance(double X, double Y) const;
+  // The same with the terrain gradient at (X, Y) already known.
+  double radiance(double X, double Y, const Eigen::Vector2d& grad) const;
   // Viewing ray of pixel (x, y) of `view`: a point on it above the terrain and the unit direction
   // towards the ground (ground frame, m).
   void ray(int view, double x, double y, Eigen::Vector3d& origin, Eigen::Vector3d& dir) const;
@@ -80,6 +83,7 @@ class SynthScene {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  const SynthTerrain& terrain_() const;
   explicit SynthScene(std::unique_ptr<Impl>);
 };
 

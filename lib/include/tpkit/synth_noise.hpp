@@ -1,0 +1,48 @@
+// Deterministic hashing and band-limited value noise for the synthetic scene (tp-synth). Everything is a
+// pure function of a 64-bit seed and integer lattice coordinates, so rendering does not depend on the
+// order of evaluation, strips or threads.
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+namespace tpkit::synth {
+
+// splitmix64 finaliser: a bijective 64-bit mix.
+inline uint64_t mix64(uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+// Hash of a (pre-mixed) seed and up to three integers: one mix of a linear combination with odd
+// 64-bit constants (fast enough to call per lattice point and per sample).
+inline uint64_t hash(uint64_t seed, int64_t a, int64_t b = 0, int64_t c = 0) {
+  return mix64(seed + static_cast<uint64_t>(a) * 0xd1b54a32d192ed03ULL + static_cast<uint64_t>(b) * 0xaef17502108ef2d9ULL +
+               static_cast<uint64_t>(c) * 0xf58e6f2b9c3ab7d5ULL);
+}
+// Uniform in [0, 1) from a hash.
+inline double unit(uint64_t h) { return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0); }
+inline double uniform(uint64_t seed, int64_t a, int64_t b = 0, int64_t c = 0) { return unit(hash(seed, a, b, c)); }
+
+inline double smoothstep(double e0, double e1, double x) {
+  double t = (x - e0) / (e1 - e0);
+  t = t < 0 ? 0 : (t > 1 ? 1 : t);
+  return t * t * (3 - 2 * t);
+}
+inline double lerp(double a, double b, double t) { return a + (b - a) * t; }
+
+// 2-D value noise in [-1, 1] on the unit lattice with quintic (C2) interpolation of hashed lattice values:
+// continuous with continuous first and second derivatives; its spectrum is concentrated below 1 cycle per
+// lattice unit.
+inline double value_noise(uint64_t seed, double x, double y) {
+  const double fx = std::floor(x), fy = std::floor(y);
+  const int64_t ix = static_cast<int64_t>(fx), iy = static_cast<int64_t>(fy);
+  const double tx = x - fx, ty = y - fy;
+  const double sx = tx * tx * tx * (tx * (tx * 6 - 15) + 10);
+  const double sy = ty * ty * ty * (ty * (ty * 6 - 15) + 10);
+  const double v00 = 2 * uniform(seed, ix, iy) - 1, v10 = 2 * uniform(seed, ix + 1, iy) - 1;
+  const double v01 = 2 * uniform(seed, ix, iy + 1) - 1, v11 = 2 * uniform(seed, ix + 1, iy + 1) - 1;
+  return lerp(lerp(v00, v10, sx), lerp(v01, v11, sx), sy);
+}
+
+}  // namespace tpkit::synth

@@ -1,0 +1,50 @@
+// The terrain height field of the synthetic scene (tp-synth): a uniform bicubic B-spline over a grid of
+// control heights. Control heights are a fractal sum of value-noise octaves plus a few large hills and
+// valleys, scaled so that the surface spans exactly `relief` metres over the scene square [0, S]^2
+// (centred on Z = 0). Ground frame: X east, Y north, Z up, metres.
+//
+// The B-spline is C2 and, by its convex-hull property, lies inside [min, max] of the 4x4 control heights
+// of each cell: ray casting skips cells whose bound the ray passes above and refines the first
+// sign change of (ray height - terrain height) by bracketing (exact first intersection, with occlusion).
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace tpkit {
+
+class SynthTerrain {
+ public:
+  SynthTerrain() = default;
+  // seed: RNG seed; scene: side S of the scene square (m); relief: max - min height over the scene (m);
+  // spacing: control grid spacing (m); [x0, x1] x [y0, y1]: ground area the grid must cover (m).
+  SynthTerrain(uint64_t seed, double scene, double relief, double spacing, double x0, double y0, double x1,
+               double y1);
+  // Height Z (m) at ground X, Y (m). Outside the grid the nearest border value is used (continuous).
+  double height(double X, double Y) const;
+  // Height and gradient (dZ/dX, dZ/dY).
+  double height(double X, double Y, Eigen::Vector2d* grad) const;
+  // Bounds of the height everywhere (m).
+  double zmin() const { return zmin_; }
+  double zmax() const { return zmax_; }
+  // First t >= 0 where o + t d meets the terrain (d: any direction with d.z < 0; o: any point). Nothing
+  // when the ray leaves the height bounds without meeting it (or d.z >= 0).
+  std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
+  // Newton refinement of the intersection starting from t0; nothing if it does not converge quickly
+  // (caller falls back to intersect()). Used for supersamples next to an exact cast.
+  // tol: stop when the Newton step is below tol (m along the ray); the error of the result is then of
+  // the order of curvature x tol^2. grad (optional): terrain gradient at the last evaluation.
+  std::optional<double> refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0, double tol = 1e-10,
+                               Eigen::Vector2d* grad = nullptr) const;
+
+ private:
+  double eval(double u, double v, double* du, double* dv) const;  // grid units
+  double h_ = 1, gx0_ = 0, gy0_ = 0;
+  long nx_ = 0, ny_ = 0;           // control points
+  std::vector<float> c_;           // ny x nx control heights
+  std::vector<float> cmax_;        // (ny-3) x (nx-3) per-cell upper bound; cell (i, j) spans u in [i+1, i+2)
+  double zmin_ = 0, zmax_ = 0;
+};
+
+}  // namespace tpkit

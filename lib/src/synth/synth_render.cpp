@@ -1,0 +1,194 @@
+// Rendering and writing of the tp-synth triplet (synth_scene.hpp: SynthScene::render_rows,
+// write_synth_scene).
+//
+// Each pixel is the mean radiance over n x n samples at offsets (k + 0.5) / n - 0.5 from its centre (box
+// pixel response), each sample the first terrain intersection of its viewing ray. Exact casts (grid
+// traversal + bracketing, synth_terrain.hpp) are made at the pixel corners; a sample inside a pixel whose
+// four corner hits are consistent (no occlusion edge) is found by Newton from the bilinear interpolation
+// of the corner ray parameters, every other sample by an exact cast.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <thread>
+#include <vector>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/formats.hpp"
+#include "tpkit/image_io.hpp"
+#include "tpkit/synth_noise.hpp"
+#include "tpkit/synth_scene.hpp"
+#include "tpkit/synth_terrain.hpp"
+#include "tpkit/tool_support.hpp"
+
+namespace tpkit {
+
+namespace {
+// Standard normal deviate from a hash (Box-Muller on two 53-bit uniforms).
+double gauss(uint64_t h) {
+  const double u1 = (static_cast<double>(synth::mix64(h) >> 11) + 1) * (1.0 / 9007199254740993.0);
+  const double u2 = synth::unit(synth::mix64(h ^ 0xabcdef12345ULL));
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * 3.14159265358979323846 * u2);
+}
+}  // namespace
+
+void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const {
+  const long W = params().size;
+  const int ns = static_cast<int>(params().supersample);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Exact ray parameters at the pixel corners (x - 0.5, y - 0.5), (rows + 1) x (W + 1).
+  std::vector<double> tc(static_cast<size_t>(rows + 1) * (W + 1));
+  Eigen::Vector3d o, d;
+  auto cast = [&](double x, double y) {
+    ray(view, x, y, o, d);
+    const auto t = terrain_().intersect(o, d);
+    return t ? *t : nan;
+  };
+  for (long j = 0; j <= rows; ++j)
+    for (long i = 0; i <= W; ++i) tc[static_cast<size_t>(j) * (W + 1) + i] = cast(i - 0.5, y0 + j - 0.5);
+  // Corner parameters of a smooth pixel differ by a few pixel sizes at most; a larger jump means an
+  // occlusion edge (or a grazing ray) inside the pixel.
+  const double jump = 6 * params().gsd;
+  const uint64_t ns_seed = synth::hash(params().seed, 0x401e, view);
+  const double g = gain(view), off = offset(view), sigma = params().noise;
+  for (long j = 0; j < rows; ++j) {
+    const long y = y0 + j;
+    for (long x = 0; x < W; ++x) {
+      const double* r0 = &tc[static_cast<size_t>(j) * (W + 1) + x];
+      const double* r1 = r0 + (W + 1);
+      const double t00 = r0[0], t10 = r0[1], t01 = r1[0], t11 = r1[1];
+      const bool smooth = std::isfinite(t00) && std::isfinite(t10) && std::isfinite(t01) && std::isfinite(t11) &&
+                          std::abs(t10 - t00) < jump && std::abs(t11 - t01) < jump && std::abs(t01 - t00) < jump &&
+                          std::abs(t11 - t10) < jump;
+      double sum = 0;
+      for (int b = 0; b < ns; ++b) {
+        const double fy = (b + 0.5) / ns;
+        for (int a = 0; a < ns; ++a) {
+          const double fx = (a + 0.5) / ns;
+          const double sx = x - 0.5 + fx, sy = y - 0.5 + fy;
+          ray(view, sx, sy, o, d);
+          std::optional<double> t;
+          Eigen::Vector2d grad;
+          // Newton until a step is below 1 cm: the position error is then ~ (curvature / slope) x step^2, below
+          // 1e-4 m for the terrains made here; the gradient of its last evaluation shades.
+          if (smooth) t = terrain_().refine(o, d, (1 - fy) * ((1 - fx) * t00 + fx * t10) + fy * ((1 - fx) * t01 + fx * t11), 1e-2, &grad);
+          if (!t) {
+            t = terrain_().intersect(o, d);
+            if (!t) continue;  // cannot happen inside the terrain grid: counts as black
+            const Eigen::Vector3d X = o + *t * d;
+            terrain_().height(X.x(), X.y(), &grad);
+          }
+          const Eigen::Vector3d X = o + *t * d;
+          sum += radiance(X.x(), X.y(), grad);
+        }
+      }
+      double dn = g * sum / (ns * ns) + off;
+      if (sigma > 0) dn += sigma * gauss(synth::hash(ns_seed, y, x));
+      dn = std::clamp(std::round(dn), 0.0, 4095.0);
+      out[static_cast<size_t>(j) * W + x] = static_cast<uint16_t>(dn);
+    }
+  }
+}
+
+void write_synth_scene(const SynthScene& scene, const std::string& dir, const SynthWriteOptions& opt) {
+  const SynthParams& p = scene.params();
+  namespace fs = std::filesystem;
+  // Truth first: it is quick and may fail (too few visible points) before anything is written.
+  const SynthTruth truth = synth_truth_points(scene, p.points);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) throw InputError(dir, 0, "cannot create directory: " + ec.message());
+
+  Meta meta;
+  meta_set(meta, "generator", "tp-synth");
+  meta_set(meta, "seed", std::to_string(p.seed));
+  meta_set(meta, "size", std::to_string(p.size));
+  meta_set(meta, "relief", format_number(p.relief));
+  meta_set(meta, "gsd", format_number(p.gsd));
+  meta_set(meta, "camera", p.camera);
+  meta_set(meta, "points", std::to_string(p.points));
+  meta_set(meta, "noise", format_number(p.noise));
+  meta_set(meta, "supersample", std::to_string(p.supersample));
+  meta_set(meta, "scene", "ground square [0, " + format_number(scene.scene_size()) +
+                              "] m x [0, same] m; X east, Y north, Z up (m)");
+
+  std::vector<ImageRef> images;
+  for (int v = 0; v < SynthScene::kViews; ++v) images.push_back({"view" + std::to_string(v + 1) + ".tif", p.size, p.size});
+
+  // Views: strips rendered by worker threads in batches, written in order (bounded memory).
+  const long W = p.size, rows = std::max(1L, opt.strip_rows);
+  int threads = opt.threads > 0 ? opt.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const long strips = (W + rows - 1) / rows;
+  Progress progress("rendering", strips * SynthScene::kViews);
+  for (int v = 0; v < SynthScene::kViews; ++v) {
+    std::string desc = "tp-synth view " + std::to_string(v + 1) + " (" + (v == 0 ? "forward" : v == 1 ? "nadir" : "backward") +
+                       "); seed " + std::to_string(p.seed) + "; 12-bit DN = gain * radiance + offset + noise; gain " +
+                       format_number(scene.gain(v)) + ", offset " + format_number(scene.offset(v));
+    TiffWriterU16 writer(dir + "/" + images[v].path, W, W, {{"ImageDescription", desc}, {"Software", "tpkit tp-synth"}});
+    const long batch = 2L * threads;
+    std::vector<std::vector<uint16_t>> buf(static_cast<size_t>(std::min(batch, strips)));
+    for (long s0 = 0; s0 < strips; s0 += batch) {
+      const long nb = std::min(batch, strips - s0);
+      std::atomic<long> next{0};
+      std::exception_ptr err;
+      std::atomic<bool> failed{false};
+      auto work = [&]() {
+        for (long k; (k = next++) < nb && !failed;) {
+          const long y0 = (s0 + k) * rows, h = std::min(rows, W - y0);
+          try {
+            buf[k].resize(static_cast<size_t>(h) * W);
+            scene.render_rows(v, y0, h, buf[k].data());
+          } catch (...) {
+            if (!failed.exchange(true)) err = std::current_exception();
+          }
+          progress.add();
+        }
+      };
+      std::vector<std::thread> pool;
+      for (int t = 1; t < std::min<long>(threads, nb); ++t) pool.emplace_back(work);
+      work();
+      for (auto& t : pool) t.join();
+      if (err) std::rethrow_exception(err);
+      for (long k = 0; k < nb; ++k) {
+        const long y0 = (s0 + k) * rows, h = std::min(rows, W - y0);
+        writer.write_rows(y0, h, buf[k].data());
+      }
+    }
+    writer.close();
+  }
+  progress.done();
+
+  // Truth tracks with the ground point as extra columns X Y Z.
+  Tracks tr;
+  tr.images = images;
+  tr.meta = meta;
+  meta_set(tr.meta, "truth", "noise-free projections of ground points visible in all three views; X Y Z in metres");
+  tr.xy = truth.xy;
+  tr.id.resize(truth.xy.rows());
+  for (Eigen::Index i = 0; i < truth.xy.rows(); ++i) tr.id[i] = i + 1;
+  tr.extra.names = {"X", "Y", "Z"};
+  tr.extra.values = truth.ground;
+  save_tracks(dir + "/truth.tracks", tr);
+
+  Cameras cams;
+  cams.images = images;
+  cams.meta = meta;
+  meta_set(cams.meta, "cameras", "x ~ P [X Y Z 1]^T: ground metres (local frame) to pixels; view 1 forward, 2 nadir, 3 backward");
+  for (int v = 0; v < SynthScene::kViews; ++v) cams.P.push_back(scene.camera(v));
+  save_cameras(dir + "/truth.cameras", cams);
+
+  if (p.camera == "affine") {
+    Trifocal tf;
+    tf.images = images;
+    tf.meta = meta;
+    meta_set(tf.meta, "method", "exact, from the truth cameras (H&Z T_i = a_i b_4^T - a_4 b_i^T, P1 H = [I | 0])");
+    tf.T = trifocal_from_cameras(scene.camera(0), scene.camera(1), scene.camera(2));
+    save_trifocal(dir + "/truth.trifocal", tf);
+  }
+  save_params(dir + "/scene.params", p);
+}
+
+}  // namespace tpkit

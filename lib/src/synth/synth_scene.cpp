@@ -1,0 +1,304 @@
+// The synthetic satellite triplet of tp-synth: parameters, geometry, truth points (synth_scene.hpp).
+#include "tpkit/synth_scene.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/synth_camera.hpp"
+#include "tpkit/synth_noise.hpp"
+#include "tpkit/synth_terrain.hpp"
+#include "tpkit/synth_texture.hpp"
+#include "tpkit/text_table.hpp"
+
+namespace tpkit {
+
+namespace {
+constexpr double kDeg = 3.14159265358979323846 / 180;
+constexpr double kAltitude = 700e3;  // satellite altitude above the scene centre (m)
+}  // namespace
+
+struct SynthScene::Impl {
+  SynthParams p;
+  double S = 0;         // scene square side (m)
+  double z_top = 0;     // ray origins of affine views: just above the highest terrain
+  SynthTerrain terrain;
+  SynthTexture texture;
+  SynthCamera cam[kViews];
+  double gain[kViews] = {}, offset[kViews] = {};
+  Eigen::Vector3d sun = Eigen::Vector3d::UnitZ();
+};
+
+void check_params(const SynthParams& p) {
+  if (p.size < 16 || p.size > 100000) throw UsageError("--size must be between 16 and 100000 pixels, got " + std::to_string(p.size));
+  if (!(p.relief >= 0) || !std::isfinite(p.relief)) throw UsageError("--relief must be >= 0 metres");
+  if (!(p.gsd > 0) || !std::isfinite(p.gsd)) throw UsageError("--gsd must be > 0 metres/pixel");
+  if (p.camera != "affine" && p.camera != "perspective")
+    throw UsageError("--camera must be affine or perspective, got '" + p.camera + "'");
+  if (p.points < 0) throw UsageError("--points must be >= 0");
+  if (!(p.noise >= 0) || !std::isfinite(p.noise)) throw UsageError("--noise must be >= 0 DN");
+  if (p.supersample < 1 || p.supersample > 16) throw UsageError("--supersample must be between 1 and 16");
+}
+
+void save_params(const std::string& path, const SynthParams& p) {
+  std::ostringstream os;
+  os << "# tpkit synth-params 1\n"
+     << "seed = " << p.seed << "\n"
+     << "size = " << p.size << "\n"
+     << "relief = " << format_number(p.relief) << "\n"
+     << "gsd = " << format_number(p.gsd) << "\n"
+     << "camera = " << p.camera << "\n"
+     << "points = " << p.points << "\n"
+     << "noise = " << format_number(p.noise) << "\n"
+     << "supersample = " << p.supersample << "\n";
+  write_file_atomic(path, os.str());
+}
+
+SynthParams load_params(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open");
+  SynthParams p;
+  std::string line;
+  long n = 0;
+  auto trim = [](std::string s) {
+    const auto b = s.find_first_not_of(" \t\r"), e = s.find_last_not_of(" \t\r");
+    return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+  };
+  while (std::getline(in, line)) {
+    ++n;
+    const std::string t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    const auto eq = t.find('=');
+    if (eq == std::string::npos) throw InputError(path, n, "expected 'key = value'");
+    const std::string key = trim(t.substr(0, eq)), val = trim(t.substr(eq + 1));
+    auto num = [&](double& out) {
+      size_t used = 0;
+      try {
+        out = std::stod(val, &used);
+      } catch (...) {
+        used = 0;
+      }
+      if (used == 0 || used != val.size() || !std::isfinite(out)) throw InputError(path, n, key + ": not a number: '" + val + "'");
+    };
+    auto integer = [&](long long& out) {
+      size_t used = 0;
+      try {
+        out = std::stoll(val, &used);
+      } catch (...) {
+        used = 0;
+      }
+      if (used == 0 || used != val.size()) throw InputError(path, n, key + ": not an integer: '" + val + "'");
+    };
+    long long i = 0;
+    if (key == "seed") {
+      size_t used = 0;
+      try {
+        p.seed = std::stoull(val, &used);
+      } catch (...) {
+        used = 0;
+      }
+      if (used == 0 || used != val.size() || val[0] == '-') throw InputError(path, n, "seed: not an unsigned integer: '" + val + "'");
+    } else if (key == "size") {
+      integer(i);
+      p.size = static_cast<long>(i);
+    } else if (key == "relief") {
+      num(p.relief);
+    } else if (key == "gsd") {
+      num(p.gsd);
+    } else if (key == "camera") {
+      p.camera = val;
+    } else if (key == "points") {
+      integer(i);
+      p.points = static_cast<long>(i);
+    } else if (key == "noise") {
+      num(p.noise);
+    } else if (key == "supersample") {
+      integer(i);
+      p.supersample = static_cast<long>(i);
+    } else {
+      throw InputError(path, n, "unknown key '" + key + "'");
+    }
+  }
+  try {
+    check_params(p);
+  } catch (const UsageError& e) {
+    throw InputError(path, 0, e.what());
+  }
+  return p;
+}
+
+SynthScene::SynthScene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SynthScene::SynthScene(SynthScene&&) noexcept = default;
+SynthScene& SynthScene::operator=(SynthScene&&) noexcept = default;
+SynthScene::~SynthScene() = default;
+
+SynthScene SynthScene::load(const std::string& dir) { return SynthScene(load_params(dir + "/scene.params")); }
+
+SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>()) {
+  check_params(params);
+  Impl& m = *impl_;
+  m.p = params;
+  const uint64_t gs = synth::hash(params.seed, 0x6e0);
+  auto u = [&](int k) { return synth::uniform(gs, k); };
+  // Three-line geometry: along-track +22 / 0 / -22 deg (forward, nadir, backward) with small seeded
+  // deviations, the same cross-track pointing (2..3 deg) give or take 0.3 deg, small rolls.
+  const double cross = (2.0 + 1.0 * u(1)) * kDeg;
+  double along[kViews], crossv[kViews], roll[kViews];
+  for (int v = 0; v < kViews; ++v) {
+    along[v] = ((v == 0 ? 22.0 : v == 2 ? -22.0 : 0.0) + 0.5 * (2 * u(10 + v) - 1)) * kDeg;
+    crossv[v] = cross + 0.3 * (2 * u(20 + v) - 1) * kDeg;
+    roll[v] = 0.4 * (2 * u(30 + v) - 1) * kDeg;
+    m.gain[v] = 3000 + 600 * u(40 + v);
+    m.offset[v] = 60 + 200 * u(50 + v);
+  }
+  const bool affine = params.camera == "affine";
+  // Focal length (pixels): the nadir view's pixel spans gsd at the scene centre's range.
+  const double range1 = kAltitude * Eigen::Vector3d(std::tan(crossv[1]), std::tan(along[1]), 1).norm();
+  const double focal = range1 / params.gsd;
+  const long n = params.size;
+  auto build = [&](double S) {
+    const Eigen::Vector3d centre(S / 2, S / 2, 0);
+    for (int v = 0; v < kViews; ++v) m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal, centre, n);
+  };
+  // The scene square: the largest S for which the box [0, S]^2 x [-relief/2, relief/2] projects inside
+  // every view with a margin of max(4, 3% of size) pixels.
+  const double margin = std::max(4.0, 0.03 * n);
+  auto fits = [&](double S) {
+    build(S);
+    for (int v = 0; v < kViews; ++v)
+      for (int k = 0; k < 8; ++k) {
+        const Eigen::Vector3d X((k & 1) ? S : 0, (k & 2) ? S : 0, (k & 4) ? params.relief / 2 : -params.relief / 2);
+        const Eigen::Vector2d x = m.cam[v].project(X);
+        if (!(x.x() >= margin && x.y() >= margin && x.x() <= n - 1 - margin && x.y() <= n - 1 - margin)) return false;
+      }
+    return true;
+  };
+  double lo = 0, hi = 2 * n * params.gsd;
+  if (!fits(1e-6 * params.gsd))
+    throw UsageError("--relief " + format_number(params.relief) + " m is too large for views of " + std::to_string(n) +
+                     " pixels at --gsd " + format_number(params.gsd));
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (fits(mid) ? lo : hi) = mid;
+  }
+  m.S = lo;
+  build(m.S);
+  // Terrain grid: covers what any pixel of any view can see at heights within +-relief (the clamp of the
+  // terrain), plus the scene square.
+  double x0 = 0, y0 = 0, x1 = m.S, y1 = m.S;
+  const double zb = std::max(params.relief, 1.0);
+  for (int v = 0; v < kViews; ++v)
+    for (int k = 0; k < 4; ++k) {
+      const double px = (k & 1) ? n + 1.0 : -2.0, py = (k & 2) ? n + 1.0 : -2.0;
+      Eigen::Vector3d o, d;
+      m.cam[v].ray(px, py, zb, o, d);
+      for (double z : {zb, -zb}) {
+        const double t = (o.z() - z) / -d.z();
+        const Eigen::Vector3d X = o + t * d;
+        x0 = std::min(x0, X.x());
+        x1 = std::max(x1, X.x());
+        y0 = std::min(y0, X.y());
+        y1 = std::max(y1, X.y());
+      }
+    }
+  const double spacing = 4 * params.gsd;
+  m.terrain = SynthTerrain(params.seed, m.S, params.relief, spacing, x0 - 4 * spacing, y0 - 4 * spacing,
+                           x1 + 4 * spacing, y1 + 4 * spacing);
+  m.z_top = m.terrain.zmax() + 1.0;
+  const double sun_az = (200 + 40 * u(60)) * kDeg, sun_el = 55 * kDeg;
+  m.sun = Eigen::Vector3d(std::cos(sun_el) * std::cos(sun_az), std::cos(sun_el) * std::sin(sun_az), std::sin(sun_el));
+  m.texture = SynthTexture(params.seed, params.gsd, sun_az, sun_el);
+}
+
+const SynthTerrain& SynthScene::terrain_() const { return impl_->terrain; }
+const SynthParams& SynthScene::params() const { return impl_->p; }
+double SynthScene::scene_size() const { return impl_->S; }
+double SynthScene::height(double X, double Y) const { return impl_->terrain.height(X, Y); }
+Eigen::Vector2d SynthScene::height_gradient(double X, double Y) const {
+  Eigen::Vector2d g;
+  impl_->terrain.height(X, Y, &g);
+  return g;
+}
+double SynthScene::albedo(double X, double Y) const { return impl_->texture.albedo(X, Y); }
+double SynthScene::radiance(double X, double Y) const {
+  Eigen::Vector2d g;
+  impl_->terrain.height(X, Y, &g);
+  return radiance(X, Y, g);
+}
+double SynthScene::radiance(double X, double Y, const Eigen::Vector2d& g) const {
+  const Eigen::Vector3d nrm = Eigen::Vector3d(-g.x(), -g.y(), 1).normalized();
+  const double shade = 0.3 + 0.7 * std::max(0.0, nrm.dot(impl_->sun));
+  return impl_->texture.albedo(X, Y) * shade;
+}
+double SynthScene::gain(int view) const { return impl_->gain[view]; }
+double SynthScene::offset(int view) const { return impl_->offset[view]; }
+
+Eigen::Vector2d SynthScene::project(int view, const Eigen::Vector3d& X) const { return impl_->cam[view].project(X); }
+Eigen::Matrix<double, 3, 4> SynthScene::camera(int view) const { return impl_->cam[view].P; }
+
+void SynthScene::ray(int view, double x, double y, Eigen::Vector3d& o, Eigen::Vector3d& d) const {
+  impl_->cam[view].ray(x, y, impl_->z_top, o, d);
+}
+
+std::optional<Eigen::Vector3d> SynthScene::ground_point(int view, double x, double y) const {
+  Eigen::Vector3d o, d;
+  ray(view, x, y, o, d);
+  const auto t = impl_->terrain.intersect(o, d);
+  if (!t) return std::nullopt;
+  return Eigen::Vector3d(o + *t * d);
+}
+
+bool SynthScene::visible(int view, const Eigen::Vector3d& X) const {
+  const Eigen::Vector2d x = project(view, X);
+  const double n = impl_->p.size;
+  if (!(x.x() >= 0 && x.y() >= 0 && x.x() <= n - 1 && x.y() <= n - 1)) return false;
+  Eigen::Vector3d o, d;
+  ray(view, x.x(), x.y(), o, d);
+  const auto t = impl_->terrain.intersect(o, d);
+  // X lies on this ray at tX; hidden when the terrain is met clearly before it.
+  const double tX = (X - o).dot(d);
+  if (!t) return true;
+  return *t >= tX - 1e-6 * (1 + impl_->p.gsd);
+}
+
+SynthTruth synth_truth_points(const SynthScene& scene, long points) {
+  SynthTruth truth;
+  truth.xy.resize(points, 6);
+  truth.ground.resize(points, 3);
+  if (points == 0) return truth;
+  const double S = scene.scene_size();
+  // Stratified: g x g cells over the scene square, visited in a seeded random order, one candidate per
+  // cell per round, until `points` candidates visible in all three views are found.
+  const long g = std::max(1L, static_cast<long>(std::ceil(std::sqrt(points * 1.25))));
+  std::vector<long> order(static_cast<size_t>(g * g));
+  std::iota(order.begin(), order.end(), 0L);
+  std::mt19937_64 rng(synth::hash(scene.params().seed, 0x77a));
+  std::uniform_real_distribution<double> unif(0.0, 1.0);
+  long found = 0;
+  for (int round = 0; round < 50 && found < points; ++round) {
+    std::shuffle(order.begin(), order.end(), rng);
+    for (long c : order) {
+      if (found == points) break;
+      const double X = (c % g + unif(rng)) * S / g, Y = (c / g + unif(rng)) * S / g;
+      const Eigen::Vector3d P(X, Y, scene.height(X, Y));
+      bool ok = true;
+      for (int v = 0; v < SynthScene::kViews && ok; ++v) ok = scene.visible(v, P);
+      if (!ok) continue;
+      for (int v = 0; v < SynthScene::kViews; ++v) truth.xy.block<1, 2>(found, 2 * v) = scene.project(v, P).transpose();
+      truth.ground.row(found) = P.transpose();
+      ++found;
+    }
+  }
+  if (found < points)
+    throw NumericalError("only " + std::to_string(found) + " of " + std::to_string(points) +
+                         " truth points are visible in all three views");
+  return truth;
+}
+
+}  // namespace tpkit

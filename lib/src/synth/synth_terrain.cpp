@@ -1,0 +1,266 @@
+// Terrain height field of tp-synth: bicubic B-spline over fractal control heights (synth_terrain.hpp).
+#include "tpkit/synth_terrain.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "tpkit/error.hpp"
+#include "tpkit/synth_noise.hpp"
+
+namespace tpkit {
+
+using synth::hash;
+using synth::uniform;
+using synth::value_noise;
+
+namespace {
+
+// Cubic B-spline weights at fraction t in [0, 1] and their derivatives.
+inline void bspline(double t, double w[4], double dw[4]) {
+  const double t2 = t * t, t3 = t2 * t, s = 1 - t;
+  w[0] = s * s * s / 6;
+  w[1] = (3 * t3 - 6 * t2 + 4) / 6;
+  w[2] = (-3 * t3 + 3 * t2 + 3 * t + 1) / 6;
+  w[3] = t3 / 6;
+  if (dw) {
+    dw[0] = -s * s / 2;
+    dw[1] = (3 * t2 - 4 * t) / 2;
+    dw[2] = (-3 * t2 + 2 * t + 1) / 2;
+    dw[3] = t2 / 2;
+  }
+}
+
+}  // namespace
+
+SynthTerrain::SynthTerrain(uint64_t seed, double scene, double relief, double spacing, double x0, double y0,
+                           double x1, double y1)
+    : h_(spacing) {
+  if (!(spacing > 0) || !(scene > 0) || !(x1 > x0) || !(y1 > y0)) throw NumericalError("synth terrain: bad extent");
+  // Control point k sits at grid coordinate k; the surface is defined for u in [1, n - 2]: one extra ring.
+  gx0_ = std::floor(x0 / h_ - 2) * h_;
+  gy0_ = std::floor(y0 / h_ - 2) * h_;
+  nx_ = static_cast<long>(std::ceil((x1 - gx0_) / h_)) + 3;
+  ny_ = static_cast<long>(std::ceil((y1 - gy0_) / h_)) + 3;
+  c_.assign(static_cast<size_t>(nx_) * ny_, 0.f);
+
+  const uint64_t ts = hash(seed, 0x7e77a1);
+  // Octaves of value noise: wavelength from S/1.5 down to 4 control spacings, persistence 0.5.
+  struct Octave { double lambda, amp, ox, oy; uint64_t seed; };
+  std::vector<Octave> octaves;
+  double lambda = scene / 1.5, amp = 1.0;
+  for (int o = 0; o < 16 && (o < 2 || lambda >= 4 * h_); ++o) {
+    octaves.push_back({lambda, amp, 1000 * uniform(ts, o, 1), 1000 * uniform(ts, o, 2), hash(ts, o, 3)});
+    lambda /= 2;
+    amp *= 0.5;
+  }
+  // A few large hills (+) and valleys (-): Gaussian bumps.
+  struct Hill { double x, y, s, a; };
+  std::vector<Hill> hills;
+  const int nh = 3 + static_cast<int>(hash(ts, 99) % 4);
+  for (int k = 0; k < nh; ++k) {
+    const double sgn = uniform(ts, 100, k, 4) < 0.6 ? 1 : -1;
+    hills.push_back({scene * (-0.1 + 1.2 * uniform(ts, 100, k, 0)), scene * (-0.1 + 1.2 * uniform(ts, 100, k, 1)),
+                     scene * (0.12 + 0.18 * uniform(ts, 100, k, 2)), sgn * (0.6 + 0.8 * uniform(ts, 100, k, 3))});
+  }
+  for (long j = 0; j < ny_; ++j) {
+    const double Y = gy0_ + j * h_;
+    for (long i = 0; i < nx_; ++i) {
+      const double X = gx0_ + i * h_;
+      double z = 0;
+      for (const auto& o : octaves) z += o.amp * value_noise(o.seed, X / o.lambda + o.ox, Y / o.lambda + o.oy);
+      for (const auto& hl : hills) {
+        const double dx = X - hl.x, dy = Y - hl.y;
+        z += hl.a * std::exp(-(dx * dx + dy * dy) / (2 * hl.s * hl.s));
+      }
+      c_[static_cast<size_t>(j) * nx_ + i] = static_cast<float>(z);
+    }
+  }
+  // Range of the surface over the scene: knots, then a dense local search around the extremes.
+  auto range = [&](double& lo, double& hi) {
+    lo = std::numeric_limits<double>::infinity();
+    hi = -lo;
+    double xlo = 0, ylo = 0, xhi = 0, yhi = 0;
+    const long n = static_cast<long>(std::ceil(scene / h_));
+    for (long j = 0; j <= n; ++j)
+      for (long i = 0; i <= n; ++i) {
+        const double X = std::min(scene, i * h_), Y = std::min(scene, j * h_);
+        const double z = height(X, Y);
+        if (z < lo) { lo = z; xlo = X; ylo = Y; }
+        if (z > hi) { hi = z; xhi = X; yhi = Y; }
+      }
+    for (int pass = 0; pass < 2; ++pass) {
+      const double cx = pass ? xhi : xlo, cy = pass ? yhi : ylo;
+      for (int b = -16; b <= 16; ++b)
+        for (int a = -16; a <= 16; ++a) {
+          const double X = std::clamp(cx + a * h_ / 16, 0.0, scene), Y = std::clamp(cy + b * h_ / 16, 0.0, scene);
+          const double z = height(X, Y);
+          lo = std::min(lo, z);
+          hi = std::max(hi, z);
+        }
+    }
+  };
+  // Provisional bounds so that height() works during the range search.
+  cmax_.clear();
+  double lo, hi;
+  range(lo, hi);
+  const double mid = 0.5 * (lo + hi);
+  const double scale = (hi - lo) > 0 ? relief / (hi - lo) : 0.0;
+  for (auto& v : c_) {
+    // Outside the scene the fractal goes on; clamping keeps every height within +-relief.
+    const double z = std::clamp((v - mid) * scale, -relief, relief);
+    v = static_cast<float>(z);
+  }
+  zmin_ = *std::min_element(c_.begin(), c_.end());
+  zmax_ = *std::max_element(c_.begin(), c_.end());
+  // Per-cell bound: max over the 4x4 control heights (convex hull property).
+  const long cx = nx_ - 3, cy = ny_ - 3;
+  std::vector<float> rowmax(static_cast<size_t>(cx) * ny_);
+  for (long j = 0; j < ny_; ++j)
+    for (long i = 0; i < cx; ++i) {
+      const float* p = &c_[static_cast<size_t>(j) * nx_ + i];
+      rowmax[static_cast<size_t>(j) * cx + i] = std::max(std::max(p[0], p[1]), std::max(p[2], p[3]));
+    }
+  cmax_.resize(static_cast<size_t>(cx) * cy);
+  for (long j = 0; j < cy; ++j)
+    for (long i = 0; i < cx; ++i) {
+      float m = rowmax[static_cast<size_t>(j) * cx + i];
+      for (int b = 1; b < 4; ++b) m = std::max(m, rowmax[static_cast<size_t>(j + b) * cx + i]);
+      cmax_[static_cast<size_t>(j) * cx + i] = m;
+    }
+}
+
+double SynthTerrain::eval(double u, double v, double* du, double* dv) const {
+  u = std::clamp(u, 1.0, static_cast<double>(nx_ - 2));
+  v = std::clamp(v, 1.0, static_cast<double>(ny_ - 2));
+  long ku = std::min(static_cast<long>(u), nx_ - 3), kv = std::min(static_cast<long>(v), ny_ - 3);
+  double wu[4], wv[4], dwu[4], dwv[4];
+  const bool grad = du != nullptr;
+  bspline(u - ku, wu, grad ? dwu : nullptr);
+  bspline(v - kv, wv, grad ? dwv : nullptr);
+  double z = 0, gu = 0, gv = 0;
+  for (int b = 0; b < 4; ++b) {
+    const float* p = &c_[static_cast<size_t>(kv - 1 + b) * nx_ + (ku - 1)];
+    const double r = wu[0] * p[0] + wu[1] * p[1] + wu[2] * p[2] + wu[3] * p[3];
+    z += wv[b] * r;
+    if (grad) {
+      gu += wv[b] * (dwu[0] * p[0] + dwu[1] * p[1] + dwu[2] * p[2] + dwu[3] * p[3]);
+      gv += dwv[b] * r;
+    }
+  }
+  if (grad) {
+    *du = gu;
+    *dv = gv;
+  }
+  return z;
+}
+
+double SynthTerrain::height(double X, double Y) const {
+  return eval((X - gx0_) / h_, (Y - gy0_) / h_, nullptr, nullptr);
+}
+
+double SynthTerrain::height(double X, double Y, Eigen::Vector2d* grad) const {
+  const double u = (X - gx0_) / h_, v = (Y - gy0_) / h_;
+  double gu = 0, gv = 0;
+  const double z = eval(u, v, &gu, &gv);
+  // Clamped outside the grid: the gradient there is that of the clamped (constant) direction.
+  const bool inu = u > 1 && u < nx_ - 2, inv = v > 1 && v < ny_ - 2;
+  if (grad) *grad = Eigen::Vector2d(inu ? gu / h_ : 0.0, inv ? gv / h_ : 0.0);
+  return z;
+}
+
+std::optional<double> SynthTerrain::refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t, double tol,
+                                           Eigen::Vector2d* grad) const {
+  for (int it = 0; it < 8; ++it) {
+    Eigen::Vector2d g;
+    const double f = o.z() + t * d.z() - height(o.x() + t * d.x(), o.y() + t * d.y(), &g);
+    const double fp = d.z() - (g.x() * d.x() + g.y() * d.y());
+    if (!(fp < -1e-9)) return std::nullopt;
+    const double dt = f / fp;
+    t -= dt;
+    if (std::abs(dt) < tol + 1e-15 * std::abs(t)) {
+      if (grad) *grad = g;
+      return t;
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
+  if (!(d.z() < 0)) return std::nullopt;
+  auto f = [&](double t) { return o.z() + t * d.z() - height(o.x() + t * d.x(), o.y() + t * d.y()); };
+  const double t0 = std::max(0.0, (o.z() - zmax_) / -d.z());
+  const double t1 = (o.z() - zmin_) / -d.z();
+  if (!(t1 >= t0)) return std::nullopt;
+  // Bracketed refinement (Illinois false position) of a sign change f(a) > 0 >= f(b).
+  auto solve = [&](double a, double b, double fa, double fb) {
+    const double tol = 1e-10 + 1e-15 * std::abs(b);
+    int side = 0;
+    for (int it = 0; it < 200 && b - a > tol; ++it) {
+      double c = (a * fb - b * fa) / (fb - fa);
+      if (!(c > a && c < b) || it % 8 == 7) c = 0.5 * (a + b);
+      const double fc = f(c);
+      if (fc > 0) {
+        a = c;
+        fa = fc;
+        if (side == 1) fb *= 0.5;
+        side = 1;
+      } else {
+        b = c;
+        fb = fc;
+        if (fc == 0) return c;
+        if (side == -1) fa *= 0.5;
+        side = -1;
+      }
+    }
+    return std::abs(fa) < std::abs(fb) ? a : b;
+  };
+  const double u0 = (o.x() + t0 * d.x() - gx0_) / h_, v0 = (o.y() + t0 * d.y() - gy0_) / h_;
+  const double du = d.x() / h_, dv = d.y() / h_;
+  const double hspeed = std::hypot(du, dv);  // grid units per unit t
+  long ku = static_cast<long>(std::floor(u0)), kv = static_cast<long>(std::floor(v0));
+  const double inf = std::numeric_limits<double>::infinity();
+  const int su = du > 0 ? 1 : -1, sv = dv > 0 ? 1 : -1;
+  double tnu = du > 0 ? t0 + (ku + 1 - u0) / du : (du < 0 ? t0 + (ku - u0) / du : inf);
+  double tnv = dv > 0 ? t0 + (kv + 1 - v0) / dv : (dv < 0 ? t0 + (kv - v0) / dv : inf);
+  const double tdu = du != 0 ? 1 / std::abs(du) : inf, tdv = dv != 0 ? 1 / std::abs(dv) : inf;
+  const long cxn = nx_ - 3, cyn = ny_ - 3;
+  double ta = t0;
+  double fprev = f(t0), tprev = t0;
+  if (fprev <= 0) return t0;
+  for (long guard = 0; guard < 100000000; ++guard) {
+    const double tb = std::min(std::min(tnu, tnv), t1);
+    const long ci = ku - 1, cj = kv - 1;
+    const double bound =
+        (ci >= 0 && ci < cxn && cj >= 0 && cj < cyn) ? cmax_[static_cast<size_t>(cj) * cxn + ci] : zmax_;
+    if (o.z() + tb * d.z() <= bound + 1e-9 * (1 + std::abs(bound))) {
+      double a = std::max(ta, (o.z() - bound) / -d.z());
+      if (a != tprev) {
+        fprev = f(a);
+        tprev = a;
+        if (fprev <= 0) return a;  // cannot happen for a true bound; kept for safety
+      }
+      const int n = 1 + static_cast<int>(std::ceil((tb - a) * hspeed * 2));  // half-cell samples
+      for (int s = 1; s <= n; ++s) {
+        const double b = s == n ? tb : a + (tb - a) * s / n;
+        const double fb = f(b);
+        if (fb <= 0) return solve(a, b, fprev, fb);
+        a = b;
+        fprev = fb;
+        tprev = b;
+      }
+    }
+    if (tb >= t1) break;
+    ta = tb;
+    if (tnu < tnv) {
+      ku += su;
+      tnu += tdu;
+    } else {
+      kv += sv;
+      tnv += tdv;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace tpkit

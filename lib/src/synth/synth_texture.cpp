@@ -1,0 +1,167 @@
+// Ground albedo of tp-synth (synth_texture.hpp).
+#include "tpkit/synth_texture.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "tpkit/synth_noise.hpp"
+
+namespace tpkit {
+
+using synth::hash;
+using synth::lerp;
+using synth::smoothstep;
+using synth::uniform;
+using synth::value_noise;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+// Weight 1 inside (signed distance sd > 0 inside), 0 outside, a smooth ramp of width w across sd = 0.
+inline double inside(double sd, double w) { return smoothstep(-0.5 * w, 0.5 * w, sd); }
+// Signed distance to an axis-aligned rectangle (centre cx, cy, half sizes hx, hy): positive inside.
+inline double rect_sd(double x, double y, double cx, double cy, double hx, double hy) {
+  const double qx = std::abs(x - cx) - hx, qy = std::abs(y - cy) - hy;
+  const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0);
+  return -(std::sqrt(ox * ox + oy * oy) + std::min(std::max(qx, qy), 0.0));
+}
+// Partition of [0, L) into n cells with seeded random widths; returns the cell of x and the distance
+// from x to the nearest cell boundary (0 and L included).
+inline int partition(uint64_t s, int n, double L, double x, double* dist) {
+  double w[8], total = 0;
+  for (int k = 0; k < n; ++k) total += (w[k] = 0.5 + uniform(s, k));
+  double b = 0;
+  for (int k = 0; k < n; ++k) {
+    const double e = (k == n - 1) ? L : b + L * w[k] / total;
+    if (x < e || k == n - 1) {
+      *dist = std::min(x - b, e - x);
+      return k;
+    }
+    b = e;
+  }
+  *dist = 0;
+  return 0;
+}
+}  // namespace
+
+SynthTexture::SynthTexture(uint64_t seed, double gsd, double sun_azimuth, double sun_elevation)
+    : seed_(hash(seed, 0x7e47)), gsd_(gsd) {
+  ew_ = std::max(gsd_, 0.3);
+  const double a = kPi * (0.05 + 0.4 * uniform(seed_, 1));
+  ca_ = std::cos(a);
+  sa_ = std::sin(a);
+  ou_ = block_ * uniform(seed_, 2);
+  ov_ = block_ * uniform(seed_, 3);
+  // Sun direction in the layout frame (u, v) = rotation(X, Y), per metre of building height.
+  const double sx = std::cos(sun_azimuth), sy = std::sin(sun_azimuth);
+  const double len = 1 / std::tan(sun_elevation);
+  sun_u_ = len * (ca_ * sx + sa_ * sy);
+  sun_v_ = len * (-sa_ * sx + ca_ * sy);
+}
+
+double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const {
+  const uint64_t bh = hash(seed_, 10, bi, bj);
+  const int n1 = 2 + static_cast<int>(bh % 3);
+  double d1, d2;
+  const int s = partition(hash(bh, 1), n1, block_, lu, &d1);
+  const uint64_t sh = hash(bh, 2, s);
+  const int n2 = 2 + static_cast<int>(sh % 4);
+  const int p = partition(hash(sh, 3), n2, block_, lv, &d2);
+  const uint64_t ph = hash(sh, 4, p);
+  double a = 0.15 + 0.5 * synth::unit(hash(ph, 5));
+  const double kind = synth::unit(hash(ph, 6));
+  if (kind < 0.6) {
+    // Crop rows: stripes at a parcel-specific orientation and period (>= 3 gsd).
+    const double ang = kPi * synth::unit(hash(ph, 7));
+    const double period = std::max(2.5 + 6 * synth::unit(hash(ph, 8)), 3 * gsd_);
+    const double amp = 0.04 + 0.1 * synth::unit(hash(ph, 9));
+    a += amp * std::sin(2 * kPi * (u * std::cos(ang) + v * std::sin(ang)) / period);
+  } else {
+    // Rough fields: blotchy noise.
+    const double l = std::max(4 + 8 * synth::unit(hash(ph, 10)), 3 * gsd_);
+    a += 0.08 * value_noise(hash(ph, 11), u / l, v / l);
+  }
+  // Dark hedges (1 m half width) along every parcel boundary.
+  const double d = std::min(d1, d2);
+  return lerp(0.1, a, inside(d - 1.0, ew_));
+}
+
+double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const {
+  const double lot = block_ / 4;
+  const int64_t li = static_cast<int64_t>(std::floor(lu / lot)), lj = static_cast<int64_t>(std::floor(lv / lot));
+  // In the lot, [0, 60): footprint + shadow stay >= 3 m inside it (30 + 5 + 16 + 5.6 < 60).
+  const double x = lu - li * lot, y = lv - lj * lot;
+  double a = 0.33 + 0.05 * value_noise(hash(seed_, 20), u / 3, v / 3);
+  const uint64_t h = hash(seed_, 21, bi * 8 + li, bj * 8 + lj);
+  if (synth::unit(h) > 0.85) {
+    // A small park: trees.
+    return lerp(a, woodland(u, v), inside(std::min(std::min(x, lot - x), std::min(y, lot - y)) - 3, ew_));
+  }
+  const double cx = lot / 2 + 5 * (2 * synth::unit(hash(h, 1)) - 1);
+  const double cy = lot / 2 + 5 * (2 * synth::unit(hash(h, 2)) - 1);
+  const double hx = 6 + 10 * synth::unit(hash(h, 3)), hy = 5 + 10 * synth::unit(hash(h, 4));
+  const double bh = 3 + 5 * synth::unit(hash(h, 5));  // building height (m); shadow |sun| * bh <= 6 m
+  // Cast shadow: the footprint moved away from the sun, darkening the pavement.
+  const double sd_shadow = rect_sd(x, y, cx - sun_u_ * bh, cy - sun_v_ * bh, hx, hy);
+  a *= 1 - 0.55 * inside(sd_shadow, ew_);
+  // Gabled roof: ridge along the longer side, the two halves lit differently.
+  const double roof = 0.3 + 0.5 * synth::unit(hash(h, 6));
+  const bool along_x = hx > hy;
+  const double across = along_x ? (y - cy) : (x - cx);
+  const double facing = along_x ? sun_v_ : sun_u_;
+  const double side = smoothstep(-0.5 * ew_, 0.5 * ew_, across) * 2 - 1;  // -1 .. 1 across the ridge
+  const double lit = roof * (1 + 0.25 * side * (facing > 0 ? 1 : -1));
+  const double sd_roof = rect_sd(x, y, cx, cy, hx, hy);
+  // Roof edge: a thin bright parapet (0.6 m).
+  const double rim = 1 - inside(sd_roof - 0.6, ew_);
+  const double roof_a = lerp(lit, 0.75, 0.6 * rim);
+  return lerp(a, roof_a, inside(sd_roof, ew_));
+}
+
+double SynthTexture::woodland(double u, double v) const {
+  const double l = std::max(5.0, 3 * gsd_);
+  const double c = value_noise(hash(seed_, 30), u / l, v / l) + 0.5 * value_noise(hash(seed_, 31), 2 * u / l, 2 * v / l);
+  const double crown = smoothstep(-0.3, 0.5, c);
+  return 0.07 + 0.2 * crown;
+}
+
+double SynthTexture::albedo(double X, double Y) const {
+  const double u = ca_ * X + sa_ * Y + ou_, v = -sa_ * X + ca_ * Y + ov_;
+  const int64_t bi = static_cast<int64_t>(std::floor(u / block_)), bj = static_cast<int64_t>(std::floor(v / block_));
+  const double lu = u - bi * block_, lv = v - bj * block_;
+  const double type = uniform(seed_, 1, bi, bj);
+  double a;
+  if (type < 0.55)
+    a = farmland(bi, bj, lu, lv, u, v);
+  else if (type < 0.82)
+    a = urban(bi, bj, lu, lv, u, v);
+  else
+    a = woodland(u, v);
+  // Every block fades to a common verge albedo at its border (2 m), so the albedo is continuous there.
+  const double db = std::min(std::min(lu, block_ - lu), std::min(lv, block_ - lv));
+  a = lerp(0.3, a, inside(db - 2.0, ew_));
+  // Roads on some whole block-grid lines (u = i B or v = j B), 6..12 m wide, with dashed centre lines.
+  for (int axis = 0; axis < 2; ++axis) {
+    const double l = axis == 0 ? lu : lv;
+    const int64_t k = (axis == 0 ? bi : bj) + (l > block_ / 2 ? 1 : 0);
+    const double dist = std::min(l, block_ - l);
+    const uint64_t rh = hash(seed_, 40 + axis, k);
+    if (synth::unit(rh) > 0.45) continue;
+    const double half = 3 + 3 * synth::unit(hash(rh, 1));
+    if (dist > half + ew_) continue;
+    const double asphalt = 0.2 + 0.25 * synth::unit(hash(rh, 2));
+    double r = asphalt + 0.03 * value_noise(hash(rh, 3), u / 2, v / 2);
+    // Dashed centre marking: 0.4 m wide (at least one edge width), 3 m dashes every 9 m.
+    const double along = axis == 0 ? v : u;
+    const double phase = along / 9 - std::floor(along / 9);
+    const double dash = inside(1.5 / 9 - std::abs(phase - 0.5), ew_ / 9);
+    r = lerp(r, 0.85, dash * inside(0.2 - dist, ew_) * (half > 4 ? 1 : 0));
+    a = lerp(a, r, inside(half - dist, ew_));
+  }
+  // Large-scale modulation and fine ground noise (wavelength >= 2 gsd).
+  a *= 1 + 0.15 * value_noise(hash(seed_, 50), X / 180, Y / 180);
+  const double lf = std::max(1.0, 2 * gsd_);
+  a += 0.025 * value_noise(hash(seed_, 51), X / lf, Y / lf);
+  return std::clamp(a, 0.02, 0.98);
+}
+
+}  // namespace tpkit
