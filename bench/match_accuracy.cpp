@@ -1,0 +1,188 @@
+// bench_match_accuracy: accuracy of tp-match / tp-chain tie points.
+//
+//   bench_match_accuracy --synth DIR [--check MED P90] [--threads N] [--window W]
+//       DIR from `tp-synth --out DIR`: matches view1-view2, view1-view3, view2-view3 with the tp-match
+//       library (default options), chains them into triplets, and prints for each pair and for the
+//       triplets the error distribution (count, median, 90th percentile, max; pixels) of raw SIFT
+//       and of the refined positions in image 2 (resp. views 2 and 3) against the truth:
+//       X = ground_point(view 1, x1, y1), truth = project(view v, X) when visible.
+//       --check: exit status 1 when a refined median or 90th percentile is above MED / P90.
+//   bench_match_accuracy --tracks FILE [--check-rmse R]
+//       Affine maximum-likelihood fit of the tracks (Tomasi-Kanade: rank-3 factorization of the
+//       centred 2K x n measurement matrix) and its reprojection RMSE, sqrt(mean squared 2-D residual)
+//       over all views and tracks, pixels. --check-rmse: exit 1 when above R.
+//   bench_match_accuracy --render8 IN OUT
+//       The 8-bit rendering tp-match's detector sees (percentile stretch 0.5..99.5 of band 1).
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tpkit/formats.hpp"
+#include "tpkit/image_tiles.hpp"
+#include "tpkit/match_pair.hpp"
+#include "tpkit/synth_scene.hpp"
+#include "tpkit/tracks_chain.hpp"
+
+namespace {
+struct Dist {
+  long n = 0;
+  double med = 0, p90 = 0, max = 0;
+};
+Dist dist(std::vector<double> e) {
+  Dist d;
+  d.n = static_cast<long>(e.size());
+  if (e.empty()) return d;
+  std::sort(e.begin(), e.end());
+  auto q = [&](double p) { return e[std::min(e.size() - 1, static_cast<size_t>(std::floor(p * (e.size() - 1) + 0.5)))]; };
+  d.med = q(0.5);
+  d.p90 = q(0.9);
+  d.max = e.back();
+  return d;
+}
+void print(const char* what, const Dist& d) {
+  std::printf("  %-26s count %6ld  median %.4f  p90 %.4f  max %.4f px\n", what, d.n, d.med, d.p90, d.max);
+}
+
+// Affine ML fit of tracks: RMSE of the 2-D residuals, pixels.
+double affine_ml_rmse(const tpkit::Tracks& t, std::vector<double>* per_track = nullptr) {
+  const int K = t.views();
+  const Eigen::Index n = static_cast<Eigen::Index>(t.size());
+  Eigen::MatrixXd W(2 * K, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int c = 0; c < 2 * K; ++c) W(c, i) = t.xy(i, c);
+  Eigen::VectorXd mean = W.rowwise().mean();
+  W.colwise() -= mean;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(W * W.transpose());
+  Eigen::MatrixXd U = es.eigenvectors().rightCols(3);  // the three largest
+  Eigen::MatrixXd R = W - U * (U.transpose() * W);
+  if (per_track) {
+    per_track->resize(n);
+    for (Eigen::Index i = 0; i < n; ++i) (*per_track)[i] = std::sqrt(R.col(i).squaredNorm() / K);
+  }
+  return std::sqrt(R.squaredNorm() / (static_cast<double>(K) * n));
+}
+
+double secs(std::chrono::steady_clock::time_point a) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::string synth, tracks, r_in, r_out;
+    double cmed = -1, cp90 = -1, crmse = -1;
+    int threads = std::max(1u, std::thread::hardware_concurrency());
+    int window = 21;
+    for (int i = 1; i < argc; ++i) {
+      std::string a = argv[i];
+      auto need = [&](int k) {
+        if (i + k >= argc) throw std::runtime_error("missing value after " + a);
+      };
+      if (a == "--synth") need(1), synth = argv[++i];
+      else if (a == "--tracks") need(1), tracks = argv[++i];
+      else if (a == "--check") need(2), cmed = std::stod(argv[++i]), cp90 = std::stod(argv[++i]);
+      else if (a == "--check-rmse") need(1), crmse = std::stod(argv[++i]);
+      else if (a == "--threads") need(1), threads = std::stoi(argv[++i]);
+      else if (a == "--window") need(1), window = std::stoi(argv[++i]);
+      else if (a == "--render8") need(2), r_in = argv[++i], r_out = argv[++i];
+      else {
+        std::fprintf(stderr, "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n");
+        return 2;
+      }
+    }
+    if (!r_in.empty()) {
+      auto s = tpkit::open_image_source(r_in, 0, {}, "");
+      auto st = tpkit::percentile_stretch(s);
+      auto r = tpkit::read_valid_region(s, 0, 0, s.info.width, s.info.height);
+      tpkit::write_image_u8(r_out, r.width, r.height, tpkit::render_u8(r, st));
+      std::fprintf(stderr, "%s: stretch %g..%g -> %s\n", r_in.c_str(), st.lo, st.hi, r_out.c_str());
+      return 0;
+    }
+    bool fail = false;
+    if (!tracks.empty()) {
+      tpkit::Tracks t = tpkit::read_tracks(tracks);
+      std::vector<double> e;
+      double rmse = affine_ml_rmse(t, &e);
+      Dist d = dist(e);
+      long over = std::count_if(e.begin(), e.end(), [](double v) { return v > 1.0; });
+      std::printf("%s: %zu tracks, %d views; affine ML (rank-3 factorization) reprojection RMSE %.4f px\n", tracks.c_str(),
+                  t.size(), t.views(), rmse);
+      print("per-track rms residual", d);
+      std::printf("  tracks with rms residual > 1 px: %ld\n", over);
+      if (crmse > 0 && !(rmse <= crmse)) {
+        std::printf("FAIL: RMSE %.4f > %.4f\n", rmse, crmse);
+        fail = true;
+      }
+    }
+    if (!synth.empty()) {
+      tpkit::SynthScene scene = tpkit::SynthScene::load(synth);
+      std::string v[3] = {synth + "/view1.tif", synth + "/view2.tif", synth + "/view3.tif"};
+      tpkit::ImageSource src[3];
+      for (int k = 0; k < 3; ++k) src[k] = tpkit::open_image_source(v[k], 0, {}, "");
+      tpkit::PairMatchOptions po;
+      po.threads = threads;
+      po.lsm.window = window;
+      const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+      std::vector<tpkit::Matches> ms;
+      for (auto& p : pairs) {
+        auto t0 = std::chrono::steady_clock::now();
+        tpkit::PairMatchStats st;
+        tpkit::Matches m = tpkit::match_pair(src[p[0]], src[p[1]], po, &st);
+        double dt = secs(t0);
+        std::vector<double> eraw, eref;
+        int ckx = m.extra.find("kx2"), cky = m.extra.find("ky2");
+        for (size_t r = 0; r < m.size(); ++r) {
+          auto X = scene.ground_point(p[0], m.xy(r, 0), m.xy(r, 1));
+          if (!X || !scene.visible(p[1], *X)) continue;
+          Eigen::Vector2d tr = scene.project(p[1], *X);
+          eraw.push_back((Eigen::Vector2d(m.extra.values(r, ckx), m.extra.values(r, cky)) - tr).norm());
+          eref.push_back((Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3)) - tr).norm());
+        }
+        std::printf("pair view%d-view%d: keypoints %ld/%ld, verified %ld, refined %ld, %.2f s\n", p[0] + 1, p[1] + 1,
+                    st.keypoints1, st.keypoints2, st.verified, st.refined, dt);
+        Dist dr = dist(eraw), df = dist(eref);
+        print("raw SIFT (kx2, ky2)", dr);
+        print("refined LSM (x2, y2)", df);
+        if (cmed > 0 && !(df.n > 0 && df.med <= cmed && df.p90 <= cp90)) {
+          std::printf("FAIL: refined median %.4f / p90 %.4f above %.4f / %.4f\n", df.med, df.p90, cmed, cp90);
+          fail = true;
+        }
+        ms.push_back(std::move(m));
+      }
+      tpkit::ChainOptions co;
+      co.images = {v[0], v[1], v[2]};
+      tpkit::ChainStats cs;
+      tpkit::Tracks t = tpkit::chain_tracks(ms, co, &cs);
+      std::vector<double> e2, e3;
+      for (size_t r = 0; r < t.size(); ++r) {
+        auto X = scene.ground_point(0, t.xy(r, 0), t.xy(r, 1));
+        if (!X) continue;
+        if (scene.visible(1, *X)) e2.push_back((t.point(r, 1) - scene.project(1, *X)).norm());
+        if (scene.visible(2, *X)) e3.push_back((t.point(r, 2) - scene.project(2, *X)).norm());
+      }
+      std::printf("triplets (tp-chain): %zu\n", t.size());
+      print("view 2 position", dist(e2));
+      print("view 3 position", dist(e3));
+      std::vector<double> all = e2;
+      all.insert(all.end(), e3.begin(), e3.end());
+      Dist da = dist(all);
+      print("views 2+3", da);
+      if (t.size() > 3) std::printf("  affine ML reprojection RMSE of the triplets %.4f px\n", affine_ml_rmse(t));
+      if (cmed > 0 && !(da.n > 0 && da.med <= cmed && da.p90 <= cp90)) {
+        std::printf("FAIL: triplet median %.4f / p90 %.4f above %.4f / %.4f\n", da.med, da.p90, cmed, cp90);
+        fail = true;
+      }
+    }
+    return fail ? 1 : 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_match_accuracy: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,122 @@
+#include "tpkit/image_tiles.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "tpkit/error.hpp"
+
+namespace tpkit {
+
+ImageSource open_image_source(const std::string& path, int band, std::optional<double> nodata, const std::string& mask) {
+  ImageSource s;
+  s.path = path;
+  s.band = band;
+  s.info = image_info(path);
+  if (band < 0 || band >= s.info.bands)
+    throw InputError(path, 0, "band " + std::to_string(band + 1) + " does not exist (the image has " +
+                                  std::to_string(s.info.bands) + (s.info.bands == 1 ? " band)" : " bands)"));
+  if (s.info.width <= 0 || s.info.height <= 0) throw InputError(path, 0, "empty image");
+  s.nodata = nodata ? nodata : s.info.nodata;
+  if (!mask.empty()) {
+    ImageInfo mi = image_info(mask);
+    if (mi.width != s.info.width || mi.height != s.info.height)
+      throw InputError(mask, 0, "mask is " + std::to_string(mi.width) + "x" + std::to_string(mi.height) + " but the image " +
+                                    path + " is " + std::to_string(s.info.width) + "x" + std::to_string(s.info.height));
+    s.mask = mask;
+  }
+  return s;
+}
+
+Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h) {
+  Raster r = read_region(src.path, src.band, x0, y0, w, h);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  if (src.nodata) {
+    const double nd = *src.nodata;
+    for (float& v : r.data)
+      if (v == static_cast<float>(nd) || (std::isnan(nd) && std::isnan(v))) v = nan;
+  }
+  if (!src.mask.empty() && !r.data.empty()) {
+    Raster m = read_region(src.mask, 0, r.x0, r.y0, r.width, r.height);
+    for (size_t i = 0; i < r.data.size(); ++i)
+      if (!(m.data[i] != 0)) r.data[i] = nan;
+  }
+  for (float& v : r.data)
+    if (!std::isfinite(v)) v = nan;
+  return r;
+}
+
+Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, long max_samples) {
+  const long W = src.info.width, H = src.info.height;
+  // regular subsample with step k in both directions
+  long k = 1;
+  while ((W / k) * (H / k) > max_samples) ++k;
+  std::vector<float> samples;
+  samples.reserve(static_cast<size_t>((W / k + 1) * (H / k + 1)));
+  const long strip = std::max(k, (k * std::max(1L, (1L << 22) / std::max(1L, W)) / k));
+  for (long y = 0; y < H; y += strip) {
+    long h = std::min(strip, H - y);
+    Raster r = read_valid_region(src, 0, y, W, h);
+    for (long yy = 0; yy < h; ++yy) {
+      if ((y + yy) % k) continue;
+      for (long x = 0; x < W; x += k) {
+        float v = r.at(x, yy);
+        if (!std::isnan(v)) samples.push_back(v);
+      }
+    }
+  }
+  if (samples.empty()) throw InputError(src.path, 0, "every pixel of band " + std::to_string(src.band + 1) + " is nodata or masked");
+  Stretch s;
+  s.valid_samples = static_cast<long>(samples.size());
+  auto at = [&](double p) {
+    size_t i = static_cast<size_t>(std::llround(p / 100.0 * static_cast<double>(samples.size() - 1)));
+    i = std::min(i, samples.size() - 1);
+    std::nth_element(samples.begin(), samples.begin() + static_cast<long>(i), samples.end());
+    return static_cast<double>(samples[i]);
+  };
+  s.lo = at(p_lo);
+  s.hi = at(p_hi);
+  return s;
+}
+
+std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<uint8_t>* valid) {
+  std::vector<uint8_t> out(r.data.size());
+  if (valid) valid->assign(r.data.size(), 255);
+  const double span = s.hi - s.lo;
+  const double g = span > 0 ? 255.0 / span : 0.0;
+  for (size_t i = 0; i < r.data.size(); ++i) {
+    float v = r.data[i];
+    if (std::isnan(v)) {
+      out[i] = 0;
+      if (valid) (*valid)[i] = 0;
+      continue;
+    }
+    double q = std::round((v - s.lo) * g);
+    out[i] = static_cast<uint8_t>(std::clamp(q, 0.0, 255.0));
+  }
+  return out;
+}
+
+std::vector<Tile> tile_grid(long width, long height, long tile, long overlap) {
+  if (tile <= 0) tile = std::max(width, height);
+  std::vector<Tile> tiles;
+  long nx = (width + tile - 1) / tile, ny = (height + tile - 1) / tile;
+  // even split: cores of nearly equal size
+  for (long j = 0; j < ny; ++j)
+    for (long i = 0; i < nx; ++i) {
+      Tile t;
+      t.index = static_cast<int>(tiles.size());
+      t.cx0 = width * i / nx;
+      t.cx1 = width * (i + 1) / nx;
+      t.cy0 = height * j / ny;
+      t.cy1 = height * (j + 1) / ny;
+      t.rx0 = std::max(0L, t.cx0 - overlap);
+      t.ry0 = std::max(0L, t.cy0 - overlap);
+      t.rx1 = std::min(width, t.cx1 + overlap);
+      t.ry1 = std::min(height, t.cy1 + overlap);
+      tiles.push_back(t);
+    }
+  return tiles;
+}
+
+}  // namespace tpkit

@@ -1,0 +1,92 @@
+#include "tpkit/match_descriptors.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <opencv2/features2d.hpp>
+#include <opencv2/flann.hpp>
+
+namespace tpkit {
+
+namespace {
+// For each row of q, its two nearest neighbours in t (distances as L2, not squared).
+void knn2(const cv::Mat& q, const cv::Mat& t, bool exact, const DescriptorMatchOptions& o, std::vector<std::vector<cv::DMatch>>& out) {
+  out.clear();
+  if (q.rows == 0 || t.rows == 0) {
+    out.resize(q.rows);
+    return;
+  }
+  if (exact) {
+    cv::BFMatcher bf(cv::NORM_L2);
+    bf.knnMatch(q, t, out, 2);
+  } else {
+    cv::flann::KDTreeIndexParams ip(o.flann_trees);
+    cv::flann::SearchParams sp(o.flann_checks);
+    cv::flann::Index index(t, ip, cvflann::FLANN_DIST_L2);
+    cv::Mat idx(q.rows, 2, CV_32S), dist(q.rows, 2, CV_32F);
+    index.knnSearch(q, idx, dist, std::min(2, t.rows), sp);
+    out.resize(q.rows);
+    for (int r = 0; r < q.rows; ++r) {
+      for (int k = 0; k < std::min(2, t.rows); ++k) {
+        int j = idx.at<int>(r, k);
+        if (j < 0 || j >= t.rows) continue;
+        out[r].emplace_back(r, j, std::sqrt(std::max(0.f, dist.at<float>(r, k))));
+      }
+    }
+  }
+}
+}  // namespace
+
+std::vector<DescriptorMatch> match_descriptors(const cv::Mat& desc1, const cv::Mat& desc2, const DescriptorMatchOptions& o) {
+  std::vector<DescriptorMatch> res;
+  if (desc1.rows == 0 || desc2.rows == 0) return res;
+  // FLANN's kd-tree randomness comes from the C library rand(): fix it for determinism
+  bool exact = desc1.rows < o.exact_below && desc2.rows < o.exact_below;
+  std::vector<std::vector<cv::DMatch>> f, b;
+  cv::theRNG().state = 0x1234567;
+  std::srand(12345);
+  knn2(desc1, desc2, exact, o, f);
+  if (o.mutual) {
+    std::srand(54321);
+    knn2(desc2, desc1, exact, o, b);
+  }
+  for (int i = 0; i < desc1.rows; ++i) {
+    if (f[i].empty()) continue;
+    const cv::DMatch& m = f[i][0];
+    float ratio = 0.f;
+    if (f[i].size() > 1) {
+      float d2 = f[i][1].distance;
+      ratio = d2 > 0 ? m.distance / d2 : 1.f;
+      if (ratio >= o.ratio) continue;
+    } else if (desc2.rows > 1) {
+      continue;  // the second neighbour is unknown: cannot test the ratio
+    }
+    if (o.mutual) {
+      const auto& bb = b[m.trainIdx];
+      if (bb.empty() || bb[0].trainIdx != i) continue;
+    }
+    res.push_back({i, m.trainIdx, m.distance, ratio});
+  }
+  return res;
+}
+
+std::vector<size_t> grid_select(const std::vector<cv::Point2f>& pts, const std::vector<float>& score, long width, long height,
+                                int cells, int per_cell) {
+  std::vector<size_t> order(pts.size());
+  std::iota(order.begin(), order.end(), 0);
+  if (cells <= 0 || per_cell <= 0) return order;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return score[a] < score[b]; });
+  std::vector<int> count(static_cast<size_t>(cells) * cells, 0);
+  std::vector<size_t> keep;
+  for (size_t i : order) {
+    long cx = std::clamp<long>(static_cast<long>((pts[i].x + 0.5) * cells / std::max(1L, width)), 0, cells - 1);
+    long cy = std::clamp<long>(static_cast<long>((pts[i].y + 0.5) * cells / std::max(1L, height)), 0, cells - 1);
+    int& c = count[static_cast<size_t>(cy * cells + cx)];
+    if (c >= per_cell) continue;
+    ++c;
+    keep.push_back(i);
+  }
+  std::sort(keep.begin(), keep.end());
+  return keep;
+}
+
+}  // namespace tpkit

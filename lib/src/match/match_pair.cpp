@@ -1,0 +1,235 @@
+#include "tpkit/match_pair.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "tpkit/affine_fundamental.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/text_table.hpp"
+#include "tpkit/tool_support.hpp"
+
+namespace tpkit {
+
+Eigen::Matrix2d keypoint_affine(double size1, double angle1_deg, double size2, double angle2_deg) {
+  double s = size1 > 0 && size2 > 0 ? size2 / size1 : 1.0;
+  double a = (angle2_deg - angle1_deg) * M_PI / 180.0;
+  if (angle1_deg < 0 || angle2_deg < 0) a = 0;  // no orientation
+  Eigen::Matrix2d R;
+  R << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+  return s * R;
+}
+
+namespace {
+template <class F>
+void parallel_for(size_t n, int threads, F&& f) {
+  std::atomic<size_t> next{0};
+  std::exception_ptr err;
+  std::mutex m;
+  auto work = [&]() {
+    for (;;) {
+      size_t i = next++;
+      if (i >= n) return;
+      try {
+        f(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(m);
+        if (!err) err = std::current_exception();
+        next = n;
+        return;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  int w = std::min<int>(std::max(1, threads), static_cast<int>(std::max<size_t>(1, n)));
+  for (int k = 1; k < w; ++k) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (err) std::rethrow_exception(err);
+}
+}  // namespace
+
+Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOptions& o, PairMatchStats* stats) {
+  PairMatchStats st;
+  Matches M;
+  M.image1 = {a.path, a.info.width, a.info.height};
+  M.image2 = {b.path, b.info.width, b.info.height};
+
+  // 1. keypoints
+  Keypoints K1, K2;
+  {
+    std::unique_ptr<Progress> p1, p2;
+    if (o.progress) p1 = std::make_unique<Progress>("detect " + a.path, (long)tile_grid(a.info.width, a.info.height, o.sift.tile, o.sift.overlap).size());
+    K1 = detect_sift_tiles(a, o.sift, o.threads, p1.get());
+    if (p1) p1->done();
+    if (o.progress) p2 = std::make_unique<Progress>("detect " + b.path, (long)tile_grid(b.info.width, b.info.height, o.sift.tile, o.sift.overlap).size());
+    K2 = detect_sift_tiles(b, o.sift, o.threads, p2.get());
+    if (p2) p2->done();
+  }
+  st.keypoints1 = static_cast<long>(K1.kp.size());
+  st.keypoints2 = static_cast<long>(K2.kp.size());
+
+  // 2. putative matches
+  std::vector<DescriptorMatch> put = match_descriptors(K1.desc, K2.desc, o.desc);
+  st.putative = static_cast<long>(put.size());
+  K1.desc.release();
+  K2.desc.release();
+
+  // 3. affine F RANSAC
+  Eigen::MatrixX4d xy(put.size(), 4);
+  for (size_t i = 0; i < put.size(); ++i) {
+    const auto &k1 = K1.kp[put[i].i1], &k2 = K2.kp[put[i].i2];
+    xy.row(static_cast<Eigen::Index>(i)) << k1.pt.x, k1.pt.y, k2.pt.x, k2.pt.y;
+  }
+  AffineFundamentalRansac ro;
+  ro.threshold = o.ransac_threshold;
+  ro.max_iterations = o.ransac_iterations;
+  ro.seed = o.seed;
+  AffineFundamentalResult rr = ransac_affine_fundamental(xy, ro);
+  std::vector<size_t> ver;
+  if (rr.ok && rr.inliers >= o.min_inliers)
+    for (size_t i = 0; i < put.size(); ++i)
+      if (rr.inlier[i]) ver.push_back(i);
+  st.verified = static_cast<long>(ver.size());
+  st.ransac_rms = rr.ok ? rr.rms : 0;
+  if (ver.empty()) st.overlap = false;
+
+  // 4. grid thinning
+  if (o.grid > 0 && !ver.empty()) {
+    std::vector<cv::Point2f> pts;
+    std::vector<float> score;
+    for (size_t i : ver) {
+      pts.push_back(K1.kp[put[i].i1].pt);
+      score.push_back(put[i].ratio);
+    }
+    std::vector<size_t> keep = grid_select(pts, score, a.info.width, a.info.height, o.grid, o.per_cell);
+    std::vector<size_t> v2;
+    for (size_t k : keep) v2.push_back(ver[k]);
+    ver.swap(v2);
+  }
+  st.gridded = static_cast<long>(ver.size());
+
+  // 5. least-squares matching, image-1 region by region
+  struct Rec {
+    long long id1, id2;
+    double x1, y1, x2, y2, kx2, ky2, sigma, corr;
+    bool ok;
+    LsmStatus status;
+  };
+  std::vector<Rec> recs(ver.size());
+  for (size_t j = 0; j < ver.size(); ++j) {
+    const auto& m = put[ver[j]];
+    const auto &k1 = K1.kp[m.i1], &k2 = K2.kp[m.i2];
+    recs[j] = {K1.id[m.i1], K2.id[m.i2], k1.pt.x, k1.pt.y, k2.pt.x, k2.pt.y, k2.pt.x, k2.pt.y, 0, 0, true, LsmStatus::Ok};
+  }
+  if (o.refine && !recs.empty()) {
+    std::vector<Tile> tiles = tile_grid(a.info.width, a.info.height, o.refine_tile, 0);
+    std::vector<std::vector<size_t>> by_tile(tiles.size());
+    long nx = (a.info.width + o.refine_tile - 1) / o.refine_tile;
+    for (size_t j = 0; j < recs.size(); ++j) {
+      // find the tile whose core holds x1 (cores of tile_grid are an even split)
+      size_t best = 0;
+      for (size_t t = 0; t < tiles.size(); ++t)
+        if (recs[j].x1 + 0.5 >= tiles[t].cx0 && recs[j].x1 + 0.5 < tiles[t].cx1 && recs[j].y1 + 0.5 >= tiles[t].cy0 &&
+            recs[j].y1 + 0.5 < tiles[t].cy1) {
+          best = t;
+          break;
+        }
+      by_tile[best].push_back(j);
+    }
+    (void)nx;
+    std::unique_ptr<Progress> pr;
+    if (o.progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
+    const int h = o.lsm.window / 2;
+    parallel_for(tiles.size(), o.threads, [&](size_t t) {
+      const auto& js = by_tile[t];
+      if (js.empty()) return;
+      // regions that hold every window (plus the interpolation support and the allowed drift)
+      double ax0 = 1e300, ay0 = 1e300, ax1 = -1e300, ay1 = -1e300, bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
+      std::vector<Eigen::Matrix2d> A0(js.size());
+      for (size_t q = 0; q < js.size(); ++q) {
+        const Rec& r = recs[js[q]];
+        const auto& m = put[ver[js[q]]];
+        A0[q] = keypoint_affine(K1.kp[m.i1].size, K1.kp[m.i1].angle, K2.kp[m.i2].size, K2.kp[m.i2].angle);
+        double ext1 = h * std::sqrt(2.0) + 3;
+        double ext2 = h * std::sqrt(2.0) * A0[q].norm() * 1.5 + o.lsm.max_shift * 3 + 6;
+        ax0 = std::min(ax0, r.x1 - ext1);
+        ax1 = std::max(ax1, r.x1 + ext1);
+        ay0 = std::min(ay0, r.y1 - ext1);
+        ay1 = std::max(ay1, r.y1 + ext1);
+        bx0 = std::min(bx0, r.kx2 - ext2);
+        bx1 = std::max(bx1, r.kx2 + ext2);
+        by0 = std::min(by0, r.ky2 - ext2);
+        by1 = std::max(by1, r.ky2 + ext2);
+      }
+      Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
+                                    (long)std::ceil(ay1 - ay0) + 2);
+      Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
+                                    (long)std::ceil(by1 - by0) + 2);
+      for (size_t q = 0; q < js.size(); ++q) {
+        Rec& r = recs[js[q]];
+        LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[q], o.lsm);
+        r.ok = L.ok();
+        r.status = L.status;
+        if (r.ok) {
+          r.x2 = L.p2.x();
+          r.y2 = L.p2.y();
+          r.sigma = L.sigma;
+          r.corr = L.corr;
+        }
+      }
+      if (pr) pr->add(static_cast<long>(js.size()));
+    });
+    if (pr) pr->done();
+  }
+
+  size_t nout = 0;
+  for (const Rec& r : recs) {
+    if (r.ok) ++nout;
+    else st.dropped[static_cast<int>(r.status)]++;
+  }
+  st.refined = o.refine ? static_cast<long>(nout) : 0;
+  M.xy.resize(static_cast<Eigen::Index>(nout), 4);
+  M.extra.names = {"kx2", "ky2"};
+  if (o.refine) {
+    M.extra.names.push_back("sigma");
+    M.extra.names.push_back("corr");
+  }
+  M.extra.values.resize(static_cast<Eigen::Index>(nout), static_cast<Eigen::Index>(M.extra.names.size()));
+  size_t k = 0;
+  for (const Rec& r : recs) {
+    if (!r.ok) continue;
+    M.id1.push_back(r.id1);
+    M.id2.push_back(r.id2);
+    M.xy.row(k) << r.x1, r.y1, r.x2, r.y2;
+    M.extra.values(k, 0) = r.kx2;
+    M.extra.values(k, 1) = r.ky2;
+    if (o.refine) {
+      M.extra.values(k, 2) = r.sigma;
+      M.extra.values(k, 3) = r.corr;
+    }
+    ++k;
+  }
+  meta_set(M.meta, "detector1", detector_tag(o.sift, a));
+  meta_set(M.meta, "detector2", detector_tag(o.sift, b));
+  meta_set(M.meta, "keypoints", std::to_string(st.keypoints1) + " " + std::to_string(st.keypoints2));
+  meta_set(M.meta, "putative", std::to_string(st.putative) + " (ratio " + format_number(o.desc.ratio) +
+                                   (o.desc.mutual ? ", mutual" : "") + ")");
+  meta_set(M.meta, "verified", std::to_string(st.verified) + " (affine F RANSAC, threshold " + format_number(o.ransac_threshold) +
+                                   " px, seed " + std::to_string(o.seed) + ", inlier rms " + format_number(std::round(st.ransac_rms * 1e4) / 1e4) + " px)");
+  if (o.grid > 0) meta_set(M.meta, "grid", std::to_string(o.grid) + "x" + std::to_string(o.grid) + ", " + std::to_string(o.per_cell) + " per cell: " + std::to_string(st.gridded));
+  if (o.refine)
+    meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (o.lsm.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") +
+                                       " max_shift " + format_number(o.lsm.max_shift) + " min_corr " + format_number(o.lsm.min_corr) +
+                                       ": " + std::to_string(st.refined) + " converged");
+  else
+    meta_set(M.meta, "refinement", "none (raw SIFT positions)");
+  meta_set(M.meta, "positions", "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2; kx2 ky2 keypoint of image2");
+  if (stats) *stats = st;
+  return M;
+}
+
+}  // namespace tpkit

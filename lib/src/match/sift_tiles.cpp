@@ -1,0 +1,145 @@
+#include "tpkit/sift_tiles.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <numeric>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <thread>
+
+#include "tpkit/error.hpp"
+#include "tpkit/text_table.hpp"
+#include "tpkit/tool_support.hpp"
+
+namespace tpkit {
+
+std::string detector_tag(const SiftOptions& o, const ImageSource& src) {
+  std::ostringstream s;
+  s << "opencv-sift " << CV_VERSION << " band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
+    << " max_per_tile=" << o.max_per_tile << " contrast=" << format_number(o.contrast) << " edge=" << format_number(o.edge)
+    << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " stretch=" << format_number(o.stretch_lo)
+    << "," << format_number(o.stretch_hi);
+  if (src.nodata) s << " nodata=" << format_number(*src.nodata);
+  if (!src.mask.empty()) s << " mask=" << src.mask;
+  return s.str();
+}
+
+namespace {
+struct TileResult {
+  std::vector<cv::KeyPoint> kp;
+  cv::Mat desc;
+};
+
+TileResult detect_tile(const ImageSource& src, const SiftOptions& o, const Stretch& st, const Tile& t) {
+  Raster r = read_valid_region(src, t.rx0, t.ry0, t.rx1 - t.rx0, t.ry1 - t.ry0);
+  std::vector<uint8_t> valid;
+  std::vector<uint8_t> u8 = render_u8(r, st, &valid);
+  cv::Mat img(static_cast<int>(r.height), static_cast<int>(r.width), CV_8U, u8.data());
+  cv::Mat mask(static_cast<int>(r.height), static_cast<int>(r.width), CV_8U, valid.data());
+  // keypoints next to invalid pixels describe the nodata border: keep a margin of valid pixels
+  cv::Mat eroded;
+  bool any_invalid = std::find(valid.begin(), valid.end(), 0) != valid.end();
+  if (any_invalid) cv::erode(mask, eroded, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(9, 9)));
+  auto sift = cv::SIFT::create(0, o.octave_layers, o.contrast, o.edge, o.sigma);
+  TileResult out;
+  std::vector<cv::KeyPoint> kp;
+  cv::Mat desc;
+  sift->detectAndCompute(img, any_invalid ? eroded : cv::Mat(), kp, desc);
+  std::vector<int> keep;
+  for (int i = 0; i < static_cast<int>(kp.size()); ++i) {
+    double x = kp[i].pt.x + t.rx0, y = kp[i].pt.y + t.ry0;
+    if (x < t.cx0 - 0.5 || x >= t.cx1 - 0.5 || y < t.cy0 - 0.5 || y >= t.cy1 - 0.5) continue;  // owned by another tile
+    // a keypoint whose support reaches past the read region could differ between tilings
+    double reach = 2.0 * kp[i].size;
+    bool inner_x = (t.rx0 == 0 || x - reach >= t.rx0) && (t.rx1 == src.info.width || x + reach <= t.rx1);
+    bool inner_y = (t.ry0 == 0 || y - reach >= t.ry0) && (t.ry1 == src.info.height || y + reach <= t.ry1);
+    if (!inner_x || !inner_y) continue;
+    keep.push_back(i);
+  }
+  if (o.max_per_tile > 0 && static_cast<int>(keep.size()) > o.max_per_tile) {
+    std::stable_sort(keep.begin(), keep.end(), [&](int a, int b) { return kp[a].response > kp[b].response; });
+    keep.resize(o.max_per_tile);
+  }
+  out.kp.reserve(keep.size());
+  out.desc.create(static_cast<int>(keep.size()), 128, CV_32F);
+  for (size_t j = 0; j < keep.size(); ++j) {
+    cv::KeyPoint k = kp[keep[j]];
+    k.pt.x += static_cast<float>(t.rx0);
+    k.pt.y += static_cast<float>(t.ry0);
+    k.class_id = t.index;
+    out.kp.push_back(k);
+    desc.row(keep[j]).copyTo(out.desc.row(static_cast<int>(j)));
+  }
+  return out;
+}
+}  // namespace
+
+Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int threads, Progress* progress) {
+  Keypoints K;
+  K.stretch = percentile_stretch(src, o.stretch_lo, o.stretch_hi);
+  std::vector<Tile> tiles = tile_grid(src.info.width, src.info.height, o.tile, o.overlap);
+  K.tiles = static_cast<long>(tiles.size());
+  std::vector<TileResult> res(tiles.size());
+  threads = std::max(1, threads);
+  int workers = std::min<int>(threads, static_cast<int>(tiles.size()));
+  // OpenCV parallelises inside one tile; share the threads between tile workers and OpenCV
+  int saved = cv::getNumThreads();
+  cv::setNumThreads(std::max(1, threads / workers));
+  std::atomic<size_t> next{0};
+  std::exception_ptr err;
+  std::mutex m;
+  auto work = [&]() {
+    for (;;) {
+      size_t i = next++;
+      if (i >= tiles.size()) return;
+      try {
+        res[i] = detect_tile(src, o, K.stretch, tiles[i]);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(m);
+        if (!err) err = std::current_exception();
+        next = tiles.size();
+        return;
+      }
+      if (progress) progress->add(1);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  cv::setNumThreads(saved);
+  if (err) std::rethrow_exception(err);
+
+  // gather and sort into the stable order
+  struct Ref {
+    size_t tile;
+    int row;
+  };
+  std::vector<Ref> refs;
+  for (size_t t = 0; t < res.size(); ++t)
+    for (int r = 0; r < static_cast<int>(res[t].kp.size()); ++r) refs.push_back({t, r});
+  auto key = [&](const Ref& a) { return std::make_tuple(a.tile, a.row); };
+  (void)key;
+  std::sort(refs.begin(), refs.end(), [&](const Ref& a, const Ref& b) {
+    const cv::KeyPoint &p = res[a.tile].kp[a.row], &q = res[b.tile].kp[b.row];
+    if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;
+    if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
+    if (p.size != q.size) return p.size < q.size;
+    if (p.angle != q.angle) return p.angle < q.angle;
+    if (p.response != q.response) return p.response < q.response;
+    return p.octave < q.octave;
+  });
+  K.kp.reserve(refs.size());
+  K.desc.create(static_cast<int>(refs.size()), 128, CV_32F);
+  for (size_t i = 0; i < refs.size(); ++i) {
+    K.kp.push_back(res[refs[i].tile].kp[refs[i].row]);
+    res[refs[i].tile].desc.row(refs[i].row).copyTo(K.desc.row(static_cast<int>(i)));
+    K.id.push_back(static_cast<long long>(i));
+  }
+  return K;
+}
+
+}  // namespace tpkit

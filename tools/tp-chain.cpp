@@ -1,0 +1,67 @@
+// tp-chain: pairwise matches files joined by (image, keypoint id) into multi-view tracks.
+#include <iostream>
+#include <memory>
+
+#include "tpkit/error.hpp"
+#include "tpkit/formats.hpp"
+#include "tpkit/tool_support.hpp"
+#include "tpkit/tracks_chain.hpp"
+
+extern const char* const tpkit_man_page;
+
+namespace {
+struct Opts {
+  std::vector<std::string> files, images;
+  std::string out = "-";
+  int min_views = -1;
+  double same = 0.01;
+  bool quiet = false;
+};
+}  // namespace
+
+int main(int argc, char** argv) {
+  return tpkit::run_tool(
+      "tp-chain", argc, argv,
+      [&](CLI::App& app) -> std::function<int()> {
+        auto o = std::make_shared<Opts>();
+        app.add_option("MATCHES", o->files, "matches files")->required();
+        app.add_option("--images", o->images, "images of the output, in column order (first = reference)");
+        app.add_option("--min-views", o->min_views, "fewest views of a track (default: 3, or 2 with two images)");
+        app.add_option("--same-position", o->same, "keypoints of one image closer than this are one point, pixels")
+            ->check(CLI::NonNegativeNumber);
+        app.add_option("-o,--output", o->out, "output tracks file (- = stdout)");
+        app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
+        return [o]() {
+          std::vector<tpkit::Matches> ms;
+          for (const auto& f : o->files) ms.push_back(tpkit::read_matches(f));
+          tpkit::ChainOptions co;
+          co.images = o->images;
+          co.same_position = o->same;
+          if (o->min_views < 0) {
+            size_t k = o->images.size();
+            if (k == 0) {
+              std::vector<std::string> seen;
+              for (const auto& m : ms)
+                for (const auto* r : {&m.image1, &m.image2})
+                  if (std::find(seen.begin(), seen.end(), r->path) == seen.end()) seen.push_back(r->path);
+              k = seen.size();
+            }
+            co.min_views = k == 2 ? 2 : 3;
+          } else {
+            co.min_views = o->min_views;
+          }
+          tpkit::ChainStats st;
+          tpkit::Tracks t = tpkit::chain_tracks(ms, co, &st);
+          tpkit::save_tracks(o->out, t);
+          if (!o->quiet) {
+            std::cerr << "tp-chain: " << st.components << " components; tracks by views:";
+            for (const auto& kv : st.by_length) std::cerr << " " << kv.first << ":" << kv.second;
+            std::cerr << "; merged duplicates " << st.merged_duplicates << ", dropped (reference conflict) "
+                      << st.dropped_reference_conflicts << ", views dropped (conflict) " << st.views_dropped_conflicts
+                      << "; written " << st.written << " tracks with " << t.views() << " views\n";
+          }
+          return 0;
+        };
+      },
+      tpkit_man_page);
+}

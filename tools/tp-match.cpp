@@ -1,0 +1,101 @@
+// tp-match: sub-pixel tie points between two images (SIFT + affine F RANSAC + least-squares matching).
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <thread>
+
+#include "tpkit/error.hpp"
+#include "tpkit/formats.hpp"
+#include "tpkit/match_pair.hpp"
+#include "tpkit/tool_support.hpp"
+
+extern const char* const tpkit_man_page;
+
+namespace {
+struct Opts {
+  std::string img1, img2, out = "-", mask1, mask2;
+  int band = 1;
+  std::optional<double> nodata;
+  int threads = 0;
+  bool no_refine = false, no_mutual = false, l2 = false, quiet = false;
+  tpkit::PairMatchOptions p;
+};
+}  // namespace
+
+int main(int argc, char** argv) {
+  return tpkit::run_tool(
+      "tp-match", argc, argv,
+      [&](CLI::App& app) -> std::function<int()> {
+        auto o = std::make_shared<Opts>();
+        app.add_option("IMG1", o->img1, "image 1 (template side)")->required();
+        app.add_option("IMG2", o->img2, "image 2 (search side)")->required();
+        app.add_option("-o,--output", o->out, "output matches file (- = stdout)");
+        app.add_option("--band", o->band, "band, from 1")->check(CLI::PositiveNumber);
+        app.add_option("--nodata", o->nodata, "nodata grey level (default: the GDAL_NODATA tag)");
+        app.add_option("--mask1", o->mask1, "mask image of IMG1 (0 = invalid)");
+        app.add_option("--mask2", o->mask2, "mask image of IMG2 (0 = invalid)");
+        app.add_option("--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+        app.add_option("--tile", o->p.sift.tile, "detection tile size, pixels")->check(CLI::Range(256L, 1L << 20));
+        app.add_option("--overlap", o->p.sift.overlap, "detection tile overlap, pixels")->check(CLI::Range(16L, 4096L));
+        app.add_option("--max-per-tile", o->p.sift.max_per_tile, "strongest keypoints kept per tile (0 = all)")->check(CLI::NonNegativeNumber);
+        app.add_option("--contrast", o->p.sift.contrast, "SIFT contrast threshold")->check(CLI::PositiveNumber);
+        app.add_option("--edge", o->p.sift.edge, "SIFT edge threshold")->check(CLI::PositiveNumber);
+        app.add_option("--stretch", [o](CLI::results_t r) {
+          o->p.sift.stretch_lo = std::stod(r.at(0));
+          o->p.sift.stretch_hi = std::stod(r.at(1));
+          return true;
+        }, "low and high percentiles of the 8-bit rendering")->expected(2);
+        app.add_option("--ratio", o->p.desc.ratio, "nearest-neighbour ratio test")->check(CLI::Range(0.1, 1.0));
+        app.add_flag("--no-mutual", o->no_mutual, "skip the mutual nearest-neighbour check");
+        app.add_option("--exact-below", o->p.desc.exact_below, "exact search when both sets are smaller")->check(CLI::NonNegativeNumber);
+        app.add_option("--checks", o->p.desc.flann_checks, "leaves visited by the approximate search")->check(CLI::PositiveNumber);
+        app.add_option("--threshold", o->p.ransac_threshold, "RANSAC inlier distance, pixels")->check(CLI::PositiveNumber);
+        app.add_option("--iterations", o->p.ransac_iterations, "RANSAC iterations at most")->check(CLI::PositiveNumber);
+        app.add_option("--seed", o->p.seed, "RANSAC seed");
+        app.add_option("--min-inliers", o->p.min_inliers, "fewer verified matches = no overlap")->check(CLI::PositiveNumber);
+        app.add_option("--grid", o->p.grid, "grid cells per side for even spread (0 = off)")->check(CLI::NonNegativeNumber);
+        app.add_option("--per-cell", o->p.per_cell, "matches kept per grid cell")->check(CLI::PositiveNumber);
+        app.add_flag("--no-refine", o->no_refine, "keep raw SIFT positions");
+        app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd)")->check(CLI::Range(5, 101));
+        app.add_option("--max-shift", o->p.lsm.max_shift, "drop points refined farther from SIFT, pixels")->check(CLI::PositiveNumber);
+        app.add_option("--min-corr", o->p.lsm.min_corr, "drop points with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
+        app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
+        app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
+        return [o]() {
+          if (o->p.sift.stretch_lo < 0 || o->p.sift.stretch_hi > 100 || !(o->p.sift.stretch_lo < o->p.sift.stretch_hi))
+            throw tpkit::UsageError("--stretch needs 0 <= LOW < HIGH <= 100");
+          if (o->p.lsm.window % 2 == 0) throw tpkit::UsageError("--window must be odd");
+          o->p.desc.mutual = !o->no_mutual;
+          o->p.refine = !o->no_refine;
+          o->p.lsm.l1 = !o->l2;
+          o->p.threads = o->threads > 0 ? o->threads : std::max(1u, std::thread::hardware_concurrency());
+          o->p.progress = !o->quiet;
+          tpkit::ImageSource a = tpkit::open_image_source(o->img1, o->band - 1, o->nodata, o->mask1);
+          tpkit::ImageSource b = tpkit::open_image_source(o->img2, o->band - 1, o->nodata, o->mask2);
+          tpkit::PairMatchStats st;
+          tpkit::Matches m = tpkit::match_pair(a, b, o->p, &st);
+          if (!st.overlap)
+            tpkit::warn("no verified matches between " + o->img1 + " and " + o->img2 +
+                        " (do the images overlap?): writing a file with zero records");
+          tpkit::save_matches(o->out, m);
+          if (!o->quiet) {
+            std::cerr << "tp-match: keypoints " << st.keypoints1 << " / " << st.keypoints2 << ", putative " << st.putative
+                      << ", verified " << st.verified << " (rms " << st.ransac_rms << " px)";
+            if (o->p.grid > 0) std::cerr << ", after grid " << st.gridded;
+            if (o->p.refine) {
+              std::cerr << ", refined " << st.refined;
+              const char* sep = " (dropped:";
+              for (int k = 1; k < 8; ++k)
+                if (st.dropped[k]) {
+                  std::cerr << sep << " " << tpkit::to_string(static_cast<tpkit::LsmStatus>(k)) << " " << st.dropped[k];
+                  sep = ",";
+                }
+              if (std::string(sep) == ",") std::cerr << ")";
+            }
+            std::cerr << "\n";
+          }
+          return 0;
+        };
+      },
+      tpkit_man_page);
+}
