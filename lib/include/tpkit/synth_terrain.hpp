@@ -4,8 +4,10 @@
 // (centred on Z = 0). Ground frame: X east, Y north, Z up, metres.
 //
 // The B-spline is C2 and, by its convex-hull property, lies inside [min, max] of the 4x4 control heights
-// of each cell: ray casting skips cells whose bound the ray passes above and refines the first
-// sign change of (ray height - terrain height) by bracketing (exact first intersection, with occlusion).
+// of each cell, and its gradient is bounded by the control differences: ray casting skips cells whose
+// bound the ray passes above, and inside a cell samples (ray height - terrain height) at half-cell steps,
+// subdividing any step where the slope bound allows a hidden dip below the terrain, then refines the
+// first sign change by bracketing: the first intersection, occlusion included, is found for certain.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -44,7 +46,8 @@ class SynthTerrain {
   long nx_ = 0, ny_ = 0;           // control points
   std::vector<float> c_;           // ny x nx control heights
   std::vector<float> cmax_;        // (ny-3) x (nx-3) per-cell upper bound; cell (i, j) spans u in [i+1, i+2)
-  double zmin_ = 0, zmax_ = 0;
+  std::vector<float> cslope_;      // per-cell bound of |grad h| (m/m), from the control differences
+  double zmin_ = 0, zmax_ = 0, slope_max_ = 0;
 };
 
 }  // namespace tpkit

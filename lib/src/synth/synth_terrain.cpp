@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "tpkit/error.hpp"
@@ -122,12 +123,24 @@ SynthTerrain::SynthTerrain(uint64_t seed, double scene, double relief, double sp
       rowmax[static_cast<size_t>(j) * cx + i] = std::max(std::max(p[0], p[1]), std::max(p[2], p[3]));
     }
   cmax_.resize(static_cast<size_t>(cx) * cy);
+  cslope_.resize(static_cast<size_t>(cx) * cy);
   for (long j = 0; j < cy; ++j)
     for (long i = 0; i < cx; ++i) {
       float m = rowmax[static_cast<size_t>(j) * cx + i];
       for (int b = 1; b < 4; ++b) m = std::max(m, rowmax[static_cast<size_t>(j + b) * cx + i]);
       cmax_[static_cast<size_t>(j) * cx + i] = m;
+      // dh/du is a quadratic B-spline of the u-differences of the control heights (likewise v): its
+      // magnitude is bounded by their largest magnitude.
+      double gu = 0, gv = 0;
+      for (int b = 0; b < 4; ++b)
+        for (int a = 0; a < 4; ++a) {
+          const float* p = &c_[static_cast<size_t>(j + b) * nx_ + i + a];
+          if (a < 3) gu = std::max(gu, std::abs(static_cast<double>(p[1]) - p[0]));
+          if (b < 3) gv = std::max(gv, std::abs(static_cast<double>(p[nx_]) - p[0]));
+        }
+      cslope_[static_cast<size_t>(j) * cx + i] = static_cast<float>(std::hypot(gu, gv) / h_ * (1 + 1e-6) + 1e-9);
     }
+  slope_max_ = *std::max_element(cslope_.begin(), cslope_.end());
 }
 
 double SynthTerrain::eval(double u, double v, double* du, double* dv) const {
@@ -225,14 +238,28 @@ std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Ei
   double tnv = dv > 0 ? t0 + (kv + 1 - v0) / dv : (dv < 0 ? t0 + (kv - v0) / dv : inf);
   const double tdu = du != 0 ? 1 / std::abs(du) : inf, tdv = dv != 0 ? 1 / std::abs(dv) : inf;
   const long cxn = nx_ - 3, cyn = ny_ - 3;
+  const double dxy = std::hypot(d.x(), d.y());
+  // First root in [a, b] given f(a) > 0 and f(b) > 0, where |f'| <= K: a dip below zero needs
+  // (f(a) + f(b)) / 2 < K (b - a) / 2; otherwise split.
+  std::function<std::optional<double>(double, double, double, double, double, int)> dip =
+      [&](double a, double b, double fa, double fb, double K, int depth) -> std::optional<double> {
+    if (fa + fb > K * (b - a) || depth > 40 || b - a < 1e-12 * (1 + std::abs(b))) return std::nullopt;
+    const double m = 0.5 * (a + b), fm = f(m);
+    if (fm <= 0) return solve(a, m, fa, fm);
+    if (auto r = dip(a, m, fa, fm, K, depth + 1)) return r;
+    return dip(m, b, fm, fb, K, depth + 1);
+  };
   double ta = t0;
   double fprev = f(t0), tprev = t0;
   if (fprev <= 0) return t0;
   for (long guard = 0; guard < 100000000; ++guard) {
     const double tb = std::min(std::min(tnu, tnv), t1);
     const long ci = ku - 1, cj = kv - 1;
-    const double bound =
-        (ci >= 0 && ci < cxn && cj >= 0 && cj < cyn) ? cmax_[static_cast<size_t>(cj) * cxn + ci] : zmax_;
+    const bool in = ci >= 0 && ci < cxn && cj >= 0 && cj < cyn;
+    const double bound = in ? cmax_[static_cast<size_t>(cj) * cxn + ci] : zmax_;
+    // Outside the grid the height is clamped: its slope is bounded by that of the border cells, which
+    // the global bound covers.
+    const double K = -d.z() + (in ? cslope_[static_cast<size_t>(cj) * cxn + ci] : slope_max_) * dxy;
     if (o.z() + tb * d.z() <= bound + 1e-9 * (1 + std::abs(bound))) {
       double a = std::max(ta, (o.z() - bound) / -d.z());
       if (a != tprev) {
@@ -245,6 +272,7 @@ std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Ei
         const double b = s == n ? tb : a + (tb - a) * s / n;
         const double fb = f(b);
         if (fb <= 0) return solve(a, b, fprev, fb);
+        if (auto r = dip(a, b, fprev, fb, K, 0)) return r;
         a = b;
         fprev = fb;
         tprev = b;
