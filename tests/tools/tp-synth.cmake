@@ -1,0 +1,42 @@
+# tp-synth: a small triplet with every file and header; bad options fail with a message and write nothing.
+tpkit_tool_test(tp-synth.small-run
+  COMMAND "tp-synth --out out --size 256 --relief 20 --points 100 --seed 3 --threads 2 && for f in view1.tif view2.tif view3.tif truth.tracks truth.cameras truth.trifocal scene.params @SEMI@ do test -s out/$f || echo MISSING $f @SEMI@ done && echo records $(grep -vc '^#' out/truth.tracks)"
+  STDOUT_MATCH "^records 100\n$"
+  CHECK_FILE out/truth.tracks
+  FILE_MATCH "^# tpkit tracks 1\n# image1: view1.tif 256 256\n# image2: view2.tif 256 256\n# image3: view3.tif 256 256\n.*# seed: 3\n.*# relief: 20\n.*# columns: track x1 y1 x2 y2 x3 y3 X Y Z\n1 [0-9]")
+tpkit_tool_test(tp-synth.cameras-file
+  COMMAND "tp-synth --out out --size 128 --relief 10 --points 20"
+  CHECK_FILE out/truth.cameras
+  FILE_MATCH "^# tpkit cameras 1\n.*# seed: 1\n.*# view 1\n[^\n]+\n[^\n]+\n0 0 0 1\n# view 2\n.*# view 3\n")
+tpkit_tool_test(tp-synth.trifocal-file
+  COMMAND "tp-synth --out out --size 128 --relief 10 --points 20 --camera affine"
+  CHECK_FILE out/truth.trifocal
+  FILE_MATCH "^# tpkit trifocal 1\n.*# camera: affine\n")
+tpkit_tool_test(tp-synth.params-file
+  COMMAND "tp-synth --out out --size 128 --relief 12.5 --gsd 0.7 --noise 0 --points 5 --seed 99"
+  CHECK_FILE out/scene.params
+  FILE_MATCH "seed = 99\nsize = 128\nrelief = 12.5\ngsd = 0.7\ncamera = affine\npoints = 5\nnoise = 0\n")
+tpkit_tool_test(tp-synth.perspective-no-trifocal
+  COMMAND "tp-synth --out out --size 128 --relief 10 --points 20 --camera perspective && test -s out/truth.cameras"
+  NO_FILE out/truth.trifocal)
+tpkit_tool_test(tp-synth.same-seed-same-bytes
+  COMMAND "tp-synth --out a --size 96 --relief 5 --points 10 --threads 1 && tp-synth --out b --size 96 --relief 5 --points 10 --threads 2 && cmp a/view2.tif b/view2.tif && cmp a/truth.tracks b/truth.tracks && echo identical"
+  STDOUT_MATCH "identical")
+tpkit_tool_test(tp-synth.negative-size
+  COMMAND "tp-synth --out out --size -5"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: .*--size" NO_FILE out)
+tpkit_tool_test(tp-synth.unknown-camera
+  COMMAND "tp-synth --out out --camera fisheye"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: .*--camera must be affine or perspective" NO_FILE out)
+tpkit_tool_test(tp-synth.relief-too-large
+  COMMAND "tp-synth --out out --size 64 --relief 500"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: .*relief.*too large" NO_FILE out)
+tpkit_tool_test(tp-synth.negative-gsd
+  COMMAND "tp-synth --out out --gsd -1"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: .*--gsd" NO_FILE out)
+tpkit_tool_test(tp-synth.missing-out
+  COMMAND "tp-synth --size 64"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: .*--out")
+tpkit_tool_test(tp-synth.out-is-a-file
+  COMMAND "echo x > out && tp-synth --out out --size 64 --relief 5 --points 5"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: out: cannot create directory")
