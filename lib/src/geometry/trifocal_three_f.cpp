@@ -1,0 +1,211 @@
+#include "tpkit/trifocal_three_f.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "tpkit/error.hpp"
+
+namespace tpkit {
+
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
+  return S;
+}
+
+const int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+
+// 8-point on normalized coordinates of views a, b: x_a^T F x_b = 0.
+Eigen::Matrix3d eight_point(const Eigen::MatrixXd& xn, int a, int b) {
+  Eigen::Matrix<double, 9, 9> N = Eigen::Matrix<double, 9, 9>::Zero();
+  for (Eigen::Index r = 0; r < xn.rows(); ++r) {
+    const Eigen::Vector3d p = track_point(xn, r, a), q = track_point(xn, r, b);
+    Eigen::Matrix<double, 9, 1> row;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) row(3 * i + j) = p(i) * q(j);
+    N.selfadjointView<Eigen::Lower>().rankUpdate(row);
+  }
+  N = N.selfadjointView<Eigen::Lower>();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(N);
+  if (es.eigenvalues()(1) <= 1e-13 * es.eigenvalues()(8))
+    throw NumericalError("three-f: the 8-point system of views " + std::to_string(a + 1) + "-" + std::to_string(b + 1) +
+                         " has more than one solution");
+  Eigen::Matrix3d F;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) F(i, j) = es.eigenvectors()(3 * i + j, 0);
+  return F;
+}
+
+Eigen::Vector3d unit_epipole(double t, double p) {
+  return Eigen::Vector3d(std::cos(p) * std::cos(t), std::cos(p) * std::sin(t), std::sin(p));
+}
+
+using Params = Eigen::Matrix<double, 31, 1>;
+
+Eigen::Matrix3d F_of(const Params& p, int f) {
+  Eigen::Matrix3d F;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) F(i, j) = p(9 * f + 3 * i + j);
+  return F;
+}
+
+// Orthonormal basis (3 x 2) of the plane orthogonal to v.
+Eigen::Matrix<double, 3, 2> complement(const Eigen::Vector3d& v) {
+  Eigen::JacobiSVD<Eigen::Matrix<double, 1, 3>> svd(v.transpose(), Eigen::ComputeFullV);
+  return svd.matrixV().rightCols<2>();
+}
+
+struct Bases {
+  Eigen::Matrix<double, 3, 2> plane1, col23, row23;
+};
+
+Bases bases_at(const Params& p) {
+  const Eigen::Matrix3d F12 = F_of(p, 0), F23 = F_of(p, 2);
+  const Eigen::Vector3d e23 = unit_epipole(p(27), p(28));
+  Bases b;
+  b.plane1 = complement(F12 * e23);
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(F23, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  b.col23 = svd.matrixU().leftCols<2>();
+  b.row23 = svd.matrixV().leftCols<2>();
+  return b;
+}
+
+Eigen::Matrix<double, 12, 1> constraints(const Params& p, const Bases& b) {
+  Eigen::Matrix<double, 12, 1> g;
+  const Eigen::Matrix3d F12 = F_of(p, 0), F13 = F_of(p, 1), F23 = F_of(p, 2);
+  const Eigen::Vector3d e23 = unit_epipole(p(27), p(28)), e32 = unit_epipole(p(29), p(30));
+  g(0) = F12.determinant();
+  g(1) = F13.determinant();
+  g(2) = F23.determinant();
+  g(3) = F12.squaredNorm() - 1;
+  g(4) = F13.squaredNorm() - 1;
+  g(5) = F23.squaredNorm() - 1;
+  const Eigen::Vector3d c = (F12 * e23).cross(F13 * e32);  // epipolar-plane constraint (eq. 2a/3)
+  g.segment<2>(6) = b.plane1.transpose() * c;
+  g.segment<2>(8) = b.col23.transpose() * (F23 * e32);              // eq. 4: F23 e32 = 0
+  g.segment<2>(10) = b.row23.transpose() * (F23.transpose() * e23);  // eq. 4: F23^T e23 = 0
+  return g;
+}
+
+Eigen::Vector3d right_null(const Eigen::Matrix3d& F) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullV);
+  return svd.matrixV().col(2);
+}
+
+}  // namespace
+
+ThreeFundamental three_fundamental_linear(const Eigen::MatrixXd& xy) {
+  if (xy.rows() < kThreeFMinTracks) throw InputError("three-f needs at least 8 tracks");
+  const auto H = isotropic_normalization(xy, false);
+  const Eigen::MatrixXd xn = apply_normalization(xy, H);
+  Eigen::Matrix3d F[3];
+  for (int q = 0; q < 3; ++q) {
+    const int a = kPairs[q][0], b = kPairs[q][1];
+    F[q] = H[a].transpose() * eight_point(xn, a, b) * H[b];  // x_a^T H_a^T F^ H_b x_b
+    F[q] /= F[q].norm();
+  }
+  return {F[0], F[1], F[2]};
+}
+
+TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
+  if (xy.rows() < kThreeFMinTracks) throw InputError("three-f needs at least 8 tracks");
+  const auto H = isotropic_normalization(xy, true);  // common scale: weights in pixels
+  const Eigen::MatrixXd xn = apply_normalization(xy, H);
+  const Eigen::Index n = xn.rows();
+  // 1. linear
+  const ThreeFundamental lin = three_fundamental_linear(xn);
+  Params p;
+  const Eigen::Matrix3d F0[3] = {lin.F12, lin.F13, lin.F23};
+  for (int f = 0; f < 3; ++f)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) p(9 * f + 3 * i + j) = F0[f](i, j);
+  {
+    const Eigen::Vector3d e32 = right_null(lin.F23), e23 = right_null(lin.F23.transpose());
+    p(27) = std::atan2(e23(1), e23(0));
+    p(28) = std::asin(std::max(-1.0, std::min(1.0, e23(2))));
+    p(29) = std::atan2(e32(1), e32(0));
+    p(30) = std::asin(std::max(-1.0, std::min(1.0, e32(2))));
+  }
+  // 2. constrained adjustment
+  for (int it = 0; it < 50; ++it) {
+    const Eigen::Matrix3d F[3] = {F_of(p, 0), F_of(p, 1), F_of(p, 2)};
+    Eigen::Matrix<double, 31, 31> JtJ = Eigen::Matrix<double, 31, 31>::Zero();
+    Params Jtr = Params::Zero();
+    for (Eigen::Index r = 0; r < n; ++r) {
+      const Eigen::Vector3d x[3] = {track_point(xn, r, 0), track_point(xn, r, 1), track_point(xn, r, 2)};
+      Eigen::Vector3d w;
+      Eigen::Matrix<double, 3, 6> B = Eigen::Matrix<double, 3, 6>::Zero();
+      Eigen::Matrix<double, 3, 31> A = Eigen::Matrix<double, 3, 31>::Zero();
+      for (int q = 0; q < 3; ++q) {
+        const int a = kPairs[q][0], b = kPairs[q][1];
+        w(q) = x[a].dot(F[q] * x[b]);
+        const Eigen::Vector3d ga = F[q] * x[b], gb = F[q].transpose() * x[a];
+        B(q, 2 * a) = ga(0);
+        B(q, 2 * a + 1) = ga(1);
+        B(q, 2 * b) = gb(0);
+        B(q, 2 * b + 1) = gb(1);
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) A(q, 9 * q + 3 * i + j) = x[a](i) * x[b](j);
+      }
+      const Eigen::Matrix3d BBt = B * B.transpose();
+      Eigen::LLT<Eigen::Matrix3d> llt(BBt);
+      if (llt.info() != Eigen::Success) continue;  // a track at an epipole carries no condition
+      const Eigen::Matrix3d Winv = llt.solve(Eigen::Matrix3d::Identity());
+      JtJ.noalias() += A.transpose() * Winv * A;
+      Jtr.noalias() += A.transpose() * (Winv * w);
+    }
+    const Bases b = bases_at(p);
+    const Eigen::Matrix<double, 12, 1> g = constraints(p, b);
+    Eigen::Matrix<double, 12, 31> G;
+    for (int c = 0; c < 31; ++c) {
+      const double h = 1e-7 * std::max(1.0, std::fabs(p(c)));
+      Params pp = p, pm = p;
+      pp(c) += h;
+      pm(c) -= h;
+      G.col(c) = (constraints(pp, b) - constraints(pm, b)) / (2 * h);
+    }
+    Eigen::Matrix<double, 43, 43> K = Eigen::Matrix<double, 43, 43>::Zero();
+    K.topLeftCorner<31, 31>() = JtJ + 1e-14 * JtJ.trace() * Eigen::Matrix<double, 31, 31>::Identity();
+    K.block<31, 12>(0, 31) = G.transpose();
+    K.block<12, 31>(31, 0) = G;
+    Eigen::Matrix<double, 43, 1> rhs;
+    rhs.head<31>() = -Jtr;
+    rhs.tail<12>() = -g;
+    const Eigen::Matrix<double, 43, 1> sol = K.colPivHouseholderQr().solve(rhs);
+    const Params dp = sol.head<31>();
+    if (!dp.allFinite()) throw NumericalError("three-f: the constrained adjustment diverged");
+    p += dp;
+    if (dp.norm() < 1e-12) break;
+  }
+  // 3. tensor from the adjusted geometry
+  const Eigen::Matrix3d F12 = F_of(p, 0), F13 = F_of(p, 1), F23 = F_of(p, 2);
+  const Eigen::Matrix3d F21 = F12.transpose(), F31 = F13.transpose(), F32 = F23.transpose();
+  const Eigen::Vector3d e21 = right_null(F12), e31 = right_null(F13);
+  Camera P1 = Camera::Zero(), P2, P3_0 = Camera::Zero();
+  P1.leftCols<3>().setIdentity();
+  P2 << skew(e21) * F21, e21;
+  P3_0.leftCols<3>() = skew(e31) * F31;
+  const Eigen::Matrix4d K0 = P3_0.transpose() * F32 * P2;
+  const Eigen::Matrix4d S = K0 + K0.transpose();
+  const Eigen::Vector4d gv = P2.transpose() * F32.transpose() * e31;
+  Eigen::Matrix<double, 10, 4> A = Eigen::Matrix<double, 10, 4>::Zero();
+  Eigen::Matrix<double, 10, 1> rhs;
+  int row = 0;
+  for (int a = 0; a < 4; ++a)
+    for (int c = a; c < 4; ++c) {
+      // (y g^T + g y^T)(a, c) = y_a g_c + g_a y_c
+      A(row, a) += gv(c);
+      A(row, c) += gv(a);
+      rhs(row) = -S(a, c);
+      ++row;
+    }
+  const Eigen::Vector4d y = A.colPivHouseholderQr().solve(rhs);
+  Camera P3 = P3_0 + e31 * y.transpose();
+  if (!P2.allFinite() || !P3.allFinite()) throw NumericalError("three-f: the cameras of the adjusted geometry are not finite");
+  const TrifocalTensor Tn = trifocal_from_cameras(P1, P2, P3);
+  return unit_trifocal(transform_trifocal(Tn, H[0].inverse(), H[1].inverse(), H[2].inverse()));
+}
+
+}  // namespace tpkit
