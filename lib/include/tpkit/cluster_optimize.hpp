@@ -12,7 +12,9 @@
 //             from the start (cost estimated on at most 400 points per direction), then the robust local
 //             refinement of H on the nearest-neighbour pairs (refine_on_pairs) until the pairs stop
 //             changing; when that does not reach the target, the correspondence-free search
-//             (cluster_search.hpp) supplies more starting points and the best result is kept.
+//             (cluster_search.hpp) supplies more starting points (refined by refine_growing), then
+//             up to 5 more evolution rounds from the start; the best result is kept. For dense clusters
+//             (> 2000 points) the search goes first: the cost is flat beyond the point spacing.
 //   none      evaluates the start only.
 // Deterministic for a seed.
 #pragma once
@@ -65,10 +67,20 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
 
 // Local refinement of H on nearest-neighbour pairs (both directions, residual h(A_i) - B_j in image-2
 // pixels) with a Cauchy loss of scale max(1.4826 median distance, 0.1 px), solved by Ceres (LM) on the
-// 8 coefficients of H in normalized coordinates; repeated until the pair set stops changing (or
-// max_rounds). Keeps the best H by the cost. `rounds` (if given) gets the number of rounds.
+// 8 coefficients of H in normalized coordinates (at most 3000 pairs per round, evenly strided);
+// repeated until the pair set stops changing (or max_rounds). Without a region, keeps the best H by
+// the cost. With a region (centre in image 1 pixels, radius), only pairs whose A point lies in it are
+// used and the last H is returned. `rounds` (if given) gets the number of rounds.
+struct RefineRegion {
+  Eigen::Vector2d center;
+  double radius;
+};
 Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H, int max_rounds = 30,
-                                int* rounds = nullptr);
+                                int* rounds = nullptr, const RefineRegion* region = nullptr);
+// Region-growing refinement from a local hypothesis: refine_on_pairs on the region, doubling its radius
+// until it covers cluster A, then on everything.
+Eigen::Matrix3d refine_growing(const ClusterCost& cost, const Eigen::Matrix3d& H, RefineRegion region,
+                               int* rounds = nullptr);
 
 // Similarity that centres pts and scales their mean distance to the centre to sqrt 2.
 Eigen::Matrix3d normalizing_transform(const Eigen::MatrixX2d& pts);

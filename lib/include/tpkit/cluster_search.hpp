@@ -8,8 +8,8 @@
 // divided by the largest, sorted, are an affine invariant (2 degrees of freedom); sorting them also
 // orders the four points. Quadruples of A are matched to those of B by nearest descriptors (nanoflann
 // KD-tree in descriptor space); each match gives an affine hypothesis (least squares on the four
-// points), which is first scored on a small subset of A (forward truncated distance) and the best are
-// kept. A mildly projective map (the paper's eq. 4) is locally affine, so the hypotheses start the
+// points), scored by the forward truncated distance of the anchor's `local` nearest neighbours in A,
+// and the best are kept; they start the region-growing refinement (cluster_optimize.hpp). A mildly projective map (the paper's eq. 4) is locally affine, so the hypotheses start the
 // local refinement (cluster_optimize.hpp) inside its basin. Handles any rotation and scale and
 // anisotropy; orientation-reversing maps (mirror images) too when allow_reflection is set.
 // Deterministic for a seed.
@@ -29,13 +29,16 @@ struct SearchOptions {
   int max_anchors_b = 4000;  // anchors of B used
   int matches_per_quad = 2;  // nearest descriptors of B tried per quadruple of A
   int keep = 12;             // hypotheses returned (best first)
+  int local = 30;            // neighbours of the anchor that score a hypothesis
   bool allow_reflection = false;
   uint64_t seed = 1;
 };
 
 struct SearchHypothesis {
   Eigen::Matrix3d H;  // x_B ~ H x_A
-  double score;       // mean truncated forward distance on the scoring subset (pixels), lower is better
+  double score;       // mean truncated forward distance near the quadruple (pixels), lower is better
+  Eigen::Vector2d center;  // the quadruple's anchor in A (image 1 pixels)
+  double radius;           // radius of the neighbourhood where the score was measured (image 1 pixels)
 };
 
 // Best hypotheses first; `tried` (if given) gets the number of hypotheses scored.

@@ -4,6 +4,7 @@
 #include <GeographicLib/LocalCartesian.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <set>
@@ -61,10 +62,9 @@ ClusterInit read_cluster_init(std::istream& in, const std::string& source) {
     std::string key = trim(line.substr(0, eq)), val = trim(line.substr(eq + 1));
     if (!known_keys().count(key)) throw InputError(source, lineno, "unknown key '" + key + "'");
     if (kv.count(key)) throw InputError(source, lineno, "key '" + key + "' given twice");
-    std::istringstream vs(val);
-    double v;
-    std::string rest;
-    if (!(vs >> v) || (vs >> rest)) throw InputError(source, lineno, "value of '" + key + "' is not a number: '" + val + "'");
+    char* end = nullptr;
+    double v = val.empty() ? 0 : std::strtod(val.c_str(), &end);
+    if (val.empty() || end != val.c_str() + val.size()) throw InputError(source, lineno, "value of '" + key + "' is not a number: '" + val + "'");
     if (!std::isfinite(v)) throw InputError(source, lineno, "value of '" + key + "' is not finite");
     kv[key] = {v, lineno};
   }

@@ -124,7 +124,8 @@ struct PairResidual {
 
 }  // namespace
 
-Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds, int* rounds) {
+Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds, int* rounds,
+                                const RefineRegion* region) {
   const Eigen::MatrixX2d &A = cost.a(), &B = cost.b();
   Eigen::Matrix3d TA = normalizing_transform(A), TB = normalizing_transform(B);
   Eigen::Matrix3d TBi = TB.inverse();
@@ -137,7 +138,35 @@ Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& 
   std::vector<std::pair<long long, bool>> prev;
   int r = 0;
   for (; r < max_rounds; ++r) {
-    auto pairs = cost.pairs(H);
+    std::vector<NnPair> pairs;
+    if (region) {
+      // Only the pairs whose A point lies in the region: forward queries from A points in it, backward
+      // queries from B points whose image under H^-1 falls in it (the others cannot pair inside).
+      double r2 = region->radius * region->radius;
+      Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
+      if (!lu.isInvertible()) break;
+      Eigen::Matrix3d Hi = lu.inverse();
+      double q[2], d2;
+      for (Eigen::Index i = 0; i < A.rows(); ++i) {
+        if ((A.row(i).transpose() - region->center).squaredNorm() > r2) continue;
+        Eigen::Vector3d m = H * Eigen::Vector3d(A(i, 0), A(i, 1), 1.0);
+        q[0] = m(0) / m(2), q[1] = m(1) / m(2);
+        if (!std::isfinite(q[0]) || !std::isfinite(q[1])) continue;
+        int j = cost.nearest_b(q, &d2);
+        pairs.push_back({static_cast<int>(i), j, std::sqrt(d2), true});
+      }
+      for (Eigen::Index j = 0; j < B.rows(); ++j) {
+        Eigen::Vector3d m = Hi * Eigen::Vector3d(B(j, 0), B(j, 1), 1.0);
+        q[0] = m(0) / m(2), q[1] = m(1) / m(2);
+        if (!std::isfinite(q[0]) || !std::isfinite(q[1])) continue;
+        if ((Eigen::Vector2d(q[0], q[1]) - region->center).squaredNorm() > r2 * 1.5) continue;
+        int i = cost.nearest_a(q, &d2);
+        if ((A.row(i).transpose() - region->center).squaredNorm() > r2) continue;
+        pairs.push_back({i, static_cast<int>(j), std::sqrt(d2), false});
+      }
+    } else {
+      pairs = cost.pairs(H);
+    }
     if (pairs.size() < 4) break;
     std::vector<std::pair<long long, bool>> key;
     key.reserve(pairs.size());
@@ -157,7 +186,9 @@ Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& 
     po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(po);
     ceres::CauchyLoss loss(scale);
-    for (const auto& p : pairs) {
+    size_t stride = (pairs.size() + 2999) / 3000;
+    for (size_t q = 0; q < pairs.size(); q += stride) {
+      const NnPair& p = pairs[q];
       auto* f = new ceres::AutoDiffCostFunction<PairResidual, 2, 8>(
           new PairResidual{An(p.ia, 0), An(p.ia, 1), Bn(p.ib, 0), Bn(p.ib, 1), 1.0 / kB});
       problem.AddResidualBlock(f, &loss, h);
@@ -172,11 +203,33 @@ Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& 
     Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
     H = normalized_homography(TBi * Hn * TA);
     if (!H.allFinite()) break;
+    if (region) {
+      best = H;
+      continue;
+    }
     double c = cost(H);
     if (c < best_cost) best_cost = c, best = H;
   }
   if (rounds) *rounds = r + 1;
   return best;
+}
+
+Eigen::Matrix3d refine_growing(const ClusterCost& cost, const Eigen::Matrix3d& H0, RefineRegion region, int* rounds) {
+  const Eigen::MatrixX2d& A = cost.a();
+  double reach = 0;
+  for (Eigen::Index i = 0; i < A.rows(); ++i) reach = std::max(reach, (A.row(i).transpose() - region.center).norm());
+  Eigen::Matrix3d H = H0;
+  int total = 0, r = 0;
+  region.radius = std::max(region.radius, 1e-9);
+  while (region.radius < reach) {
+    H = refine_on_pairs(cost, H, 4, &r, &region);
+    total += r;
+    region.radius *= 2;
+  }
+  H = refine_on_pairs(cost, H, 30, &r);
+  total += r;
+  if (rounds) *rounds = total;
+  return H;
 }
 
 OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& start, const OptimizeOptions& opt) {
@@ -249,42 +302,47 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
     };
     std::normal_distribution<double> g(0, 1);
     long budget = std::min<long>(opt.max_iterations, 3000), used = 0;
-    if (have_start) {
-      // Rounds of (1+1)-ES from the current best, each followed by the local refinement.
-      Eigen::VectorXd xs = x;
-      double cs = quick(xs);
-      for (int round = 0; round < 6 && used < budget && best > opt.target; ++round) {
-        double s = 1.0;
-        int since = 0;
-        Eigen::VectorXd sig(sp.size());
-        for (int k = 0; k < sp.size(); ++k) sig(k) = sp.es_step(k);
-        long round_budget = 150 + 100 * round;
-        for (long e = 0; e < round_budget && used < budget; ++e, ++used) {
-          Eigen::VectorXd y = xs;
-          for (int k = 0; k < sp.size(); ++k) y(k) += s * sig(k) * g(rng);
-          double cy = quick(y);
-          if (cy < cs) {
-            cs = cy, xs = y, s *= 1.5, since = 0;
-          } else {
-            s *= 0.9;
-            ++since;
-          }
-          if (s < 1e-3 || since > 60) break;
+    Eigen::VectorXd xs = x;
+    double cs = have_start ? quick(xs) : 0;
+    // One round of (1+1)-ES from the current point, followed by the local refinement.
+    auto es_round = [&](int round) {
+      double s = 1.0;
+      int since = 0;
+      Eigen::VectorXd sig(sp.size());
+      for (int k = 0; k < sp.size(); ++k) sig(k) = sp.es_step(k);
+      long round_budget = 150 + 100 * round;
+      for (long e = 0; e < round_budget && used < budget; ++e, ++used) {
+        Eigen::VectorXd y = xs;
+        for (int k = 0; k < sp.size(); ++k) y(k) += s * sig(k) * g(rng);
+        double cy = quick(y);
+        if (cy < cs) {
+          cs = cy, xs = y, s *= 1.5, since = 0;
+        } else {
+          s *= 0.9;
+          ++since;
         }
-        int rounds = 0;
-        Eigen::Matrix3d Hr = refine_on_pairs(cost, sp.H(xs), 30, &rounds);
-        res.local_rounds += rounds;
-        double cr = cost(Hr);
-        ++evals;
-        if (cr < best) best = cr, bestH = Hr, bestx = xs;
-        // Next round restarts from the refined H where the parameterization allows it.
-        if (sp.param == Parameterization::Math) {
-          xs = sp.from_H(bestH);
-          cs = quick(xs);
-        }
+        if (s < 1e-3 || since > 60) break;
       }
-      res.method = "global+local";
-    }
+      int rounds = 0;
+      Eigen::Matrix3d Hr = refine_on_pairs(cost, sp.H(xs), 30, &rounds);
+      res.local_rounds += rounds;
+      double cr = cost(Hr);
+      ++evals;
+      if (cr < best) {
+        best = cr, bestH = Hr, bestx = xs;
+        res.method = "global+local";
+      }
+      // The next round restarts from the refined H where the parameterization allows it.
+      if (sp.param == Parameterization::Math) {
+        xs = sp.from_H(bestH);
+        cs = quick(xs);
+      }
+    };
+    // Sparse clusters: the cost has structure at the scale of a start's error, so the evolution strategy
+    // goes first. Dense ones (> 2000 points): the cost is flat beyond the point spacing, so the search
+    // goes first.
+    bool dense = cost.a().rows() > 2000 || cost.b().rows() > 2000;
+    if (have_start && (!dense || !opt.search_fallback)) es_round(0);
     if (best > opt.target && opt.search_fallback) {
       SearchOptions so;
       so.seed = opt.seed;
@@ -294,7 +352,7 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
       evals += tried;
       for (const auto& hy : hyps) {
         int rounds = 0;
-        Eigen::Matrix3d Hr = refine_on_pairs(cost, hy.H, 30, &rounds);
+        Eigen::Matrix3d Hr = refine_growing(cost, hy.H, {hy.center, hy.radius}, &rounds);
         res.local_rounds += rounds;
         double cr = cost(Hr);
         ++evals;
@@ -305,6 +363,8 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
         if (best <= opt.target) break;
       }
     }
+    for (int round = (dense && opt.search_fallback) ? 0 : 1; have_start && round < 6 && used < budget && best > opt.target; ++round) es_round(round);
+    if (res.method.empty()) res.method = have_start ? "global+local" : "search+local";
     if (!std::isfinite(best)) throw NumericalError("no homography found: every hypothesis failed");
     res.iterations = used + res.local_rounds;
   } else {

@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <map>
 #include <cmath>
 #include <nanoflann.hpp>
 #include <random>
@@ -26,6 +27,7 @@ template <int D>
 using VecTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, VecCloud<D>>, VecCloud<D>, D, int>;
 
 struct Quad {
+  int anchor;
   std::array<int, 4> idx;  // points ordered by the area of the triangle that leaves them out
   std::array<double, 3> desc;
 };
@@ -96,6 +98,7 @@ std::vector<Quad> make_quads(const Eigen::MatrixX2d& P, int k, int max_anchors, 
       for (int y = x + 1; y < m; ++y)
         for (int z = y + 1; z < m; ++z) {
           Quad q;
+          q.anchor = a;
           if (quad_descriptor(P, {a, nb[x], nb[y], nb[z]}, q)) quads.push_back(q);
         }
   }
@@ -136,28 +139,48 @@ std::vector<SearchHypothesis> search_hypotheses(const ClusterCost& cost, const S
   std::vector<SearchHypothesis> out;
   if (tried) *tried = 0;
   if (A.rows() < 4 || B.rows() < 4) return out;
-  std::vector<Quad> qa = make_quads(A, opt.k_a, opt.max_anchors_a, rng);
-  // Scoring subset of A and tolerance from B's point spacing.
-  std::vector<int> sub(static_cast<size_t>(A.rows()));
-  for (size_t i = 0; i < sub.size(); ++i) sub[i] = static_cast<int>(i);
-  std::shuffle(sub.begin(), sub.end(), rng);
-  std::vector<int> quick(sub.begin(), sub.begin() + std::min<size_t>(12, sub.size()));
-  sub.resize(std::min<size_t>(60, sub.size()));
+  // Dense clusters: near-neighbour quadruples are small against the noise, so their descriptors are
+  // less distinctive among many more of B's; try more matches per quadruple from fewer anchors of B.
+  SearchOptions o = opt;
+  double dtol = 0.01;
+  if (B.rows() > 2000) {
+    o.max_anchors_b = std::min(o.max_anchors_b, 1500);
+    o.max_anchors_a = std::max(o.max_anchors_a, 300);
+    o.matches_per_quad = std::max(o.matches_per_quad, 24);
+    dtol = 0.03;
+  }
+  std::vector<Quad> qa = make_quads(A, o.k_a, o.max_anchors_a, rng);
+  // Scoring sets: the `local` nearest neighbours of each anchor of A; tolerance from B's point spacing.
+  std::vector<std::array<double, 2>> pa(static_cast<size_t>(A.rows()));
+  for (Eigen::Index i = 0; i < A.rows(); ++i) pa[static_cast<size_t>(i)] = {A(i, 0), A(i, 1)};
+  VecCloud<2> ca{&pa};
+  VecTree<2> ta(2, ca, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  ta.buildIndex();
+  std::map<int, std::pair<std::vector<int>, double>> local;  // anchor -> (neighbours, radius)
+  int nl = std::min<int>(opt.local, static_cast<int>(A.rows()));
+  for (const Quad& q : qa) {
+    if (local.count(q.anchor)) continue;
+    std::vector<int> nn(static_cast<size_t>(nl));
+    std::vector<double> d2(static_cast<size_t>(nl));
+    size_t got = ta.knnSearch(pa[static_cast<size_t>(q.anchor)].data(), static_cast<size_t>(nl), nn.data(), d2.data());
+    nn.resize(got);
+    local[q.anchor] = {nn, std::sqrt(d2[got - 1])};
+  }
   Eigen::Vector2d span = B.colwise().maxCoeff() - B.colwise().minCoeff();
-  double tol = std::max(0.3 * std::sqrt(std::max(span(0) * span(1), 1.0) / static_cast<double>(B.rows())), 1.0);
+  double tol = std::max(0.3 * std::sqrt(std::max(span(0) * span(1), 1.0) / static_cast<double>(B.rows())), 1e-3);
   std::vector<SearchHypothesis> all;
   long n_tried = 0;
   for (int mirror = 0; mirror < (opt.allow_reflection ? 2 : 1); ++mirror) {
     Eigen::MatrixX2d Bm = B;
     if (mirror) Bm.col(0) = -Bm.col(0);
-    std::vector<Quad> qb = make_quads(Bm, opt.k_b, opt.max_anchors_b, rng);
+    std::vector<Quad> qb = make_quads(Bm, o.k_b, o.max_anchors_b, rng);
     if (qb.empty() || qa.empty()) continue;
     std::vector<std::array<double, 3>> db(qb.size());
     for (size_t i = 0; i < qb.size(); ++i) db[i] = qb[i].desc;
     VecCloud<3> cloud{&db};
     VecTree<3> tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
     tree.buildIndex();
-    int km = std::min<int>(opt.matches_per_quad, static_cast<int>(qb.size()));
+    int km = std::min<int>(o.matches_per_quad, static_cast<int>(qb.size()));
     std::vector<int> nn(static_cast<size_t>(km));
     std::vector<double> d2(static_cast<size_t>(km));
     Eigen::Matrix3d M = Eigen::Matrix3d::Identity();
@@ -165,17 +188,19 @@ std::vector<SearchHypothesis> search_hypotheses(const ClusterCost& cost, const S
     for (const Quad& q : qa) {
       size_t got = tree.knnSearch(q.desc.data(), static_cast<size_t>(km), nn.data(), d2.data());
       for (size_t t = 0; t < got; ++t) {
-        if (d2[t] > 0.01) continue;
+        if (d2[t] > dtol) continue;
         Eigen::Matrix3d H;
         double rms;
         if (!affine_from(A, Bm, q, qb[static_cast<size_t>(nn[t])], H, rms)) continue;
         if (rms > tol) continue;
         H = M * H;  // back from the mirrored B
         ++n_tried;
+        const auto& loc = local[q.anchor];
+        std::vector<int> quick(loc.first.begin(), loc.first.begin() + std::min<size_t>(8, loc.first.size()));
         double s = cost.forward_truncated(H, quick, tol);
-        if (s > 0.85 * tol) continue;
-        s = cost.forward_truncated(H, sub, tol);
-        all.push_back({H, s});
+        if (s > 0.6 * tol) continue;
+        s = cost.forward_truncated(H, loc.first, tol);
+        all.push_back({H, s, A.row(q.anchor).transpose(), loc.second});
       }
     }
   }
