@@ -26,6 +26,7 @@
 // coefficient; the printed P2 = (100, -100) gives h13 = -6.89 instead of 2.33 (a sign typo).
 #pragma once
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <array>
 #include <cmath>

@@ -1,0 +1,56 @@
+# cluster-homog: the shipped sample clusters (share/tpkit: A uniform in [0, 512]^2, B = h(A) with h = eq. 4
+# of Navy et al. 2005 and 0.1 px noise; the "extra" pair has 20% extra points in each and 30% missing
+# from B), the shipped init file (the paper's section 6 start), and bad input.
+set(_s "$SRC/share/tpkit")
+set(_eq4 "0\\.24[89][0-9]* 1\\.77[89][0-9]* 2\\.[1-5][0-9]*\n-0\\.91[78][0-9]* -0\\.090[0-9]* 6\\.[4-7][0-9]*")
+tpkit_tool_test(cluster-homog.paper-start-physical
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init ${_s}/cluster-init-example.txt -o ab.homography --pairs ab.pairs"
+  CHECK_FILE ab.homography FILE_MATCH "reached_target: yes.*# beta2: .*${_eq4}")
+tpkit_tool_test(cluster-homog.pairs-file
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init ${_s}/cluster-init-example.txt -o ab.homography --pairs ab.pairs && test $(grep -vc '^#' ab.pairs) -ge 95"
+  CHECK_FILE ab.pairs FILE_MATCH "^# tpkit pairs 1\n.*# columns: x1 y1 x2 y2 d\n")
+tpkit_tool_test(cluster-homog.paper-start-math
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init ${_s}/cluster-init-example.txt --param math -o ab.homography"
+  CHECK_FILE ab.homography FILE_MATCH "parameterization: math.*reached_target: yes.*${_eq4}")
+tpkit_tool_test(cluster-homog.from-scratch
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points -o ab.homography"
+  CHECK_FILE ab.homography FILE_MATCH "search\\+local.*reached_target: yes.*${_eq4}")
+tpkit_tool_test(cluster-homog.headerless-stdout
+  COMMAND "grep -v '^#' ${_s}/cluster-a.points > a.txt && grep -v '^#' ${_s}/cluster-b.points > b.txt && cluster-homog a.txt b.txt --param math"
+  STDOUT_MATCH "# tpkit homography 1.*${_eq4}")
+tpkit_tool_test(cluster-homog.extra-missing-trim
+  COMMAND "cluster-homog ${_s}/cluster-extra-a.points ${_s}/cluster-extra-b.points --trim 0.45 --init ${_s}/cluster-init-example.txt -o ab.homography"
+  CHECK_FILE ab.homography FILE_MATCH "trim: 0\\.45.*reached_target: yes.*${_eq4}")
+tpkit_tool_test(cluster-homog.random-paper-optimizer
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init ${_s}/cluster-init-example.txt --optimizer random --max-iterations 2000 -o ab.homography"
+  STDERR_MATCH "did not reach the target" CHECK_FILE ab.homography FILE_MATCH "optimizer: random.*iterations: 2000")
+tpkit_tool_test(cluster-homog.deterministic
+  COMMAND "for i in 1 2; do cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init ${_s}/cluster-init-example.txt --seed 9 -o h$i 2>/dev/null; grep -v time_s h$i > g$i; done; cmp g1 g2")
+tpkit_tool_test(cluster-homog.scan-plot
+  COMMAND "printf 'px1=0\\npy1=0\\nrho1=800000\\nalpha1=1.57\\nbeta1=0.55\\nres1=20\\ntheta1=0.1\\ncx1=1\\ncy1=1\\npx2=100\\npy2=100\\nrho2=800000\\nalpha2=0.8\\nbeta2=1\\ngamma2=1.57\\nres2=20\\ntheta2=0.1\\ncx2=1\\ncy2=1\\n' > truth.txt && cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init truth.txt --optimizer none --scan alpha1 --range 1.4 1.75 --steps 71 --plot alpha1.svg -o alpha1.scan && test -s alpha1.svg && test $(grep -vc '^#' alpha1.scan) -eq 71"
+  CHECK_FILE alpha1.scan FILE_MATCH "^# tpkit scan 1\n.*# parameter: alpha1\n# columns: value cost\n")
+# Bad input: clear message, non-zero exit, no output file.
+tpkit_tool_test(cluster-homog.empty-cluster
+  COMMAND "printf '# tpkit points 1\\n# columns: x y\\n' > e.points && cluster-homog e.points ${_s}/cluster-b.points -o out.homography"
+  EXPECT_FAIL STDERR_MATCH "e.points: the cluster has 0 points" NO_FILE out.homography)
+tpkit_tool_test(cluster-homog.single-point
+  COMMAND "echo '1 2' > one.points && cluster-homog ${_s}/cluster-a.points one.points -o out.homography"
+  EXPECT_FAIL STDERR_MATCH "one.points: the cluster has 1 point;" NO_FILE out.homography)
+tpkit_tool_test(cluster-homog.collinear
+  COMMAND "seq 1 20 | awk '{print $1*3, $1*2+1}' > line.points && cluster-homog line.points ${_s}/cluster-b.points -o out.homography"
+  EXPECT_FAIL STDERR_MATCH "line.points: the cluster is collinear" NO_FILE out.homography)
+tpkit_tool_test(cluster-homog.non-finite
+  COMMAND "printf '1 2\\n3 nan\\n5 6\\n7 9\\n' > nan.points && cluster-homog nan.points ${_s}/cluster-b.points -o out.homography"
+  EXPECT_FAIL STDERR_MATCH "nan.points:2: .*not finite" NO_FILE out.homography)
+tpkit_tool_test(cluster-homog.init-unknown-key
+  COMMAND "printf 'alpha1 = 1\\ncolour = 3\\n' > bad.txt && cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init bad.txt -o out.homography"
+  EXPECT_FAIL STDERR_MATCH "bad.txt:2: unknown key 'colour'" NO_FILE out.homography)
+tpkit_tool_test(cluster-homog.init-impossible-angle
+  COMMAND "sed 's/^beta1 = 0.50 .*/beta1 = 1.9/' ${_s}/cluster-init-example.txt > bad.txt && cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init bad.txt -o out.homography"
+  EXPECT_FAIL STDERR_MATCH "bad.txt:11: beta1 \\(elevation\\) must be in \\(0, pi/2\\]" NO_FILE out.homography)
+tpkit_tool_test(cluster-homog.scan-without-range
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --scan h31 -o out.scan"
+  EXPECT_FAIL STDERR_MATCH "--scan needs --range" NO_FILE out.scan)
+tpkit_tool_test(cluster-homog.random-needs-init
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --optimizer random -o out.homography"
+  EXPECT_FAIL STDERR_MATCH "needs a start" NO_FILE out.homography)
