@@ -128,34 +128,49 @@ TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
     p(29) = std::atan2(e32(1), e32(0));
     p(30) = std::asin(std::max(-1.0, std::min(1.0, e32(2))));
   }
-  // 2. constrained adjustment
-  for (int it = 0; it < 50; ++it) {
-    const Eigen::Matrix3d F[3] = {F_of(p, 0), F_of(p, 1), F_of(p, 2)};
-    Eigen::Matrix<double, 31, 31> JtJ = Eigen::Matrix<double, 31, 31>::Zero();
-    Params Jtr = Params::Zero();
+  // 2. constrained adjustment: Gauss-Helmert condition equations with constraints, solved by
+  // Levenberg-Marquardt-damped KKT steps accepted when the merit cost + rho |g| decreases
+  struct Normal {
+    Eigen::Matrix<double, 31, 31> JtJ;
+    Params Jtr;
+    double cost;
+  };
+  auto normal_at = [&](const Params& q) {
+    Normal nm;
+    nm.JtJ.setZero();
+    nm.Jtr.setZero();
+    nm.cost = 0;
+    const Eigen::Matrix3d F[3] = {F_of(q, 0), F_of(q, 1), F_of(q, 2)};
     for (Eigen::Index r = 0; r < n; ++r) {
       const Eigen::Vector3d x[3] = {track_point(xn, r, 0), track_point(xn, r, 1), track_point(xn, r, 2)};
       Eigen::Vector3d w;
       Eigen::Matrix<double, 3, 6> B = Eigen::Matrix<double, 3, 6>::Zero();
       Eigen::Matrix<double, 3, 31> A = Eigen::Matrix<double, 3, 31>::Zero();
-      for (int q = 0; q < 3; ++q) {
-        const int a = kPairs[q][0], b = kPairs[q][1];
-        w(q) = x[a].dot(F[q] * x[b]);
-        const Eigen::Vector3d ga = F[q] * x[b], gb = F[q].transpose() * x[a];
-        B(q, 2 * a) = ga(0);
-        B(q, 2 * a + 1) = ga(1);
-        B(q, 2 * b) = gb(0);
-        B(q, 2 * b + 1) = gb(1);
+      for (int c = 0; c < 3; ++c) {
+        const int a = kPairs[c][0], b = kPairs[c][1];
+        w(c) = x[a].dot(F[c] * x[b]);
+        const Eigen::Vector3d ga = F[c] * x[b], gb = F[c].transpose() * x[a];
+        B(c, 2 * a) = ga(0);
+        B(c, 2 * a + 1) = ga(1);
+        B(c, 2 * b) = gb(0);
+        B(c, 2 * b + 1) = gb(1);
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) A(q, 9 * q + 3 * i + j) = x[a](i) * x[b](j);
+          for (int j = 0; j < 3; ++j) A(c, 9 * c + 3 * i + j) = x[a](i) * x[b](j);
       }
-      const Eigen::Matrix3d BBt = B * B.transpose();
-      Eigen::LLT<Eigen::Matrix3d> llt(BBt);
+      Eigen::LLT<Eigen::Matrix3d> llt(B * B.transpose());
       if (llt.info() != Eigen::Success) continue;  // a track at an epipole carries no condition
       const Eigen::Matrix3d Winv = llt.solve(Eigen::Matrix3d::Identity());
-      JtJ.noalias() += A.transpose() * Winv * A;
-      Jtr.noalias() += A.transpose() * (Winv * w);
+      nm.JtJ.noalias() += A.transpose() * Winv * A;
+      nm.Jtr.noalias() += A.transpose() * (Winv * w);
+      nm.cost += w.dot(Winv * w);
     }
+    return nm;
+  };
+  Normal cur = normal_at(p);
+  const double rho = 1e6 * std::max(cur.cost, 1e-300) + 1e-6;
+  double merit = cur.cost + rho * constraints(p, bases_at(p)).norm();
+  double mu = 1e-6;
+  for (int it = 0; it < 100 && mu < 1e12; ++it) {
     const Bases b = bases_at(p);
     const Eigen::Matrix<double, 12, 1> g = constraints(p, b);
     Eigen::Matrix<double, 12, 31> G;
@@ -166,18 +181,29 @@ TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
       pm(c) -= h;
       G.col(c) = (constraints(pp, b) - constraints(pm, b)) / (2 * h);
     }
+    const double dmax = cur.JtJ.diagonal().maxCoeff();
     Eigen::Matrix<double, 43, 43> K = Eigen::Matrix<double, 43, 43>::Zero();
-    K.topLeftCorner<31, 31>() = JtJ + 1e-14 * JtJ.trace() * Eigen::Matrix<double, 31, 31>::Identity();
+    K.topLeftCorner<31, 31>() = cur.JtJ;
+    K.topLeftCorner<31, 31>().diagonal() += mu * (cur.JtJ.diagonal().array() + 1e-9 * dmax).matrix();
     K.block<31, 12>(0, 31) = G.transpose();
     K.block<12, 31>(31, 0) = G;
     Eigen::Matrix<double, 43, 1> rhs;
-    rhs.head<31>() = -Jtr;
+    rhs.head<31>() = -cur.Jtr;
     rhs.tail<12>() = -g;
-    const Eigen::Matrix<double, 43, 1> sol = K.colPivHouseholderQr().solve(rhs);
-    const Params dp = sol.head<31>();
+    const Params dp = K.colPivHouseholderQr().solve(rhs).head<31>();
     if (!dp.allFinite()) throw NumericalError("three-f: the constrained adjustment diverged");
-    p += dp;
-    if (dp.norm() < 1e-12) break;
+    if (dp.norm() < 1e-11) break;
+    const Params np = p + dp;
+    const Normal nn = normal_at(np);
+    const double nmerit = nn.cost + rho * constraints(np, bases_at(np)).norm();
+    if (nmerit <= merit) {
+      p = np;
+      cur = nn;
+      merit = nmerit;
+      mu = std::max(1e-12, mu / 4);
+    } else {
+      mu *= 8;
+    }
   }
   // 3. tensor from the adjusted geometry
   const Eigen::Matrix3d F12 = F_of(p, 0), F13 = F_of(p, 1), F23 = F_of(p, 2);
