@@ -92,7 +92,8 @@ int main(int argc, char** argv) {
                 }
               if (std::string(sep) == ",") std::cerr << ")";
             }
-            std::cerr << "\n";
+            std::cerr << "; seconds: detect " << st.seconds[0] << ", match " << st.seconds[1] << ", verify " << st.seconds[2]
+                      << ", refine " << st.seconds[3] << "\n";
           }
           return 0;
         };

@@ -24,6 +24,7 @@ struct LsmOptions {
   double min_corr = 0.8;    // drop when the final normalised cross-correlation is lower
   bool l1 = true;           // robust L1 (IRLS); false: plain least squares
   double eps = 0.02;        // IRLS floor on |r|, in units of the template's grey-level standard deviation
+  double taper = 0;         // > 0: Gaussian weight exp(-(u^2+v^2) / (2 taper^2)) on the window (pixels); 0 = flat
 };
 
 enum class LsmStatus { Ok, OutOfImage, Invalid, Flat, Diverged, NotConverged, Drifted, LowCorrelation };

@@ -37,6 +37,7 @@ struct PairMatchOptions {
 struct PairMatchStats {
   long keypoints1 = 0, keypoints2 = 0, putative = 0, verified = 0, gridded = 0, refined = 0;
   double ransac_rms = 0;
+  double seconds[4] = {0, 0, 0, 0};             // wall time of detection, matching, verification, refinement
   long dropped[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // by LsmStatus
   bool overlap = true;                         // false: too few verified matches, zero records
 };

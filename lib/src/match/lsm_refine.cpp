@@ -131,7 +131,10 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   th << p2.x(), p2.y(), A0(0, 0), A0(0, 1), A0(1, 0), A0(1, 1), 0.0, 1.0;
   Eigen::Matrix<double, 8, 8> N;
   Eigen::Matrix<double, 8, 1> b;
-  std::vector<double> r(n), g(n), gx(n), gy(n), wgt(n, 1.0);
+  std::vector<double> r(n), g(n), gx(n), gy(n), wgt(n, 1.0), taper(n, 1.0);
+  if (o.taper > 0)
+    for (int k = 0; k < n; ++k) taper[k] = std::exp(-(du[k] * du[k] + dv[k] * dv[k]) / (2 * o.taper * o.taper));
+  wgt = taper;
   bool converged = false;
   double sum_wr2 = 0;
   auto evaluate = [&](const Eigen::Matrix<double, 8, 1>& p) -> bool {
@@ -155,7 +158,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     }
     // IRLS weights: plain least squares for the first two iterations, then L1
     if (o.l1 && it >= 2)
-      for (int k = 0; k < n; ++k) wgt[k] = 1.0 / std::max(std::abs(r[k]), o.eps);
+      for (int k = 0; k < n; ++k) wgt[k] = taper[k] / std::max(std::abs(r[k]), o.eps);
     N.setZero();
     b.setZero();
     sum_wr2 = 0;

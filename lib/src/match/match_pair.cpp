@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -58,6 +59,12 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
   M.image1 = {a.path, a.info.width, a.info.height};
   M.image2 = {b.path, b.info.width, b.info.height};
 
+  auto clock = std::chrono::steady_clock::now();
+  auto lap = [&clock](double& out) {
+    auto now = std::chrono::steady_clock::now();
+    out = std::chrono::duration<double>(now - clock).count();
+    clock = now;
+  };
   // 1. keypoints
   Keypoints K1, K2;
   {
@@ -72,12 +79,14 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
   st.keypoints1 = static_cast<long>(K1.kp.size());
   st.keypoints2 = static_cast<long>(K2.kp.size());
 
+  lap(st.seconds[0]);
   // 2. putative matches
   std::vector<DescriptorMatch> put = match_descriptors(K1.desc, K2.desc, o.desc);
   st.putative = static_cast<long>(put.size());
   K1.desc.release();
   K2.desc.release();
 
+  lap(st.seconds[1]);
   // 3. affine F RANSAC
   Eigen::MatrixX4d xy(put.size(), 4);
   for (size_t i = 0; i < put.size(); ++i) {
@@ -112,6 +121,7 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
   }
   st.gridded = static_cast<long>(ver.size());
 
+  lap(st.seconds[2]);
   // 5. least-squares matching, image-1 region by region
   struct Rec {
     long long id1, id2;
@@ -186,6 +196,7 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
     if (pr) pr->done();
   }
 
+  lap(st.seconds[3]);
   size_t nout = 0;
   for (const Rec& r : recs) {
     if (r.ok) ++nout;

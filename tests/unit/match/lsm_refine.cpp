@@ -1,0 +1,146 @@
+// Least-squares matching against a known warp: a smooth random texture, image 2 = affine warp of
+// image 1 with gain, offset and noise. Truth of p1 in image 2 is known in closed form.
+#include "tpkit/lsm_refine.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <random>
+
+#include "tpkit/match_pair.hpp"
+
+using namespace tpkit;
+
+namespace {
+struct Texture {
+  std::vector<std::array<double, 4>> waves;  // kx, ky, phase, amplitude
+  explicit Texture(unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> k(-1.2, 1.2), ph(0, 6.283);
+    for (int i = 0; i < 30; ++i) waves.push_back({k(rng), k(rng), ph(rng), 1.0 / (1 + i * 0.05)});
+  }
+  double operator()(double x, double y) const {
+    double s = 0;
+    for (const auto& w : waves) s += w[3] * std::sin(w[0] * x + w[1] * y + w[2]);
+    return s;
+  }
+};
+
+// Renders ground texture through x_img -> ground = M (x_img - c) + g0, average of 4x4 subsamples.
+Raster render(const Texture& t, long size, const Eigen::Matrix2d& M, const Eigen::Vector2d& c, double gain, double offset,
+              double noise, unsigned seed) {
+  Raster r;
+  r.width = r.height = size;
+  r.data.resize(size * size);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, noise);
+  for (long y = 0; y < size; ++y)
+    for (long x = 0; x < size; ++x) {
+      double s = 0;
+      for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+          Eigen::Vector2d p(x - 0.375 + 0.25 * i, y - 0.375 + 0.25 * j);
+          Eigen::Vector2d q = M * (p - c);
+          s += t(q.x(), q.y());
+        }
+      r.at(x, y) = static_cast<float>(offset + gain * s / 16 + (noise > 0 ? g(rng) : 0));
+    }
+  return r;
+}
+}  // namespace
+
+TEST(Lsm, BicubicReproducesLinearRampAndGradient) {
+  Raster r;
+  r.x0 = 10;
+  r.y0 = 20;
+  r.width = r.height = 12;
+  r.data.resize(144);
+  for (long y = 0; y < 12; ++y)
+    for (long x = 0; x < 12; ++x) r.at(x, y) = static_cast<float>(3 + 2 * (x + 10) - 0.5 * (y + 20));
+  double v, gx, gy;
+  ASSERT_TRUE(bicubic(r, 15.3, 25.7, v, &gx, &gy));
+  EXPECT_NEAR(v, 3 + 2 * 15.3 - 0.5 * 25.7, 1e-4);
+  EXPECT_NEAR(gx, 2.0, 1e-5);
+  EXPECT_NEAR(gy, -0.5, 1e-5);
+  EXPECT_FALSE(bicubic(r, 10.5, 25, v));  // needs one pixel of support on each side
+}
+
+TEST(Lsm, RecoversAffineShiftWithRadiometry) {
+  Texture tex(5);
+  const long S = 160;
+  const Eigen::Vector2d c(80, 80);
+  Eigen::Matrix2d M1 = Eigen::Matrix2d::Identity();
+  // image 2: ground = M2 (x2 - c) with M2 = M1 * B^-1, i.e. x2 = c + B (x1 - c) + t
+  Eigen::Matrix2d B;
+  B << 1.04, 0.06, -0.03, 0.97;
+  Eigen::Vector2d tshift(0.37, -0.61);
+  Eigen::Matrix2d M2 = B.inverse();
+  Raster I1 = render(tex, S, M1, c, 300, 1000, 3.0, 1);
+  Raster I2 = render(tex, S, M2, c + tshift, 250, 700, 3.0, 2);
+  LsmOptions o;
+  std::vector<double> err;
+  for (double px : {60.3, 75.0, 88.7, 101.2})
+    for (double py : {62.1, 79.5, 95.4}) {
+      Eigen::Vector2d p1(px, py), truth = c + tshift + B * (p1 - c);
+      Eigen::Vector2d start = truth + Eigen::Vector2d(0.6, -0.5);
+      LsmResult r = lsm_refine(I1, I2, p1, start, Eigen::Matrix2d::Identity(), o);
+      ASSERT_TRUE(r.ok()) << to_string(r.status);
+      err.push_back((r.p2 - truth).norm());
+      EXPECT_GT(r.corr, 0.95);
+      EXPECT_GT(r.sigma, 0.0);
+      EXPECT_LT(r.sigma, 0.05);
+      EXPECT_NEAR(r.A(0, 0), B(0, 0), 0.02);
+      EXPECT_NEAR(r.A(0, 1), B(0, 1), 0.02);
+    }
+  std::sort(err.begin(), err.end());
+  EXPECT_LT(err[err.size() / 2], 0.02);
+  EXPECT_LT(err.back(), 0.05);
+}
+
+TEST(Lsm, KeypointOrientationInitialisesRotation) {
+  // image 2 is image 1 rotated by +40 degrees (from +x towards +y) about c: a window that starts
+  // unrotated cannot converge, the keypoint-derived initial map can.
+  Texture tex(9);
+  const long S = 160;
+  const Eigen::Vector2d c(80, 80);
+  const double a = 40 * M_PI / 180;
+  Eigen::Matrix2d R;
+  R << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+  Raster I1 = render(tex, S, Eigen::Matrix2d::Identity(), c, 300, 1000, 2.0, 3);
+  Raster I2 = render(tex, S, R.inverse(), c, 300, 1000, 2.0, 4);
+  Eigen::Vector2d p1(70.4, 90.2), truth = c + R * (p1 - c);
+  LsmOptions o;
+  Eigen::Matrix2d A0 = keypoint_affine(4.0, 10.0, 4.0, 50.0);  // OpenCV angles differ by +40 degrees
+  LsmResult r = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.5, 0.4), A0, o);
+  ASSERT_TRUE(r.ok()) << to_string(r.status);
+  EXPECT_LT((r.p2 - truth).norm(), 0.03);
+  EXPECT_NEAR(r.A(1, 0), std::sin(a), 0.02);
+}
+
+TEST(Lsm, DropsFlatAndFarAndNodata) {
+  Raster flat;
+  flat.width = flat.height = 64;
+  flat.data.assign(64 * 64, 100.f);
+  LsmOptions o;
+  EXPECT_EQ(lsm_refine(flat, flat, {32, 32}, {32, 32}, Eigen::Matrix2d::Identity(), o).status, LsmStatus::Flat);
+
+  Texture tex(11);
+  const Eigen::Vector2d c(60, 60);
+  Raster I1 = render(tex, 120, Eigen::Matrix2d::Identity(), c, 300, 1000, 1.0, 5);
+  Raster I2 = render(tex, 120, Eigen::Matrix2d::Identity(), c + Eigen::Vector2d(1.2, 0.0), 300, 1000, 1.0, 6);
+  // truth is 1.2 px from the start: allowed with max_shift 1.5, dropped with 0.5
+  LsmResult ok = lsm_refine(I1, I2, {55, 58}, {55, 58}, Eigen::Matrix2d::Identity(), o);
+  ASSERT_TRUE(ok.ok()) << to_string(ok.status);
+  EXPECT_NEAR(ok.p2.x(), 56.2, 0.03);
+  o.max_shift = 0.5;
+  LsmResult far = lsm_refine(I1, I2, {55, 58}, {55, 58}, Eigen::Matrix2d::Identity(), o);
+  EXPECT_FALSE(far.ok());
+  // a NaN (nodata) pixel inside the window
+  o.max_shift = 1.5;
+  I2.at(57, 60) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(lsm_refine(I1, I2, {55, 58}, {55, 58}, Eigen::Matrix2d::Identity(), o).ok());
+  // window leaving the image
+  EXPECT_EQ(lsm_refine(I1, I2, {3, 58}, {3, 58}, Eigen::Matrix2d::Identity(), o).status, LsmStatus::OutOfImage);
+}
