@@ -32,7 +32,8 @@ class SynthTerrain {
   double zmax() const { return zmax_; }
   // First t >= 0 where o + t d meets the terrain (d: any direction with d.z < 0; o: any point). Nothing
   // when the ray leaves the height bounds without meeting it (or d.z >= 0).
-  std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
+  // tol: bracket width (m along the ray) at which the refinement stops.
+  std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tol = 1e-10) const;
   // Newton refinement of the intersection starting from t0; nothing if it does not converge quickly
   // (caller falls back to intersect()). Used for supersamples next to an exact cast.
   // tol: stop when the Newton step is below tol (m along the ray); the error of the result is then of

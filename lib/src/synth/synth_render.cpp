@@ -44,7 +44,8 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
   Eigen::Vector3d o, d;
   auto cast = [&](double x, double y) {
     ray(view, x, y, o, d);
-    const auto t = terrain_().intersect(o, d);
+    // 1 mm is plenty for a starting guess and for the smoothness test below.
+    const auto t = terrain_().intersect(o, d, 1e-3);
     return t ? *t : nan;
   };
   for (long j = 0; j <= rows; ++j)

@@ -199,7 +199,7 @@ std::optional<double> SynthTerrain::refine(const Eigen::Vector3d& o, const Eigen
   return std::nullopt;
 }
 
-std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
+std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tol_t) const {
   if (!(d.z() < 0)) return std::nullopt;
   auto f = [&](double t) { return o.z() + t * d.z() - height(o.x() + t * d.x(), o.y() + t * d.y()); };
   const double t0 = std::max(0.0, (o.z() - zmax_) / -d.z());
@@ -207,7 +207,7 @@ std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Ei
   if (!(t1 >= t0)) return std::nullopt;
   // Bracketed refinement (Illinois false position) of a sign change f(a) > 0 >= f(b).
   auto solve = [&](double a, double b, double fa, double fb) {
-    const double tol = 1e-10 + 1e-15 * std::abs(b);
+    const double tol = tol_t + 1e-15 * std::abs(b);
     int side = 0;
     for (int it = 0; it < 200 && b - a > tol; ++it) {
       double c = (a * fb - b * fa) / (fb - fa);

@@ -26,9 +26,12 @@ inline double rect_sd(double x, double y, double cx, double cy, double hx, doubl
 }
 // Partition of [0, L) into n cells with seeded random widths; returns the cell of x and the distance
 // from x to the nearest cell boundary (0 and L included).
+// The k-th 16-bit field of a hash as a uniform in [0, 1) (k = 0..3): several draws from one hash.
+inline double b16(uint64_t h, int k) { return static_cast<double>((h >> (16 * k)) & 0xffff) * (1.0 / 65536); }
 inline int partition(uint64_t s, int n, double L, double x, double* dist) {
   double w[8], total = 0;
-  for (int k = 0; k < n; ++k) total += (w[k] = 0.5 + uniform(s, k));
+  const uint64_t h0 = synth::mix64(s), h1 = n > 4 ? synth::mix64(s ^ 0x51ed27ULL) : 0;
+  for (int k = 0; k < n; ++k) total += (w[k] = 0.5 + b16(k < 4 ? h0 : h1, k & 3));
   double b = 0;
   for (int k = 0; k < n; ++k) {
     const double e = (k == n - 1) ? L : b + L * w[k] / total;
@@ -66,19 +69,19 @@ double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, doub
   const uint64_t sh = hash(bh, 2, s);
   const int n2 = 2 + static_cast<int>(sh % 4);
   const int p = partition(hash(sh, 3), n2, block_, lv, &d2);
-  const uint64_t ph = hash(sh, 4, p);
-  double a = 0.15 + 0.5 * synth::unit(hash(ph, 5));
-  const double kind = synth::unit(hash(ph, 6));
+  const uint64_t ph = hash(sh, 4, p), ph2 = synth::mix64(ph);
+  double a = 0.15 + 0.5 * b16(ph, 0);
+  const double kind = b16(ph, 1);
   if (kind < 0.6) {
     // Crop rows: stripes at a parcel-specific orientation and period (>= 3 gsd).
-    const double ang = kPi * synth::unit(hash(ph, 7));
-    const double period = std::max(2.5 + 6 * synth::unit(hash(ph, 8)), 3 * gsd_);
-    const double amp = 0.04 + 0.1 * synth::unit(hash(ph, 9));
-    a += amp * std::sin(2 * kPi * (u * std::cos(ang) + v * std::sin(ang)) / period);
+    const double dx = b16(ph, 2) - 0.5, dy = b16(ph, 3) * 0.5 + 1e-3, dn = std::sqrt(dx * dx + dy * dy);
+    const double period = std::max(2.5 + 6 * b16(ph2, 0), 3 * gsd_);
+    const double amp = 0.04 + 0.1 * b16(ph2, 1);
+    a += amp * std::sin(2 * kPi * (u * dx + v * dy) / (dn * period));
   } else {
     // Rough fields: blotchy noise.
-    const double l = std::max(4 + 8 * synth::unit(hash(ph, 10)), 3 * gsd_);
-    a += 0.08 * value_noise(hash(ph, 11), u / l, v / l);
+    const double l = std::max(4 + 8 * b16(ph2, 2), 3 * gsd_);
+    a += 0.08 * value_noise(ph2, u / l, v / l);
   }
   // Dark hedges (1 m half width) along every parcel boundary.
   const double d = std::min(d1, d2);
@@ -96,15 +99,16 @@ double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double 
     // A small park: trees.
     return lerp(a, woodland(u, v), inside(std::min(std::min(x, lot - x), std::min(y, lot - y)) - 3, ew_));
   }
-  const double cx = lot / 2 + 5 * (2 * synth::unit(hash(h, 1)) - 1);
-  const double cy = lot / 2 + 5 * (2 * synth::unit(hash(h, 2)) - 1);
-  const double hx = 6 + 10 * synth::unit(hash(h, 3)), hy = 5 + 10 * synth::unit(hash(h, 4));
-  const double bh = 3 + 5 * synth::unit(hash(h, 5));  // building height (m); shadow |sun| * bh <= 6 m
+  const uint64_t h2 = synth::mix64(h);
+  const double cx = lot / 2 + 5 * (2 * b16(h2, 0) - 1);
+  const double cy = lot / 2 + 5 * (2 * b16(h2, 1) - 1);
+  const double hx = 6 + 10 * b16(h2, 2), hy = 5 + 10 * b16(h2, 3);
+  const double bh = 3 + 5 * b16(h, 1);  // building height (m); shadow |sun| * bh <= 6 m
   // Cast shadow: the footprint moved away from the sun, darkening the pavement.
   const double sd_shadow = rect_sd(x, y, cx - sun_u_ * bh, cy - sun_v_ * bh, hx, hy);
   a *= 1 - 0.55 * inside(sd_shadow, ew_);
   // Gabled roof: ridge along the longer side, the two halves lit differently.
-  const double roof = 0.3 + 0.5 * synth::unit(hash(h, 6));
+  const double roof = 0.3 + 0.5 * b16(h, 2);
   const bool along_x = hx > hy;
   const double across = along_x ? (y - cy) : (x - cx);
   const double facing = along_x ? sun_v_ : sun_u_;

@@ -512,3 +512,45 @@ TEST(SynthScene, FastRenderingEqualsExactCastsWithOcclusion) {
     EXPECT_LE(worst, 1) << "view " << v;
   }
 }
+
+namespace {
+// Largest and RMS distance (pixels) between the perspective projection of ground points visible in all
+// three views and the least-squares best affine camera (x = A X + b) of each view.
+std::pair<double, double> affine_fit_miss(const SynthScene& s, long n) {
+  const SynthTruth t = synth_truth_points(s, n);
+  double worst = 0, ss = 0;
+  for (int v = 0; v < 3; ++v) {
+    Eigen::MatrixXd A(t.xy.rows(), 4);
+    A << t.ground, Eigen::VectorXd::Ones(t.xy.rows());
+    const Eigen::MatrixXd B = t.xy.middleCols(2 * v, 2);
+    const Eigen::MatrixXd M = A.colPivHouseholderQr().solve(B);
+    const Eigen::MatrixXd r = A * M - B;
+    for (Eigen::Index i = 0; i < r.rows(); ++i) {
+      worst = std::max(worst, r.row(i).norm());
+      ss += r.row(i).squaredNorm();
+    }
+  }
+  return {worst, std::sqrt(ss / (3.0 * t.xy.rows()))};
+}
+}  // namespace
+
+TEST(SynthScene, AffineApproximationOfPerspective) {
+  // Affine cameras reproduce themselves exactly; a small, flat perspective scene is nearly affine.
+  SynthParams p = small_params("affine");
+  EXPECT_LT(affine_fit_miss(SynthScene(p), 300).first, 1e-8);
+  p.camera = "perspective";
+  const auto small = affine_fit_miss(SynthScene(p), 300);
+  std::cerr << "perspective size 320 relief 40: best affine misses by max " << small.first << " px, rms " << small.second << " px\n";
+  EXPECT_LT(small.first, 0.05);
+}
+
+TEST(SynthScene, AffineApproximationDegradesOnMountains) {
+  // The paper's mountain case: large scene, strong relief.
+  SynthParams p;
+  p.size = 4096;
+  p.relief = 1500;
+  p.camera = "perspective";
+  const auto big = affine_fit_miss(SynthScene(p), 3000);
+  std::cerr << "perspective size 4096 relief 1500: best affine misses by max " << big.first << " px, rms " << big.second << " px\n";
+  EXPECT_GT(big.first, 0.5);
+}
