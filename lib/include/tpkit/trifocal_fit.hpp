@@ -29,9 +29,9 @@ TrifocalTensor run_trifocal_method(TrifocalMethod m, const Eigen::MatrixXd& xy);
 
 // Robust fitting (--ransac): hypotheses from minimal samples of 4 tracks by the affine ML solver (exact
 // for 4 tracks), scored by MSAC on the per-track reprojection error sqrt((|r1|^2 + |r2|^2 + |r3|^2) / 3)
-// in pixels (points eliminated in closed form), LO re-fits by ml; then the inliers are re-fitted with
-// `m`, and the final inlier mask is the tracks whose error under that tensor (camera recovery + DLT
-// triangulation, as reproj-eval) is <= threshold (one more re-fit if the mask changed).
+// in pixels (points eliminated in closed form: for affine views this is the reprojection error after
+// optimal triangulation), LO re-fits by ml; the inliers of the best (LO-refined) model are the inlier
+// mask, and they are re-fitted with `m` (with the full input checks, flat terrain included).
 struct RobustTrifocalFit {
   TrifocalTensor T;
   std::vector<char> inlier;

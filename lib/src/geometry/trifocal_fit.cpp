@@ -69,7 +69,6 @@ TrifocalTensor fit_trifocal(TrifocalMethod m, const Eigen::MatrixXd& xy, bool ch
 
 // ---- robust fitting -------------------------------------------------------------------------------
 
-#include "tpkit/reproj_eval.hpp"
 
 namespace tpkit {
 
@@ -126,23 +125,12 @@ RobustTrifocalFit fit_trifocal_ransac(TrifocalMethod m, const Eigen::MatrixXd& x
   if (!rr.found) throw NumericalError("ransac: no sample gave a model");
   RobustTrifocalFit out;
   out.iterations = rr.iterations;
-  std::vector<char> mask = rr.inlier;
-  for (int round = 0; round < 3; ++round) {
-    const Eigen::MatrixXd in = select_rows(xy, mask);
-    if (in.rows() < trifocal_min_tracks(m))
-      throw NumericalError("ransac: only " + std::to_string(in.rows()) + " inliers, fewer than " + name + " needs");
-    out.T = fit_trifocal(m, in, true);
-    const ReprojectionFrame frame = reprojection_frame(out.T, in);
-    const ReprojectionResult ev = evaluate_reprojection(frame, xy);
-    std::vector<char> next(xy.rows(), 0);
-    for (Eigen::Index r = 0; r < xy.rows(); ++r) next[r] = ev.track_rms(r) <= opt.threshold ? 1 : 0;
-    const bool same = next == mask;
-    mask.swap(next);
-    if (same) break;
-  }
-  out.inlier = mask;
-  out.inliers = 0;
-  for (char c : mask) out.inliers += c ? 1 : 0;
+  out.inlier = rr.inlier;
+  out.inliers = rr.inliers;
+  const Eigen::MatrixXd in = select_rows(xy, rr.inlier);
+  if (in.rows() < trifocal_min_tracks(m))
+    throw NumericalError("ransac: only " + std::to_string(in.rows()) + " inliers, fewer than " + name + " needs");
+  out.T = fit_trifocal(m, in, true);
   return out;
 }
 
