@@ -35,7 +35,7 @@ std::string slurp(const fs::path& p) {
 SynthParams small_params(const std::string& camera = "affine") {
   SynthParams p;
   p.seed = 7;
-  p.size = 320;
+  p.size = 256;
   p.relief = 40;
   p.gsd = 0.5;
   p.camera = camera;
@@ -115,7 +115,7 @@ TEST(SynthScene, TruthTracksReprojectWithWrittenCameras) {
   ASSERT_EQ(c.P.size(), 3u);
   ASSERT_EQ(t.images.size(), 3u);
   EXPECT_EQ(t.images[0].path, "view1.tif");
-  EXPECT_EQ(t.images[2].width, 320);
+  EXPECT_EQ(t.images[2].width, 256);
   const int cx = t.extra.find("X"), cy = t.extra.find("Y"), cz = t.extra.find("Z");
   ASSERT_GE(cx, 0);
   ASSERT_GE(cy, 0);
@@ -132,7 +132,7 @@ TEST(SynthScene, TruthTracksReprojectWithWrittenCameras) {
       const Eigen::Vector2d x = project(c.P[v], X);
       worst = std::max(worst, (x - t.point(i, v)).norm());
       EXPECT_GE(x.x(), 0);
-      EXPECT_LE(x.x(), 319);
+      EXPECT_LE(x.x(), 255);
       EXPECT_TRUE(w.scene.visible(v, X));
     }
   }
@@ -142,7 +142,7 @@ TEST(SynthScene, TruthTracksReprojectWithWrittenCameras) {
   double frac = 0;
   for (size_t i = 0; i < t.size(); ++i) {
     const Eigen::Vector2d x = t.point(i, 1);
-    quadrant[(x.x() > 160) + 2 * (x.y() > 160)]++;
+    quadrant[(x.x() > 128) + 2 * (x.y() > 128)]++;
     frac += std::abs(x.x() - std::round(x.x()));
   }
   for (int q : quadrant) EXPECT_GT(q, 40);
@@ -423,7 +423,7 @@ TEST(SynthScene, ImagesUse12BitRangeWithPerViewGain) {
     const std::string path = (w.dir / ("view" + std::to_string(v + 1) + ".tif")).string();
     const ImageInfo info = image_info(path);
     EXPECT_EQ(info.format, "uint16");
-    EXPECT_EQ(info.width, 320);
+    EXPECT_EQ(info.width, 256);
     const Raster r = read_band(path);
     const float mx = *std::max_element(r.data.begin(), r.data.end());
     const float mn = *std::min_element(r.data.begin(), r.data.end());
@@ -540,7 +540,7 @@ TEST(SynthScene, AffineApproximationOfPerspective) {
   EXPECT_LT(affine_fit_miss(SynthScene(p), 300).first, 1e-8);
   p.camera = "perspective";
   const auto small = affine_fit_miss(SynthScene(p), 300);
-  std::cerr << "perspective size 320 relief 40: best affine misses by max " << small.first << " px, rms " << small.second << " px\n";
+  std::cerr << "perspective size 256 relief 40: best affine misses by max " << small.first << " px, rms " << small.second << " px\n";
   EXPECT_LT(small.first, 0.05);
 }
 
