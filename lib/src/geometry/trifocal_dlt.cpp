@@ -10,13 +10,32 @@ TrifocalTensor trifocal_dlt(const Eigen::MatrixXd& xy) {
   if (xy.rows() < kDltMinTracks) throw InputError("dlt needs at least 7 tracks");
   const auto H = isotropic_normalization(xy, false);
   const Eigen::MatrixXd xn = apply_normalization(xy, H);
-  const Eigen::Index n = xn.rows();
-  Eigen::Matrix<double, Eigen::Dynamic, 27> A(4 * n, 27);
-  for (Eigen::Index r = 0; r < n; ++r)
-    A.middleRows<4>(4 * r) = trifocal_incidence_rows(track_point(xn, r, 0), track_point(xn, r, 1), track_point(xn, r, 2));
-  Eigen::Matrix<double, 27, 27> N = Eigen::Matrix<double, 27, 27>::Zero();
-  N.selfadjointView<Eigen::Lower>().rankUpdate(A.transpose());
-  N = N.selfadjointView<Eigen::Lower>();
+  // A^T A of the four equations per track without forming A: the rows of one track are
+  // x (x) a_p (x) b_q (p, q = 1, 2; a_p rows of [x']_x, b_q columns of [x'']_x), so its contribution is
+  // the Kronecker product S1 (x) S2 (x) S3 with S1 = x x^T, S2 = sum_p a_p a_p^T, S3 = sum_q b_q b_q^T.
+  // Accumulate the 6 x 6 x 6 sums of products of their unique entries, then assemble the 27 x 27 matrix.
+  static const int sym[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  double M[6][6][6] = {};
+  for (Eigen::Index r = 0; r < xn.rows(); ++r) {
+    const double x = xn(r, 0), y = xn(r, 1), u = xn(r, 2), v = xn(r, 3), s = xn(r, 4), t = xn(r, 5);
+    const double S1[6] = {x * x, x * y, x, y * y, y, 1.0};
+    const double S2[6] = {1.0, 0.0, -u, 1.0, -v, u * u + v * v};
+    const double S3[6] = {1.0, 0.0, -s, 1.0, -t, s * s + t * t};
+    for (int a = 0; a < 6; ++a)
+      for (int b = 0; b < 6; ++b) {
+        if (b == 1) continue;
+        const double ab = S1[a] * S2[b];
+        for (int c = 0; c < 6; ++c) M[a][b][c] += ab * S3[c];
+      }
+  }
+  Eigen::Matrix<double, 27, 27> N;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        for (int i2 = 0; i2 < 3; ++i2)
+          for (int j2 = 0; j2 < 3; ++j2)
+            for (int k2 = 0; k2 < 3; ++k2)
+              N(9 * i + 3 * j + k, 9 * i2 + 3 * j2 + k2) = M[sym[i][i2]][sym[j][j2]][sym[k][k2]];
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 27, 27>> es(N);
   if (es.info() != Eigen::Success) throw NumericalError("dlt: eigen decomposition failed");
   const Vector27 t = es.eigenvectors().col(0);

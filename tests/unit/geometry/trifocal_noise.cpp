@@ -217,3 +217,19 @@ TEST(Transfer, NoisyPairsAreCorrectedOntoTheEpipolarGeometry) {
   EXPECT_LT(rmse, 4 * kSigma);
   EXPECT_GT(rmse, 0.1 * kSigma);
 }
+
+// minimal optimizes the reprojection error over exactly the affine tensors, so it must land on the ML
+// (Tomasi-Kanade) solution, starting from the different affine-dlt tensor.
+TEST(MlConsistency, MinimalConvergesToMl) {
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const Data d = make(seed, 60);
+    const TrifocalTensor Tm = fit_trifocal(TrifocalMethod::Minimal, d.fit);
+    const TrifocalTensor Tl = fit_trifocal(TrifocalMethod::Ml, d.fit);
+    const TrifocalTensor Ta = fit_trifocal(TrifocalMethod::AffineDlt, d.fit);
+    const Eigen::MatrixXd pm = transfer_point_line_point(Tm, d.check.leftCols(4));
+    const Eigen::MatrixXd pl = transfer_point_line_point(Tl, d.check.leftCols(4));
+    const Eigen::MatrixXd pa = transfer_point_line_point(Ta, d.check.leftCols(4));
+    EXPECT_LT((pm - pl).cwiseAbs().maxCoeff(), 1e-4) << seed;
+    EXPECT_GT((pa - pl).cwiseAbs().maxCoeff(), 1e-3) << seed;  // the start was elsewhere
+  }
+}

@@ -1,0 +1,54 @@
+# trifocal-fit end to end on tp-synth ground truth (exact affine projections of a synthetic triplet):
+# fit -> reproj-eval, noise, outliers, and every degenerate input (error, exit 1, no output file).
+set(_synth "tp-synth --out syn --size 160 --points 300 --seed 3 --supersample 1 >/dev/null 2>&1")
+# Gaussian noise sigma 0.5 px on every coordinate (Box-Muller, fixed seed)
+set(_noise "awk 'BEGIN{srand(7)} /^#/{print;next} {for(c=2;c<=7;c++){u=rand();v=rand();if(u<1e-12)u=1e-12;$c+=0.5*sqrt(-2*log(u))*cos(6.283185307179586*v)} print}'")
+
+foreach(m dlt affine-dlt algebraic minimal three-f ml)
+  tpkit_tool_test(trifocal-fit.${m}-exact
+    COMMAND "${_synth} && trifocal-fit -m ${m} syn/truth.tracks -o t.trifocal && reproj-eval t.trifocal syn/truth.tracks"
+    STDOUT_MATCH "# rmse_px: ([0-9.]+e-(0[7-9]|[1-9][0-9])|0)\n" CHECK_FILE t.trifocal FILE_MATCH "# method: ${m}")
+endforeach()
+
+# the fitted tensor transfers view-1/view-2 points onto the true view-3 points (< 1e-6 px)
+tpkit_tool_test(trifocal-fit.transfer-matches-truth
+  COMMAND "${_synth} && trifocal-fit syn/truth.tracks -o t.trifocal && grep -v '^#' syn/truth.tracks | cut -d' ' -f2-5 | reproj-eval --transfer t.trifocal - -o x3.points && grep -v '^#' syn/truth.tracks | cut -d' ' -f6,7 > x3.truth && grep -v '^#' x3.points | paste -d' ' - x3.truth | awk '{d=($1-$3)^2+($2-$4)^2; if(d>m)m=d; n++} END{print n, \"max_err_px\", sqrt(m); exit !(n==300 && sqrt(m)<1e-6)}'"
+  STDOUT_MATCH "300 max_err_px")
+
+# sigma = 0.5 px: the ML fit reaches the ML bound sigma sqrt((n-4)/n) = 0.497 px (2-D RMSE), +-5%
+tpkit_tool_test(trifocal-fit.ml-noise-at-bound
+  COMMAND "${_synth} && ${_noise} syn/truth.tracks > noisy.tracks && trifocal-fit noisy.tracks -o t.trifocal && reproj-eval t.trifocal noisy.tracks | grep '^# rmse_px' | awk '{print; exit !($3 > 0.47 && $3 < 0.52)}'"
+  STDOUT_MATCH "# rmse_px: 0[.]")
+
+# every 4th track (by id) gets view 3 moved by 40 px: --ransac finds them, the inlier column says so
+tpkit_tool_test(trifocal-fit.ransac-outliers
+  COMMAND "${_synth} && ${_noise} syn/truth.tracks | awk '/^#/{print;next} {if($1%4==0){$6+=40}; print}' > dirty.tracks && trifocal-fit --ransac 1.5 --seed 5 --inliers flagged.tracks dirty.tracks -o t.trifocal && awk '/^#/{next} {if($1%4==0){o++; oi+=$NF} else {g++; gi+=$NF}} END{print \"good\", g, \"kept\", gi, \"outliers\", o, \"accepted\", oi; exit !(gi>=0.99*g && oi==0)}' flagged.tracks"
+  STDOUT_MATCH "good [0-9]+ kept" CHECK_FILE t.trifocal FILE_MATCH "# inliers: ")
+
+tpkit_tool_test(trifocal-fit.cameras-file
+  COMMAND "${_synth} && trifocal-fit -m minimal --cameras c.cameras syn/truth.tracks -o t.trifocal"
+  CHECK_FILE c.cameras FILE_MATCH "# view 3\n")
+
+tpkit_tool_test(trifocal-fit.same-seed-same-output
+  COMMAND "${_synth} && ${_noise} syn/truth.tracks | awk '/^#/{print;next} {if(NR%3==0){$2+=25}; print}' > d.tracks && trifocal-fit --ransac 1.5 --seed 9 d.tracks -o a.trifocal && trifocal-fit --ransac 1.5 --seed 9 d.tracks -o b.trifocal && cmp a.trifocal b.trifocal && echo same"
+  STDOUT_MATCH "same")
+
+# degenerate input: clear message, exit 1, no trifocal file
+tpkit_tool_test(trifocal-fit.flat-terrain
+  COMMAND "tp-synth --out flat --size 160 --points 300 --relief 0 --supersample 1 >/dev/null 2>&1 && trifocal-fit flat/truth.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "flat terrain" NO_FILE t.trifocal)
+tpkit_tool_test(trifocal-fit.too-few-tracks
+  COMMAND "${_synth} && (grep '^#' syn/truth.tracks; grep -v '^#' syn/truth.tracks | head -6) > few.tracks && trifocal-fit -m dlt few.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "at least 7 tracks" NO_FILE t.trifocal)
+tpkit_tool_test(trifocal-fit.duplicated-track
+  COMMAND "${_synth} && (cat syn/truth.tracks; grep -v '^#' syn/truth.tracks | head -1) > dup.tracks && trifocal-fit dup.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "duplicated track" NO_FILE t.trifocal)
+tpkit_tool_test(trifocal-fit.non-finite
+  COMMAND "${_synth} && awk '/^#/{print;next} !done{$2=\"nan\"; done=1} {print}' syn/truth.tracks > nan.tracks && trifocal-fit nan.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "not finite" NO_FILE t.trifocal)
+tpkit_tool_test(trifocal-fit.two-views
+  COMMAND "printf '1 2 3 4\\n5 6 7 8\\n9 1 2 3\\n4 5 6 8\\n' > two.tracks && trifocal-fit two.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "three views" NO_FILE t.trifocal)
+tpkit_tool_test(trifocal-fit.unknown-method
+  COMMAND "trifocal-fit -m nope - -o t.trifocal < /dev/null"
+  EXPECT_FAIL STDERR_MATCH "unknown method" NO_FILE t.trifocal)
