@@ -10,7 +10,8 @@
 // directions e = (cos th, sin th, 0), are then refined by Levenberg-Marquardt (Ceres) over th', th'' on
 // that algebraic error. Start: the epipoles of the affine-dlt tensor. A is the affine incidence matrix of
 // trifocal_affine_dlt.hpp in isotropically normalized coordinates (views 1..3); output on the original
-// pixels, unit norm. >= 4 tracks.
+// pixels, unit norm. >= 4 tracks. On affine data the affine-dlt solution already satisfies the internal
+// constraints, so the result equals it (tests/unit/geometry/trifocal_noise.cpp).
 #pragma once
 #include "tpkit/trifocal_tensor.hpp"
 
