@@ -1,4 +1,5 @@
 // tp-synth: a synthetic satellite triplet with exact ground truth (man/tp-synth.1).
+#include <iostream>
 #include <memory>
 
 #include "tpkit/error.hpp"
@@ -34,6 +35,9 @@ int main(int argc, char** argv) {
           tpkit::SynthWriteOptions w;
           w.threads = o->threads;
           tpkit::write_synth_scene(scene, o->out, w);
+          std::cerr << "tp-synth: wrote " << o->out << ": 3 views " << o->p.size << "x" << o->p.size << " ("
+                    << o->p.camera << "), scene square " << scene.scene_size() << " m, relief " << o->p.relief
+                    << " m, " << o->p.points << " truth tracks\n";
           return 0;
         };
       },
