@@ -90,6 +90,8 @@ TrifocalTensor trifocal_algebraic(const Eigen::MatrixXd& xy) {
   opt.gradient_tolerance = 1e-20;
   opt.parameter_tolerance = 1e-14;
   opt.num_threads = 1;
+  opt.max_num_consecutive_invalid_steps = 20;
+  opt.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(opt, &problem, &summary);
   AlgebraicSolution s = solve_given_epipoles(N, th[0], th[1]);

@@ -172,13 +172,18 @@ TrifocalTensor trifocal_minimal(const Eigen::MatrixXd& xy) {
   ceres::Solver::Options opt;
   opt.linear_solver_type = ceres::DENSE_QR;
   opt.max_num_iterations = 200;
-  opt.function_tolerance = 1e-16;
+  opt.function_tolerance = 1e-15;
   opt.gradient_tolerance = 1e-20;
-  opt.parameter_tolerance = 1e-16;
+  opt.parameter_tolerance = 1e-15;
+  opt.max_num_consecutive_invalid_steps = 20;
   opt.num_threads = 1;
+  opt.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(opt, &problem, &summary);
-  if (summary.termination_type == ceres::FAILURE) throw NumericalError("minimal: optimization failed: " + summary.message);
+  // at the optimum, rounding can make the last trial steps "invalid"; the parameters then hold the last
+  // accepted (best) point, which is what we want unless the cost is not finite
+  if (!std::isfinite(summary.final_cost) || summary.final_cost > summary.initial_cost)
+    throw NumericalError("minimal: optimization failed: " + summary.message);
 
   // the tensor of the optimized parameters
   const Eigen::Matrix3d U = Eigen::AngleAxisd(ang[0], Eigen::Vector3d::UnitZ()).toRotationMatrix() * mp.U;
