@@ -6,21 +6,25 @@
 #
 #   bench/trifocal_real_table.sh BUILD_DIR [WORK_DIR] [TRIALS] [SEED]
 #
-# BUILD_DIR holds bin/tp-match, bin/tp-chain and bin/bench_trifocal (a Release build); WORK_DIR
+# BUILD_DIR holds bin/tp-match, bin/tp-chain and bin/bench_trifocal (a Release build; the environment
+# variables TP_MATCH, TP_CHAIN, BENCH_TRIFOCAL name other executables); WORK_DIR
 # (default a temporary folder) keeps the matches and real.tracks. Data: ../shared/data/pleiades-marseille.
 set -eu
 build=${1:?usage: trifocal_real_table.sh BUILD_DIR [WORK_DIR] [TRIALS] [SEED]}
 work=${2:-$(mktemp -d)}
 trials=${3:-20}
 seed=${4:-1}
+tp_match=${TP_MATCH:-$build/bin/tp-match}
+tp_chain=${TP_CHAIN:-$build/bin/tp-chain}
+bench=${BENCH_TRIFOCAL:-$build/bin/bench_trifocal}
 here=$(cd "$(dirname "$0")" && pwd)
 data=${TPKIT_SHARED_DIR:-$here/../../shared}/data/pleiades-marseille
 mkdir -p "$work"
 for p in "1 2" "1 3" "2 3"; do
   set -- $p
   out="$work/m$1$2.matches"
-  [ -s "$out" ] || "$build/bin/tp-match" "$data/img_0$1.tif" "$data/img_0$2.tif" -o "$out"
+  [ -s "$out" ] || "$tp_match" "$data/img_0$1.tif" "$data/img_0$2.tif" -o "$out"
 done
 [ -s "$work/real.tracks" ] ||
-  "$build/bin/tp-chain" "$work/m12.matches" "$work/m13.matches" "$work/m23.matches" --min-views 3 -o "$work/real.tracks"
-"$build/bin/bench_trifocal" --real "$work/real.tracks" --trials "$trials" --seed "$seed"
+  "$tp_chain" "$work/m12.matches" "$work/m13.matches" "$work/m23.matches" --min-views 3 -o "$work/real.tracks"
+"$bench" --real "$work/real.tracks" --trials "$trials" --seed "$seed"
