@@ -46,7 +46,7 @@ double cpu_now() {
 struct Stats {
   int trials = 0, ok = 0, h_ok = 0;
   double iters = 0, evals = 0, secs = 0, worst_secs = 0, cpu = 0, worst_cpu = 0;
-  std::vector<double> it_ok;
+  std::vector<double> it_ok, final_cost;
 };
 
 void run_case(const char* label, int trials, const ClusterSynthOptions& base, const OptimizeOptions& oo,
@@ -79,12 +79,15 @@ void run_case(const char* label, int trials, const ClusterSynthOptions& base, co
     s.evals += static_cast<double>(r.evaluations);
     s.secs += r.seconds;
     s.worst_secs = std::max(s.worst_secs, r.seconds);
+    s.final_cost.push_back(r.cost);
     if (ok) s.it_ok.push_back(static_cast<double>(r.iterations));
   }
   std::sort(s.it_ok.begin(), s.it_ok.end());
   double med = s.it_ok.empty() ? 0 : s.it_ok[s.it_ok.size() / 2];
-  std::printf("%-46s %4d/%-4d %6.1f%% (h ok %3d)  iter mean %6.0f  median(ok) %6.0f  evals %7.0f  cpu mean %7.2f ms max %7.2f ms  wall mean %7.2f ms\n",
-              label, s.ok, s.trials, 100.0 * s.ok / std::max(1, s.trials), s.h_ok, s.iters / s.trials, med,
+  std::sort(s.final_cost.begin(), s.final_cost.end());
+  double medc = s.final_cost.empty() ? 0 : s.final_cost[s.final_cost.size() / 2];
+  std::printf("%-46s %4d/%-4d %6.1f%% (h ok %3d)  cost median %6.3f  iter mean %6.0f  median(ok) %6.0f  evals %7.0f  cpu mean %7.2f ms max %7.2f ms  wall mean %7.2f ms\n",
+              label, s.ok, s.trials, 100.0 * s.ok / std::max(1, s.trials), s.h_ok, medc, s.iters / s.trials, med,
               s.evals / s.trials, 1e3 * s.cpu / s.trials, 1e3 * s.worst_cpu, 1e3 * s.secs / s.trials);
   std::fflush(stdout);
 }
