@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
     double cmed = -1, cp90 = -1, crmse = -1;
     int threads = std::max(1u, std::thread::hardware_concurrency());
     int window = 21;
-    double taper = 0;
+    double taper = 3;
     bool l2 = false;
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];

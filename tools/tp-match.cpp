@@ -59,6 +59,8 @@ int main(int argc, char** argv) {
         app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd)")->check(CLI::Range(5, 101));
         app.add_option("--max-shift", o->p.lsm.max_shift, "drop points refined farther from SIFT, pixels")->check(CLI::PositiveNumber);
         app.add_option("--min-corr", o->p.lsm.min_corr, "drop points with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
+        app.add_option("--taper", o->p.lsm.taper, "Gaussian weight of the LSM window, sigma in pixels (0 = flat)")
+            ->check(CLI::NonNegativeNumber);
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {

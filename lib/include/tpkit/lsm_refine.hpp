@@ -1,7 +1,8 @@
 // Least-squares matching (LSM) of one correspondence, image 1 -> image 2, on the original radiometry.
 //
-// The template is a win x win window of image 1 centred on the keypoint p1 (fixed: p1 stays the
-// keypoint position); the model maps the template offset d = (u, v) (pixels, u along x = column) to
+// The template is the win x win block of image 1's own pixels (not resampled) centred on the pixel
+// nearest the keypoint p1 (fixed: p1 stays the keypoint position); the model maps each template
+// pixel's offset d = (u, v) from p1 (pixels, fractional, u along x = column) to
 //   q(d) = p2 + A d        in image 2, and   I1(p1 + d) ~ r0 + r1 * I2(q(d))
 // with 6 geometric (p2, A) and 2 radiometric (r0 offset, r1 gain) parameters, solved by Gauss-Newton
 // with bicubic interpolation (Keys, a = -0.5) and its analytic gradient. Robust L1 by iteratively
@@ -24,7 +25,7 @@ struct LsmOptions {
   double min_corr = 0.8;    // drop when the final normalised cross-correlation is lower
   bool l1 = true;           // robust L1 (IRLS); false: plain least squares
   double eps = 0.02;        // IRLS floor on |r|, in units of the template's grey-level standard deviation
-  double taper = 0;         // > 0: Gaussian weight exp(-(u^2+v^2) / (2 taper^2)) on the window (pixels); 0 = flat
+  double taper = 3;         // > 0: Gaussian weight exp(-(u^2+v^2) / (2 taper^2)) on the window (pixels); 0 = flat
 };
 
 enum class LsmStatus { Ok, OutOfImage, Invalid, Flat, Diverged, NotConverged, Drifted, LowCorrelation };

@@ -12,7 +12,7 @@ struct DescriptorMatchOptions {
   bool mutual = true;        // keep only pairs that are each other's nearest neighbour
   long exact_below = 4000;   // exact (brute force) search when both sets are smaller than this
   int flann_trees = 4;
-  int flann_checks = 128;    // leaves visited per query by the approximate search
+  int flann_checks = 64;     // leaves visited per query by the approximate search
 };
 
 struct DescriptorMatch {

@@ -77,19 +77,23 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   res.p2 = p2;
   res.A = A0;
   const int h = o.window / 2, w = 2 * h + 1, n = w * w;
-  // template (fixed), normalised to zero mean and unit standard deviation
+  // template (fixed): image 1's own pixels around p1, no resampling; offsets d from p1 are fractional
   std::vector<double> t(n), du(n), dv(n);
   double mt = 0;
+  const long cx = std::lround(p1.x()), cy = std::lround(p1.y());
   for (int j = 0, k = 0; j < w; ++j)
     for (int i = 0; i < w; ++i, ++k) {
-      du[k] = i - h;
-      dv[k] = j - h;
-      if (!bicubic(img1, p1.x() + du[k], p1.y() + dv[k], t[k])) {
+      long X = cx + i - h, Y = cy + j - h;
+      du[k] = X - p1.x();
+      dv[k] = Y - p1.y();
+      long lx = X - img1.x0, ly = Y - img1.y0;
+      if (lx < 0 || ly < 0 || lx >= img1.width || ly >= img1.height) {
         res.status = LsmStatus::OutOfImage;
-        double dummy;
-        long lx = static_cast<long>(std::floor(p1.x() + du[k])) - img1.x0, ly = static_cast<long>(std::floor(p1.y() + dv[k])) - img1.y0;
-        if (lx >= 1 && ly >= 1 && lx + 2 < img1.width && ly + 2 < img1.height && !bicubic(img1, p1.x() + du[k], p1.y() + dv[k], dummy))
-          res.status = LsmStatus::Invalid;
+        return res;
+      }
+      t[k] = img1.at(lx, ly);
+      if (std::isnan(t[k])) {
+        res.status = LsmStatus::Invalid;
         return res;
       }
       mt += t[k];
@@ -136,6 +140,8 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     for (int k = 0; k < n; ++k) taper[k] = std::exp(-(du[k] * du[k] + dv[k] * dv[k]) / (2 * o.taper * o.taper));
   wgt = taper;
   bool converged = false;
+  Eigen::Matrix<double, Eigen::Dynamic, 8> Jm(n, 8), WJ(n, 8);
+  Eigen::VectorXd wv(n), rv(n);
   double sum_wr2 = 0;
   auto evaluate = [&](const Eigen::Matrix<double, 8, 1>& p) -> bool {
     for (int k = 0; k < n; ++k) {
@@ -159,17 +165,15 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     // IRLS weights: plain least squares for the first two iterations, then L1
     if (o.l1 && it >= 2)
       for (int k = 0; k < n; ++k) wgt[k] = taper[k] / std::max(std::abs(r[k]), o.eps);
-    N.setZero();
-    b.setZero();
-    sum_wr2 = 0;
-    Eigen::Matrix<double, 8, 1> J;
+    const double r1 = th(7);
     for (int k = 0; k < n; ++k) {
-      const double r1 = th(7);
-      J << r1 * gx[k], r1 * gy[k], r1 * gx[k] * du[k], r1 * gx[k] * dv[k], r1 * gy[k] * du[k], r1 * gy[k] * dv[k], 1.0, g[k];
-      N.noalias() += wgt[k] * J * J.transpose();
-      b.noalias() += wgt[k] * r[k] * J;
-      sum_wr2 += wgt[k] * r[k] * r[k];
+      Jm.row(k) << r1 * gx[k], r1 * gy[k], r1 * gx[k] * du[k], r1 * gx[k] * dv[k], r1 * gy[k] * du[k], r1 * gy[k] * dv[k], 1.0, g[k];
+      wv(k) = wgt[k];
+      rv(k) = r[k];
     }
+    WJ = Jm.array().colwise() * wv.array();
+    N.noalias() = WJ.transpose() * Jm;
+    b.noalias() = WJ.transpose() * rv;
     Eigen::LDLT<Eigen::Matrix<double, 8, 8>> ldlt(N);
     if (ldlt.info() != Eigen::Success) {
       res.status = LsmStatus::Diverged;
@@ -209,15 +213,15 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     return res;
   }
   {
-    N.setZero();
     sum_wr2 = 0;
-    Eigen::Matrix<double, 8, 1> J;
+    const double r1 = th(7);
     for (int k = 0; k < n; ++k) {
-      const double r1 = th(7);
-      J << r1 * gx[k], r1 * gy[k], r1 * gx[k] * du[k], r1 * gx[k] * dv[k], r1 * gy[k] * du[k], r1 * gy[k] * dv[k], 1.0, g[k];
-      N.noalias() += wgt[k] * J * J.transpose();
+      Jm.row(k) << r1 * gx[k], r1 * gy[k], r1 * gx[k] * du[k], r1 * gx[k] * dv[k], r1 * gy[k] * du[k], r1 * gy[k] * dv[k], 1.0, g[k];
+      wv(k) = wgt[k];
       sum_wr2 += wgt[k] * r[k] * r[k];
     }
+    WJ = Jm.array().colwise() * wv.array();
+    N.noalias() = WJ.transpose() * Jm;
     Eigen::Matrix<double, 8, 8> C = N.ldlt().solve(Eigen::Matrix<double, 8, 8>::Identity());
     double s0 = sum_wr2 / std::max(1, n - 8);
     double var = s0 * 0.5 * (C(0, 0) + C(1, 1));

@@ -45,10 +45,8 @@ std::vector<DescriptorMatch> match_descriptors(const cv::Mat& desc1, const cv::M
   cv::theRNG().state = 0x1234567;
   std::srand(12345);
   knn2(desc1, desc2, exact, o, f);
-  if (o.mutual) {
-    std::srand(54321);
-    knn2(desc2, desc1, exact, o, b);
-  }
+  // ratio test first; the mutual check then only queries the image-2 descriptors that won
+  std::vector<DescriptorMatch> cand;
   for (int i = 0; i < desc1.rows; ++i) {
     if (f[i].empty()) continue;
     const cv::DMatch& m = f[i][0];
@@ -60,11 +58,20 @@ std::vector<DescriptorMatch> match_descriptors(const cv::Mat& desc1, const cv::M
     } else if (desc2.rows > 1) {
       continue;  // the second neighbour is unknown: cannot test the ratio
     }
-    if (o.mutual) {
-      const auto& bb = b[m.trainIdx];
-      if (bb.empty() || bb[0].trainIdx != i) continue;
-    }
-    res.push_back({i, m.trainIdx, m.distance, ratio});
+    cand.push_back({i, m.trainIdx, m.distance, ratio});
+  }
+  if (!o.mutual) return cand;
+  std::vector<int> winners;
+  for (const auto& c : cand) winners.push_back(c.i2);
+  std::sort(winners.begin(), winners.end());
+  winners.erase(std::unique(winners.begin(), winners.end()), winners.end());
+  cv::Mat q(static_cast<int>(winners.size()), desc2.cols, desc2.type());
+  for (size_t k = 0; k < winners.size(); ++k) desc2.row(winners[k]).copyTo(q.row(static_cast<int>(k)));
+  std::srand(54321);
+  knn2(q, desc1, exact, o, b);
+  for (const auto& c : cand) {
+    size_t k = static_cast<size_t>(std::lower_bound(winners.begin(), winners.end(), c.i2) - winners.begin());
+    if (!b[k].empty() && b[k][0].trainIdx == c.i1) res.push_back(c);
   }
   return res;
 }

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# Wall time and verified matches per pair: tp-match on the three pairs + tp-chain, against COLMAP 3.8
+# (CPU SIFT extraction + exhaustive matching with geometric verification), both with 2 threads, on
+# the Pléiades triplet. COLMAP finds no features in the 16-bit files, so it gets the same 8-bit
+# rendering tp-match's detector sees (bench_match_accuracy --render8: 0.5/99.5 percentile stretch).
+#
+#   bench/match_speed_colmap.sh [BUILD_DIR] [DATA_DIR] [WORK_DIR]
+#
+# COLMAP is a benchmark peer only: it is installed here (apt-get, needs root and the network) when
+# missing, never by the build or CI. Peak memory comes from /usr/bin/time -v.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$here/build}
+data=${2:-$here/../shared/data/pleiades-marseille}
+work=${3:-$(mktemp -d /tmp/tpkit-colmap.XXXXXX)}
+threads=2
+bin=$build/bin
+for t in tp-match tp-chain bench_match_accuracy; do
+  [ -x "$bin/$t" ] || { echo "missing $bin/$t: build with -DTPKIT_BENCH=ON first" >&2; exit 1; }
+done
+if ! command -v colmap >/dev/null; then
+  echo "installing colmap (Debian package, benchmark peer only)" >&2
+  if [ "$(id -u)" = 0 ]; then apt-get install -y colmap; else sudo apt-get install -y colmap; fi
+fi
+export QT_QPA_PLATFORM=offscreen
+mkdir -p "$work/images" "$work/tp"
+cd "$work"
+for i in 1 2 3; do "$bin/bench_match_accuracy" --render8 "$data/img_0$i.tif" "images/img_0$i.png"; done
+
+timed() {  # label, command...: prints wall seconds and peak RSS
+  local label=$1; shift
+  /usr/bin/time -v "$@" 2> "$label.time" >/dev/null || { cat "$label.time" >&2; exit 1; }
+  local wall rss
+  wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {n = split($2, a, ":"); s = 0; for (i = 1; i <= n; ++i) s = s * 60 + a[i]; print s}' "$label.time")
+  rss=$(awk -F': ' '/Maximum resident/ {print $2}' "$label.time")
+  echo "$label $wall $rss"
+}
+
+echo "== tpkit (threads $threads)"
+tp_total=0
+for p in "1 2" "1 3" "2 3"; do
+  set -- $p
+  r=$(timed "tp-match-$1$2" "$bin/tp-match" "$data/img_0$1.tif" "$data/img_0$2.tif" --threads $threads -q -o "tp/$1$2.matches")
+  echo "$r" | awk '{printf "tp-match %s: %.2f s, peak RSS %d MB\n", $1, $2, $3 / 1024}'
+  tp_total=$(echo "$tp_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
+done
+r=$(timed tp-chain "$bin/tp-chain" tp/12.matches tp/13.matches tp/23.matches -q -o tp/triplets.tracks)
+tp_total=$(echo "$tp_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
+for p in 12 13 23; do
+  echo "tp-match pair $p: $(grep -m1 '^# verified:' tp/$p.matches | awk '{print $3}') verified, $(grep -vc '^#' tp/$p.matches) refined"
+done
+echo "tp-chain: $(grep -vc '^#' tp/triplets.tracks) triplets"
+echo "tpkit total wall: $tp_total s"
+
+echo "== COLMAP $(colmap -h 2>&1 | head -1 | awk '{print $2}') (threads $threads, CPU)"
+rm -f colmap.db
+r1=$(timed colmap-extract colmap feature_extractor --database_path colmap.db --image_path images \
+  --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads $threads)
+r2=$(timed colmap-match colmap exhaustive_matcher --database_path colmap.db \
+  --SiftMatching.use_gpu 0 --SiftMatching.num_threads $threads)
+echo "$r1" | awk '{printf "colmap feature_extractor: %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
+echo "$r2" | awk '{printf "colmap exhaustive_matcher: %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
+colmap_total=$(echo "$r1 $r2" | awk '{print $2 + $5}')
+# pair_id = image_id1 * 2147483647 + image_id2 (COLMAP's encoding, image_id1 < image_id2)
+sqlite3 colmap.db "select image_id, rows from keypoints order by image_id;" | awk -F'|' '{print "colmap keypoints image " $1 ": " $2}'
+sqlite3 colmap.db "select pair_id, rows from two_view_geometries order by pair_id;" |
+  awk -F'|' '{id2 = $1 % 2147483647; id1 = ($1 - id2) / 2147483647; print "colmap pair " id1 id2 ": " $2 " verified"}'
+echo "COLMAP total wall: $colmap_total s"
+awk -v a="$tp_total" -v b="$colmap_total" 'BEGIN {printf "ratio tpkit / COLMAP wall time: %.2f (goal <= 0.5)\n", a / b}'
+echo "work folder: $work"

@@ -1,0 +1,21 @@
+# tp-chain on hand-written matches files: a triplet, a same-position duplicate, a conflict, the
+# --images order and bad input.
+set(_hdr "# tpkit matches 1\\n# image1: A 100 100\\n# image2: B 100 100\\n# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\\n")
+set(_ab "printf '# tpkit matches 1\\n# image1: A 100 100\\n# image2: B 100 100\\n# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\\n5 10 20 7 11.25 21.5 11 21\\n6 10 20 8 11.25 21.5 11 21\\n1 50 50 2 52 51 52 51\\n' > ab.m")
+set(_ac "printf '# tpkit matches 1\\n# image1: A 100 100\\n# image2: C 100 100\\n# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\\n5 10 20 9 30.5 40.25 30 40\\n1 50 50 3 60 60 60 60\\n4 70 70 3 60.5 60 60 60\\n' > ac.m")
+tpkit_tool_test(tp-chain.triplet
+  COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m -o t.tracks"
+  STDERR_MATCH "tracks by views: 3:1; merged duplicates 1, dropped \\(reference conflict\\) 1"
+  CHECK_FILE t.tracks FILE_MATCH "# image1: A 100 100\n# image2: B 100 100\n# image3: C 100 100\n.*# columns: track x1 y1 x2 y2 x3 y3 kp1\n0 10 20 11.25 21.5 30.5 40.25 5\n$")
+tpkit_tool_test(tp-chain.images-order
+  COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m --images C B A"
+  STDOUT_MATCH "# image1: C.*\n0 30 40 10.75 21.25 9.5 19.75 9\n")
+tpkit_tool_test(tp-chain.unknown-image
+  COMMAND "${_ab} && tp-chain ab.m --images A Z -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "Z: image given with --images appears in no matches file" NO_FILE t.tracks)
+tpkit_tool_test(tp-chain.too-many-views
+  COMMAND "${_ab} && tp-chain ab.m --min-views 3 -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "min-views 3 is more than the 2 images" NO_FILE t.tracks)
+tpkit_tool_test(tp-chain.bad-record
+  COMMAND "printf '# tpkit matches 1\\n# image1: A 1 1\\n# image2: B 1 1\\n# columns: id1 x1 y1 id2 x2 y2\\n1 2 3 4 5\\n' > bad.m && tp-chain bad.m -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "bad.m:5:" NO_FILE t.tracks)
