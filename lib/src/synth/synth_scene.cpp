@@ -22,6 +22,9 @@ namespace tpkit {
 namespace {
 constexpr double kDeg = 3.14159265358979323846 / 180;
 constexpr double kAltitude = 700e3;  // satellite altitude above the scene centre (m)
+// Version of the scene model (terrain, texture, cameras, rendering) written to scene.params: bump it when
+// the same parameters would give another scene, so that load() refuses files of another version.
+constexpr int kSynthModel = 1;
 }  // namespace
 
 struct SynthScene::Impl {
@@ -56,7 +59,8 @@ void save_params(const std::string& path, const SynthParams& p) {
      << "camera = " << p.camera << "\n"
      << "points = " << p.points << "\n"
      << "noise = " << format_number(p.noise) << "\n"
-     << "supersample = " << p.supersample << "\n";
+     << "supersample = " << p.supersample << "\n"
+     << "model = " << kSynthModel << "\n";
   write_file_atomic(path, os.str());
 }
 
@@ -121,6 +125,11 @@ SynthParams load_params(const std::string& path) {
     } else if (key == "supersample") {
       integer(i);
       p.supersample = static_cast<long>(i);
+    } else if (key == "model") {
+      integer(i);
+      if (i != kSynthModel)
+        throw InputError(path, n, "written by scene model " + val + "; this tpkit has model " + std::to_string(kSynthModel) +
+                                      ": regenerate it with this tp-synth");
     } else {
       throw InputError(path, n, "unknown key '" + key + "'");
     }

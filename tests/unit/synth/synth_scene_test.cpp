@@ -467,6 +467,16 @@ TEST(SynthParams, SaveLoadAndRejects) {
   EXPECT_THROW(load_params(f.string()), InputError);
   {
     std::ofstream o(f);
+    o << "seed = 1\nmodel = 999\n";
+  }
+  try {
+    load_params(f.string());
+    FAIL() << "other model version accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 2);
+  }
+  {
+    std::ofstream o(f);
     o << "camera = fisheye\n";
   }
   EXPECT_THROW(load_params(f.string()), InputError);
