@@ -78,8 +78,11 @@ TEST(ClusterCost, PairsAreNearestNeighboursBothWays) {
   auto pairs = cost.pairs(cp.truth);
   ASSERT_EQ(pairs.size(), 100u);
   auto fwd = brute_dist(cp.truth, cp.A, cp.B);
-  for (const auto& p : pairs)
-    if (p.forward) EXPECT_NEAR(p.d, fwd[p.ia], 1e-12);
+  for (const auto& p : pairs) {
+    if (p.forward) {
+      EXPECT_NEAR(p.d, fwd[p.ia], 1e-12);
+    }
+  }
 }
 
 TEST(ClusterCost, SingularHomographyCostsInfinity) {
