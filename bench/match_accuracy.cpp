@@ -6,7 +6,8 @@
 //       triplets the error distribution (count, median, 90th percentile, max; pixels) of raw SIFT
 //       and of the refined positions in image 2 (resp. views 2 and 3) against the truth:
 //       X = ground_point(view 1, x1, y1), truth = project(view v, X) when visible.
-//       --check: exit status 1 when a refined median or 90th percentile is above MED / P90.
+//       --check: exit status 1 when the triplets' median or 90th percentile (views 2 and 3 together)
+//       is above MED / P90.
 //   bench_match_accuracy --tracks FILE [--check-rmse R]
 //       Affine maximum-likelihood fit of the tracks (Tomasi-Kanade: rank-3 factorization of the
 //       centred 2K x n measurement matrix) and its reprojection RMSE, sqrt(mean squared 2-D residual)
@@ -188,10 +189,6 @@ int main(int argc, char** argv) {
         Dist dr = dist(eraw), df = dist(eref);
         print("raw SIFT (kx2, ky2)", dr);
         print("refined LSM (x2, y2)", df);
-        if (cmed > 0 && !(df.n > 0 && df.med <= cmed && df.p90 <= cp90)) {
-          std::printf("FAIL: refined median %.4f / p90 %.4f above %.4f / %.4f\n", df.med, df.p90, cmed, cp90);
-          fail = true;
-        }
         ms.push_back(std::move(m));
       }
       tpkit::ChainOptions co;

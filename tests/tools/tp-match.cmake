@@ -25,7 +25,7 @@ tpkit_tool_test(tp-match.deterministic
 # Accuracy against the synthetic truth: refined median and 90th percentile (pixels) of every pair and
 # of the chained triplets; the bench exits 1 when a bound fails.
 tpkit_tool_test(tp-match.synth-accuracy
-  COMMAND "tp-synth --out s --size 512 --seed 3 --relief 15 && bench_match_accuracy --synth s --threads 2 --check 0.05 0.12"
+  COMMAND "tp-synth --out s --size 512 --seed 3 --relief 15 && bench_match_accuracy --synth s --threads 2 --check 0.03 0.08"
   STDOUT_MATCH "triplets \\(tp-chain\\): [0-9]+" TIMEOUT 300)
 tpkit_tool_test(tp-match.no-refine
   COMMAND "tp-synth --out s --size 256 --seed 5 && tp-match s/view1.tif s/view2.tif --no-refine -o raw.m && awk '!/^#/ && ($5 != $7 || $6 != $8) {bad++} END {exit bad > 0}' raw.m"
