@@ -380,23 +380,36 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
       res.physical = sp.physical(bestx);
       res.has_physical = true;
     } else {
-      PhysicalParams st;
       bool fi = opt.free_intrinsics;
+      std::vector<PhysicalParams> starts;
       if (sp.param == Parameterization::Physical) {
-        st = sp.physical(bestx);
+        starts.push_back(sp.physical(bestx));
       } else {
-        // Nadir-looking start; image scale ratio from the determinant of H's linear part.
-        st.view[0].res = 1, st.view[1].res = 1;
+        // Nadir-looking starts: image scale ratio from the determinant of H's linear part, rotation
+        // gamma2 = +-(the rotation angle of H's linear part), both tried.
+        // gamma2 = -(rotation of H's linear part) first (the sign that fits eq. 4), and res1 = 20 m/px
+        // (a ground footprint of km at 800 km, where a projective part like eq. 4's can be expressed).
+        PhysicalParams st;
         double det = std::abs(res.H(0, 0) * res.H(1, 1) - res.H(0, 1) * res.H(1, 0));
-        if (det > 0) st.view[1].res = 1.0 / std::sqrt(det);
         st.view[0].beta = st.view[1].beta = 1.4;
+        double rot = std::atan2(res.H(1, 0) - res.H(0, 1), res.H(0, 0) + res.H(1, 1));
+        for (double res1 : {20.0, 1.0})
+          for (double sgn : {-1.0, 1.0}) {
+            st.view[0].res = res1;
+            st.view[1].res = det > 0 ? res1 / std::sqrt(det) : res1;
+            st.view[1].gamma = sgn * rot;
+            starts.push_back(st);
+          }
         fi = true;
       }
-      double rms = 1;
-      PhysicalParams fit = fit_physical_params(res.H, st, extent_grid(cost.a()), fi, &rms);
-      if (rms < 0.01 && physical_params_problem(fit).empty()) {
-        res.physical = fit;
-        res.has_physical = true;
+      for (const PhysicalParams& st : starts) {
+        double rms = 1;
+        PhysicalParams fit = fit_physical_params(res.H, st, extent_grid(cost.a()), fi, &rms);
+        if (rms < 0.01 && physical_params_problem(fit).empty()) {
+          res.physical = fit;
+          res.has_physical = true;
+          break;
+        }
       }
     }
   }

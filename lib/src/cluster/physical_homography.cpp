@@ -128,8 +128,19 @@ PhysicalParams fit_physical_params(const Eigen::Matrix3d& H, const PhysicalParam
     for (int v = 0; v < 2; ++v)
       for (int k = 6; k < 10; ++k) fixed.push_back(v * kViewParamCount + k);
   if (!fixed.empty()) problem.SetManifold(p.data(), new ceres::SubsetManifold(kPhysicalParamCount, fixed));
-  problem.SetParameterLowerBound(p.data(), 2, 1.0);
-  problem.SetParameterLowerBound(p.data(), 12, 1.0);
+  // Keep a camera looking down at the plane (physical_params_problem): rho > 0, 0 < beta <= pi/2,
+  // res > 0, |theta| < pi/2.
+  for (int v = 0; v < 2; ++v) {
+    int o = v * kViewParamCount;
+    problem.SetParameterLowerBound(p.data(), o + 2, 1.0);
+    problem.SetParameterLowerBound(p.data(), o + 4, 1e-3);
+    problem.SetParameterUpperBound(p.data(), o + 4, M_PI / 2);
+    if (free_intrinsics) {
+      problem.SetParameterLowerBound(p.data(), o + 6, 1e-9);
+      problem.SetParameterLowerBound(p.data(), o + 7, -1.5);
+      problem.SetParameterUpperBound(p.data(), o + 7, 1.5);
+    }
+  }
   ceres::Solver::Options o;
   o.linear_solver_type = ceres::DENSE_QR;
   o.max_num_iterations = 200;
