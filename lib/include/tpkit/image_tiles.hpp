@@ -48,7 +48,8 @@ struct Tile {
   long cx0 = 0, cy0 = 0, cx1 = 0, cy1 = 0;
   long rx0 = 0, ry0 = 0, rx1 = 0, ry1 = 0;
 };
-// Row-major grid of tiles of at most `tile` x `tile` core pixels covering width x height.
+// Row-major grid of round(width / tile) x round(height / tile) tiles (at least 1 x 1) with cores of
+// nearly equal size (so at most about 1.5 tile on a side) covering width x height.
 std::vector<Tile> tile_grid(long width, long height, long tile, long overlap);
 
 }  // namespace tpkit

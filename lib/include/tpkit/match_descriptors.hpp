@@ -21,7 +21,7 @@ struct DescriptorMatch {
   float ratio;     // distance / second-best distance (0..1)
 };
 
-// desc1, desc2: CV_32F rows. Result sorted by i1. Deterministic for the same input.
+// desc1, desc2: CV_32F or CV_8U rows (converted to float). Result sorted by i1. Deterministic for the same input.
 std::vector<DescriptorMatch> match_descriptors(const cv::Mat& desc1, const cv::Mat& desc2, const DescriptorMatchOptions& o);
 
 // Keeps at most `per_cell` matches (lowest `score` first) in each cell of a cells x cells grid over a

@@ -16,7 +16,7 @@
 namespace tpkit {
 
 struct SiftOptions {
-  long tile = 2048;           // tile core size in pixels
+  long tile = 1024;           // tile core size in pixels (tile_grid)
   long overlap = 96;          // margin read around each core; keypoints larger than it are dropped
   int max_per_tile = 0;       // strongest keypoints kept per tile (0 = all)
   double contrast = 0.02;     // OpenCV contrastThreshold (on the 8-bit rendering)
@@ -28,7 +28,7 @@ struct SiftOptions {
 
 struct Keypoints {
   std::vector<cv::KeyPoint> kp;  // kp[i].pt in full-image pixels
-  cv::Mat desc;                  // n x 128, CV_32F (OpenCV SIFT's 0..255 scale)
+  cv::Mat desc;                  // n x 128, CV_8U (OpenCV SIFT's descriptors are integers 0..255)
   std::vector<long long> id;     // stable ids, here equal to the index
   Stretch stretch;
   long tiles = 0;

@@ -100,8 +100,8 @@ std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<ui
 std::vector<Tile> tile_grid(long width, long height, long tile, long overlap) {
   if (tile <= 0) tile = std::max(width, height);
   std::vector<Tile> tiles;
-  long nx = (width + tile - 1) / tile, ny = (height + tile - 1) / tile;
-  // even split: cores of nearly equal size
+  // even split into cores of nearly equal size, at most about 1.5 tile on a side
+  long nx = std::max(1L, (2 * width + tile) / (2 * tile)), ny = std::max(1L, (2 * height + tile) / (2 * tile));
   for (long j = 0; j < ny; ++j)
     for (long i = 0; i < nx; ++i) {
       Tile t;

@@ -36,9 +36,12 @@ void knn2(const cv::Mat& q, const cv::Mat& t, bool exact, const DescriptorMatchO
 }
 }  // namespace
 
-std::vector<DescriptorMatch> match_descriptors(const cv::Mat& desc1, const cv::Mat& desc2, const DescriptorMatchOptions& o) {
+std::vector<DescriptorMatch> match_descriptors(const cv::Mat& d1in, const cv::Mat& d2in, const DescriptorMatchOptions& o) {
   std::vector<DescriptorMatch> res;
-  if (desc1.rows == 0 || desc2.rows == 0) return res;
+  if (d1in.rows == 0 || d2in.rows == 0) return res;
+  cv::Mat desc1, desc2;  // FLANN's kd-trees need float
+  d1in.convertTo(desc1, CV_32F);
+  d2in.convertTo(desc2, CV_32F);
   // FLANN's kd-tree randomness comes from the C library rand(): fix it for determinism
   bool exact = desc1.rows < o.exact_below && desc2.rows < o.exact_below;
   std::vector<std::vector<cv::DMatch>> f, b;

@@ -64,14 +64,14 @@ TileResult detect_tile(const ImageSource& src, const SiftOptions& o, const Stret
     keep.resize(o.max_per_tile);
   }
   out.kp.reserve(keep.size());
-  out.desc.create(static_cast<int>(keep.size()), 128, CV_32F);
+  out.desc.create(static_cast<int>(keep.size()), 128, CV_8U);
   for (size_t j = 0; j < keep.size(); ++j) {
     cv::KeyPoint k = kp[keep[j]];
     k.pt.x += static_cast<float>(t.rx0);
     k.pt.y += static_cast<float>(t.ry0);
     k.class_id = t.index;
     out.kp.push_back(k);
-    desc.row(keep[j]).copyTo(out.desc.row(static_cast<int>(j)));
+    desc.row(keep[j]).convertTo(out.desc.row(static_cast<int>(j)), CV_8U);  // exact: integer values
   }
   return out;
 }
@@ -133,7 +133,7 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
     return p.octave < q.octave;
   });
   K.kp.reserve(refs.size());
-  K.desc.create(static_cast<int>(refs.size()), 128, CV_32F);
+  K.desc.create(static_cast<int>(refs.size()), 128, CV_8U);
   for (size_t i = 0; i < refs.size(); ++i) {
     K.kp.push_back(res[refs[i].tile].kp[refs[i].row]);
     res[refs[i].tile].desc.row(refs[i].row).copyTo(K.desc.row(static_cast<int>(i)));
