@@ -10,8 +10,8 @@
 # missing, never by the build or CI. Peak memory comes from /usr/bin/time -v.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
-build=${1:-$here/build}
-data=${2:-$here/../shared/data/pleiades-marseille}
+build=$(cd "${1:-$here/build}" && pwd)
+data=$(cd "${2:-$here/../shared/data/pleiades-marseille}" && pwd)
 work=${3:-$(mktemp -d /tmp/tpkit-colmap.XXXXXX)}
 threads=2
 bin=$build/bin

@@ -233,7 +233,7 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
                                    " px, seed " + std::to_string(o.seed) + ", inlier rms " + format_number(std::round(st.ransac_rms * 1e4) / 1e4) + " px)");
   if (o.grid > 0) meta_set(M.meta, "grid", std::to_string(o.grid) + "x" + std::to_string(o.grid) + ", " + std::to_string(o.per_cell) + " per cell: " + std::to_string(st.gridded));
   if (o.refine)
-    meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (o.lsm.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") +
+    meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (o.lsm.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") + " taper " + format_number(o.lsm.taper) +
                                        " max_shift " + format_number(o.lsm.max_shift) + " min_corr " + format_number(o.lsm.min_corr) +
                                        ": " + std::to_string(st.refined) + " converged");
   else
