@@ -145,7 +145,7 @@ TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
       const Eigen::Vector3d x[3] = {track_point(xn, r, 0), track_point(xn, r, 1), track_point(xn, r, 2)};
       Eigen::Vector3d w;
       Eigen::Matrix<double, 3, 6> B = Eigen::Matrix<double, 3, 6>::Zero();
-      Eigen::Matrix<double, 3, 31> A = Eigen::Matrix<double, 3, 31>::Zero();
+      Eigen::Matrix<double, 9, 1> a9[3];  // dw_c / d(F_c entries): the only non-zero block of row c
       for (int c = 0; c < 3; ++c) {
         const int a = kPairs[c][0], b = kPairs[c][1];
         w(c) = x[a].dot(F[c] * x[b]);
@@ -155,15 +155,20 @@ TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
         B(c, 2 * b) = gb(0);
         B(c, 2 * b + 1) = gb(1);
         for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) A(c, 9 * c + 3 * i + j) = x[a](i) * x[b](j);
+          for (int j = 0; j < 3; ++j) a9[c](3 * i + j) = x[a](i) * x[b](j);
       }
       Eigen::LLT<Eigen::Matrix3d> llt(B * B.transpose());
       if (llt.info() != Eigen::Success) continue;  // a track at an epipole carries no condition
       const Eigen::Matrix3d Winv = llt.solve(Eigen::Matrix3d::Identity());
-      nm.JtJ.noalias() += A.transpose() * Winv * A;
-      nm.Jtr.noalias() += A.transpose() * (Winv * w);
-      nm.cost += w.dot(Winv * w);
+      const Eigen::Vector3d Ww = Winv * w;
+      for (int c = 0; c < 3; ++c) {
+        for (int c2 = 0; c2 <= c; ++c2) nm.JtJ.block<9, 9>(9 * c, 9 * c2).noalias() += Winv(c, c2) * a9[c] * a9[c2].transpose();
+        nm.Jtr.segment<9>(9 * c) += Ww(c) * a9[c];
+      }
+      nm.cost += w.dot(Ww);
     }
+    for (int c = 0; c < 3; ++c)
+      for (int c2 = 0; c2 < c; ++c2) nm.JtJ.block<9, 9>(9 * c2, 9 * c) = nm.JtJ.block<9, 9>(9 * c, 9 * c2).transpose();
     return nm;
   };
   Normal cur = normal_at(p);
@@ -197,12 +202,15 @@ TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
     const Normal nn = normal_at(np);
     const double nmerit = nn.cost + rho * constraints(np, bases_at(np)).norm();
     if (nmerit <= merit) {
+      const bool flat = merit - nmerit <= 1e-14 * merit && g.norm() < 1e-12;
       p = np;
       cur = nn;
       merit = nmerit;
       mu = std::max(1e-12, mu / 4);
+      if (flat) break;  // converged: no decrease left and the constraints hold
     } else {
       mu *= 8;
+      if (dp.norm() < 1e-10) break;  // only rounding left to gain
     }
   }
   // 3. tensor from the adjusted geometry
