@@ -50,10 +50,10 @@ int main(int argc, char** argv) {
     app.add_option("--scan", o->scan, "parameter to scan");
     app.add_option("--range", o->range, "LO HI of the scan")->expected(2);
     app.add_option("--steps", o->steps, "values of the scan");
-    app.add_option("--plot", o->plot, "SVG figure of the scan");
+    app.add_option("--plot", o->plot, "SVG figure of the scan, or of the clusters before and after");
     return [o]() {
       if (!o->scan.empty() && o->range.size() != 2) throw UsageError("--scan needs --range LO HI");
-      if (o->scan.empty() && (!o->range.empty() || !o->plot.empty())) throw UsageError("--range and --plot go with --scan");
+      if (o->scan.empty() && !o->range.empty()) throw UsageError("--range goes with --scan");
       if (!(o->trim >= 0 && o->trim < 1)) throw UsageError("--trim must be in [0, 1)");
       if (!(o->truncate >= 0)) throw UsageError("--truncate must be >= 0");
       if (!(o->target >= 0)) throw UsageError("--target must be >= 0");
@@ -125,6 +125,12 @@ int main(int argc, char** argv) {
           plot_scan(o->plot, rows, o->scan, "cluster cost against " + o->scan + " (" + o->param + " parameters)");
         save_scan(o->out, rows, o->scan, h.images, m);
       } else {
+        if (!o->plot.empty()) {
+          Eigen::Matrix3d H0 = start.has_H ? start.H
+                               : start.has_physical ? physical_homography(start.physical)
+                                                    : Eigen::Matrix3d::Identity();
+          plot_clusters(o->plot, A.xy, B.xy, H0, cost(H0), r.H, r.cost);
+        }
         save_homography(o->out, h);
       }
       if (!o->pairs.empty()) save_pairs(o->pairs, cost, mutual_pairs(cost, r.H), h.images, m);

