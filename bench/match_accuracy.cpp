@@ -71,35 +71,9 @@ double affine_ml_rmse(const tpkit::Tracks& t, std::vector<double>* per_track = n
   return std::sqrt(R.squaredNorm() / (static_cast<double>(K) * n));
 }
 
-// Truth of a pixel of a view: the first intersection of its viewing ray with the terrain. For the affine
-// camera this casts the ray of camera(view) itself (scan down in Z by 0.25 m, then bisection), which agrees
-// with truth.tracks; for other cameras SynthScene::ground_point.
+// Truth of a pixel of a view: the first intersection of its viewing ray with the terrain.
 std::optional<Eigen::Vector3d> ground_of(const tpkit::SynthScene& s, int view, double x, double y) {
-  if (s.params().camera != "affine") return s.ground_point(view, x, y);
-  const Eigen::Matrix<double, 3, 4> P = s.camera(view);
-  const Eigen::Matrix2d Ainv = P.block<2, 2>(0, 0).inverse();
-  auto at = [&](double Z) {
-    Eigen::Vector2d XY = Ainv * Eigen::Vector2d(x - P(0, 2) * Z - P(0, 3), y - P(1, 2) * Z - P(1, 3));
-    return Eigen::Vector3d(XY(0), XY(1), Z);
-  };
-  auto f = [&](double Z) {
-    Eigen::Vector3d X = at(Z);
-    return Z - s.height(X.x(), X.y());
-  };
-  const double top = s.params().relief + 1, bottom = -s.params().relief - 1, step = 0.25;
-  double zp = top;
-  for (double z = top - step; z >= bottom; z -= step) {
-    if (f(z) <= 0) {
-      double a = z, b = zp;
-      for (int i = 0; i < 60; ++i) {
-        double m = 0.5 * (a + b);
-        (f(m) <= 0 ? a : b) = m;
-      }
-      return at(0.5 * (a + b));
-    }
-    zp = z;
-  }
-  return std::nullopt;
+  return s.ground_point(view, x, y);
 }
 
 double secs(std::chrono::steady_clock::time_point a) {
