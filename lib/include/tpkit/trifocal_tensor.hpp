@@ -25,6 +25,9 @@ using CameraTriplet = std::array<Camera, 3>;
 using Vector27 = Eigen::Matrix<double, 27, 1>;
 
 // t[9 i + 3 j + k] = T_i(j, k).
+// The cross-product matrix [v]x, with [v]x w = v x w.
+Eigen::Matrix3d skew(const Eigen::Vector3d& v);
+
 Vector27 trifocal_to_vector(const TrifocalTensor& T);
 TrifocalTensor trifocal_from_vector(const Vector27& t);
 

@@ -6,14 +6,6 @@
 
 namespace tpkit {
 
-namespace {
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
-  return S;
-}
-}  // namespace
-
 TrifocalEpipoles trifocal_epipoles(const TrifocalTensor& T) {
   Eigen::Matrix3d Ul, Vr;
   for (int i = 0; i < 3; ++i) {

@@ -9,13 +9,11 @@
 
 namespace tpkit {
 
-namespace {
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d S;
   S << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
   return S;
 }
-}  // namespace
 
 Vector27 trifocal_to_vector(const TrifocalTensor& T) {
   Vector27 t;

@@ -9,11 +9,6 @@ namespace tpkit {
 
 namespace {
 
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
-  return S;
-}
 
 const int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
 
