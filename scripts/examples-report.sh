@@ -9,9 +9,11 @@ echo "# tpkit experiments: $name"
 echo
 echo "Images: $(for i in $images; do printf '`%s` ' "$i"; done)"
 echo
-echo "Triplet tracks (tp-match on the three pairs, then tp-chain): **$(count "$out/triplet.tracks")**;"
+echo "Triplet tracks (tp-match on the three pairs, then tp-chain): **$(count "$out/triplet.tracks")**, of which"
+echo "$(count "$out/triplet-inliers.tracks") are inliers of a robust affine trifocal fit (trifocal-fit --ransac drops"
+echo "mismatches that slid along an epipolar line, which pair verification cannot see);"
 echo "pair matches: 1-2 $(count "$out/pair-1-2.matches"), 1-3 $(count "$out/pair-1-3.matches"), 2-3 $(count "$out/pair-2-3.matches")."
-echo "Fit points are drawn from the triplet tracks by \`tp-sample\` with a fixed seed; every other track is a"
+echo "Fit points are drawn from the inlier tracks by \`tp-sample\` with a fixed seed; every other track is a"
 echo "held-out check point. RMSE is the square root of the mean squared 2-D reprojection residual over all"
 echo "points and the three views, after camera recovery from the tensor and DLT triangulation (reproj-eval)."
 echo
