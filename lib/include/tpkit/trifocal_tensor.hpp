@@ -48,6 +48,10 @@ TrifocalTensor transform_trifocal(const TrifocalTensor& T, const Eigen::Matrix3d
 
 // Frobenius norm 1, largest-magnitude entry positive (as the trifocal file stores it).
 TrifocalTensor unit_trifocal(const TrifocalTensor& T);
+// An affine tensor fitted in normalized coordinates (x_n = H[v] x for view v) back on pixels: the
+// exact inverse transform, the affine zero pattern cleared of rounding, Frobenius norm 1. The
+// normalizations must be similarities (they keep the zero pattern).
+TrifocalTensor denormalize_affine_trifocal(const TrifocalTensor& Tn, const std::vector<Eigen::Matrix3d>& H);
 
 // [x']_x (sum_i x^i T_i) [x'']_x for homogeneous points of views 1, 2, 3 (algebraic residual, 3x3).
 Eigen::Matrix3d trifocal_incidence(const TrifocalTensor& T, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,

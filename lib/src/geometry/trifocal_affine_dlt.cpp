@@ -48,13 +48,7 @@ TrifocalTensor trifocal_affine_dlt(const Eigen::MatrixXd& xy) {
   const auto H = isotropic_normalization(xy, false);
   const Eigen::MatrixXd xn = apply_normalization(xy, H);
   const TrifocalTensor Tn = affine_tensor_from_vector(smallest_eigenvector(affine_incidence_normal_matrix(xn)));
-  TrifocalTensor T = transform_trifocal(Tn, H[0].inverse(), H[1].inverse(), H[2].inverse());
-  // the similarity keeps the zero pattern; clear the rounding left in those entries
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k)
-        if (affine_zero_entry(i, j, k)) T[i](j, k) = 0;
-  return unit_trifocal(T);
+  return denormalize_affine_trifocal(Tn, H);
 }
 
 }  // namespace tpkit

@@ -96,12 +96,7 @@ TrifocalTensor trifocal_algebraic(const Eigen::MatrixXd& xy) {
   ceres::Solve(opt, &problem, &summary);
   AlgebraicSolution s = solve_given_epipoles(N, th[0], th[1]);
   const TrifocalTensor Tn = affine_tensor_from_vector(s.t);
-  TrifocalTensor T = transform_trifocal(Tn, H[0].inverse(), H[1].inverse(), H[2].inverse());
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k)
-        if (affine_zero_entry(i, j, k)) T[i](j, k) = 0;
-  return unit_trifocal(T);
+  return denormalize_affine_trifocal(Tn, H);
 }
 
 }  // namespace tpkit

@@ -197,12 +197,7 @@ TrifocalTensor trifocal_minimal(const Eigen::MatrixXd& xy) {
     Tn[i].setZero();
     for (int m = 0; m < 3; ++m) Tn[i] += U(i, m) * (V * C[m] * W.transpose());
   }
-  TrifocalTensor T = transform_trifocal(Tn, H[0].inverse(), H[1].inverse(), H[2].inverse());
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k)
-        if (affine_zero_entry(i, j, k)) T[i](j, k) = 0;
-  return unit_trifocal(T);
+  return denormalize_affine_trifocal(Tn, H);
 }
 
 }  // namespace tpkit

@@ -15,6 +15,15 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return S;
 }
 
+TrifocalTensor denormalize_affine_trifocal(const TrifocalTensor& Tn, const std::vector<Eigen::Matrix3d>& H) {
+  TrifocalTensor T = transform_trifocal(Tn, H[0].inverse(), H[1].inverse(), H[2].inverse());
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        if (affine_zero_entry(i, j, k)) T[i](j, k) = 0;
+  return unit_trifocal(T);
+}
+
 Vector27 trifocal_to_vector(const TrifocalTensor& T) {
   Vector27 t;
   for (int i = 0; i < 3; ++i)
