@@ -27,15 +27,6 @@ using namespace tpkit;
 
 namespace {
 
-PhysicalParams paper_start() {
-  PhysicalParams p = paper_physical_params();
-  p.view[0].px += 200;
-  p.view[0].py -= 50;
-  p.view[0].alpha -= 0.17;
-  p.view[0].beta -= 0.05;
-  p.view[0].gamma += 0.5;
-  return p;
-}
 
 double cpu_now() {
   timespec ts;
@@ -61,7 +52,7 @@ void run_case(const char* label, int trials, const ClusterSynthOptions& base, co
     OptimizeStart st;
     if (with_init) {
       st.has_physical = true;
-      st.physical = paper_start();
+      st.physical = paper_start_params();
     }
     OptimizeOptions o = oo;
     o.seed = static_cast<uint64_t>(t + 1);

@@ -22,12 +22,18 @@ const tpkit::SynthScene& scene(const std::string& camera) {
   return camera == "affine" ? affine : perspective;
 }
 
-void BM_Albedo(benchmark::State& st) {
-  const auto& s = scene("affine");
+// 1024 random ground positions (x, y interleaved) over the scene, fixed seed.
+std::vector<double> ground_samples(const tpkit::SynthScene& s) {
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(0, s.scene_size());
   std::vector<double> xy(2048);
   for (auto& v : xy) v = u(rng);
+  return xy;
+}
+
+void BM_Albedo(benchmark::State& st) {
+  const auto& s = scene("affine");
+  const std::vector<double> xy = ground_samples(s);
   size_t i = 0;
   for (auto _ : st) {
     benchmark::DoNotOptimize(s.albedo(xy[i], xy[i + 1]));
@@ -38,10 +44,7 @@ BENCHMARK(BM_Albedo);
 
 void BM_HeightGradient(benchmark::State& st) {
   const auto& s = scene("affine");
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(0, s.scene_size());
-  std::vector<double> xy(2048);
-  for (auto& v : xy) v = u(rng);
+  const std::vector<double> xy = ground_samples(s);
   size_t i = 0;
   for (auto _ : st) {
     benchmark::DoNotOptimize(s.height_gradient(xy[i], xy[i + 1]));

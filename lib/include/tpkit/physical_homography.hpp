@@ -104,6 +104,9 @@ std::string physical_params_problem(const PhysicalParams& p);
 
 // The paper's section 5 capture conditions (with P2 = (100, +100) m, see above) and its eq. 4.
 PhysicalParams paper_physical_params();
+// The paper's section 6 starting point: the section 5 values with P1 + (200, -50) m, alpha1 - 0.17,
+// beta1 - 0.05, gamma1 + 0.5 (the perturbation the benchmarks and tests start from).
+PhysicalParams paper_start_params();
 Eigen::Matrix3d paper_eq4_homography();
 
 // Parameters -> H is physical_homography(); H -> parameters: least squares (Ceres) of the free

@@ -86,6 +86,16 @@ PhysicalParams paper_physical_params() {
   return p;
 }
 
+PhysicalParams paper_start_params() {
+  PhysicalParams p = paper_physical_params();
+  p.view[0].px += 200;
+  p.view[0].py -= 50;
+  p.view[0].alpha -= 0.17;
+  p.view[0].beta -= 0.05;
+  p.view[0].gamma += 0.5;
+  return p;
+}
+
 Eigen::Matrix3d paper_eq4_homography() {
   Eigen::Matrix3d H;
   H << 0.248587, 1.779159, 2.327801, -0.917194, -0.090371, 6.597157, -0.000009, -0.000023, 1.000021;

@@ -11,15 +11,6 @@
 using namespace tpkit;
 
 namespace {
-PhysicalParams paper_start() {
-  PhysicalParams p = paper_physical_params();
-  p.view[0].px += 200;
-  p.view[0].py -= 50;
-  p.view[0].alpha -= 0.17;
-  p.view[0].beta -= 0.05;
-  p.view[0].gamma += 0.5;
-  return p;
-}
 
 struct Tally {
   int ok = 0;
@@ -35,7 +26,7 @@ Tally run(int trials, ClusterSynthOptions so, OptimizeOptions oo, CostOptions co
     ClusterCost cost(cp.A, cp.B, co);
     OptimizeStart st;
     st.has_physical = with_init;
-    st.physical = paper_start();
+    st.physical = paper_start_params();
     oo.seed = static_cast<uint64_t>(k + 1);
     OptimizeResult r = optimize_clusters(cost, st, oo);
     double diff = homography_max_difference(r.H, truth, extent_grid(cp.A));
@@ -93,7 +84,7 @@ TEST(ClusterOptimize, PaperRandomSearchDecreasesTheCost) {
   ClusterCost cost(cp.A, cp.B);
   OptimizeStart st;
   st.has_physical = true;
-  st.physical = paper_start();
+  st.physical = paper_start_params();
   OptimizeOptions o;
   o.optimizer = OptimizerKind::Random;
   o.max_iterations = 3000;
@@ -113,7 +104,7 @@ TEST(ClusterOptimize, DeterministicForASeed) {
   ClusterCost cost(cp.A, cp.B);
   OptimizeStart st;
   st.has_physical = true;
-  st.physical = paper_start();
+  st.physical = paper_start_params();
   for (auto kind : {OptimizerKind::Random, OptimizerKind::Default}) {
     OptimizeOptions o;
     o.optimizer = kind;
