@@ -10,6 +10,7 @@
 #include "tpkit/camera_recovery.hpp"
 #include "tpkit/reproj_eval.hpp"
 #include "tpkit/trifocal_affine_dlt.hpp"
+#include "tpkit/trifocal_dlt.hpp"
 #include "tpkit/trifocal_fit.hpp"
 #include "tpkit/trifocal_ml.hpp"
 #include "tpkit/trifocal_transfer.hpp"
@@ -117,11 +118,41 @@ TEST(NoiseGoals, MlSmallAndLargeN) {
   }
 }
 
-// The general DLT meets <= 1.3x only with many tracks (1.09x at n = 1000 in the benchmark); at n = 100
-// it is about 1.6x (the paper's tables show the same gap). Guard both.
-TEST(NoiseGoals, DltWithinItsMeasuredRange) {
-  EXPECT_LE(figures(TrifocalMethod::Dlt, 1000, 5).ratio, 1.3);
-  EXPECT_LE(figures(TrifocalMethod::Dlt, 100, 15).ratio, 2.0);
+// The general DLT with its constraint step: <= 1.3x the bound at every n (issue 4). With 10 tracks the
+// projective model (18 degrees of freedom against the affine 12) may fit below the affine bound, but
+// never below the projective one, sigma sqrt((n - 6) / (2n)) = 0.82x of it at n = 10.
+TEST(NoiseGoals, DltWithinGoal) {
+  for (int n : {10, 100, 1000}) {
+    const Figures f = figures(TrifocalMethod::Dlt, n, n == 1000 ? 5 : 25);
+    EXPECT_LE(f.ratio, 1.3) << n;
+    EXPECT_GT(f.ratio, n == 10 ? 0.75 : 0.95) << n;
+  }
+}
+
+// Without the constraint step the linear tensor is not the tensor of any three cameras, and the
+// cameras recovered from it fit the tracks far worse (3.9x the bound at n = 10 in the benchmark).
+TEST(NoiseGoals, DltConstraintStepMatters) {
+  double raw = 0, constrained = 0;
+  for (std::uint64_t seed = 1; seed <= 9; ++seed) {
+    const Data d = make(seed, 10);
+    raw += fit_rmse(trifocal_dlt(d.fit, false), d.fit);
+    constrained += fit_rmse(trifocal_dlt(d.fit), d.fit);
+  }
+  EXPECT_GT(raw, 2.0 * constrained);
+}
+
+// The constrained DLT tensor is geometrically valid on noisy tracks: the cameras recovered from it
+// reproduce it.
+TEST(NoiseGoals, DltTensorIsGeometricallyValid) {
+  for (std::uint64_t seed : {1, 2, 3}) {
+    const Data d = make(seed, 30, seed == 3 ? 30000 : 1000);
+    const auto H = isotropic_normalization(d.fit, false);
+    const TrifocalTensor T = unit_trifocal(transform_trifocal(trifocal_dlt(d.fit), H[0], H[1], H[2]));
+    const CameraTriplet P = cameras_from_trifocal(T);
+    const Vector27 a = trifocal_to_vector(unit_trifocal(trifocal_from_cameras(P[0], P[1], P[2])));
+    const Vector27 b = trifocal_to_vector(T);
+    EXPECT_LT(std::min((a - b).norm(), (a + b).norm()), 1e-8) << seed;
+  }
 }
 
 // reproj-eval's camera recovery + DLT triangulation, applied to the ml tensor, gives the residuals of
