@@ -40,7 +40,7 @@ echo "== tpkit (threads $threads)"
 tp_total=0
 for p in "1 2" "1 3" "2 3"; do
   set -- $p
-  r=$(timed "tp-match-$1$2" "$bin/tp-match" "$data/img_0$1.tif" "$data/img_0$2.tif" --threads $threads -q -o "tp/$1$2.matches")
+  r=$(timed "tp-match-$1$2" "$bin/tp-match" "$data/img_0$1.tif" "$data/img_0$2.tif" --threads $threads --cache tp/keypoints -q -o "tp/$1$2.matches")
   echo "$r" | awk '{printf "tp-match %s: %.2f s, peak RSS %d MB\n", $1, $2, $3 / 1024}'
   tp_total=$(echo "$tp_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
 done

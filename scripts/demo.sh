@@ -18,9 +18,9 @@ step "tp-synth: a 1024 x 1024 triplet with 150 m relief, affine cameras, seed 1 
 "$bin"/tp-synth --out scene --size 1024 --relief 150 --seed 1
 
 step "tp-match: the three pairs (SIFT, affine-F RANSAC, least-squares refinement)"
-"$bin"/tp-match scene/view1.tif scene/view2.tif -o pair-1-2.matches
-"$bin"/tp-match scene/view1.tif scene/view3.tif -o pair-1-3.matches
-"$bin"/tp-match scene/view2.tif scene/view3.tif -o pair-2-3.matches
+"$bin"/tp-match scene/view1.tif scene/view2.tif --cache keypoints -o pair-1-2.matches
+"$bin"/tp-match scene/view1.tif scene/view3.tif --cache keypoints -o pair-1-3.matches
+"$bin"/tp-match scene/view2.tif scene/view3.tif --cache keypoints -o pair-2-3.matches
 
 step "tp-chain: tracks seen in all three views"
 "$bin"/tp-chain pair-1-2.matches pair-1-3.matches pair-2-3.matches \

@@ -17,7 +17,7 @@ struct Opts {
   int band = 1;
   std::optional<double> nodata;
   int threads = 0;
-  bool no_refine = false, no_mutual = false, l2 = false, quiet = false;
+  bool no_refine = false, no_mutual = false, global = false, l2 = false, quiet = false;
   tpkit::PairMatchOptions p;
 };
 }  // namespace
@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
         app.add_option("--mask1", o->mask1, "mask image of IMG1 (0 = invalid)");
         app.add_option("--mask2", o->mask2, "mask image of IMG2 (0 = invalid)");
         app.add_option("--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+        app.add_option("--cache", o->p.cache_dir, "keypoint cache folder: each image is detected once");
         app.add_option("--tile", o->p.sift.tile, "detection tile size, pixels")->check(CLI::Range(256L, 1L << 20));
         app.add_option("--overlap", o->p.sift.overlap, "detection tile overlap, pixels")->check(CLI::Range(16L, 4096L));
         app.add_option("--max-per-tile", o->p.sift.max_per_tile, "strongest keypoints kept per tile (0 = all)")->check(CLI::NonNegativeNumber);
@@ -49,6 +50,12 @@ int main(int argc, char** argv) {
         app.add_flag("--no-mutual", o->no_mutual, "skip the mutual nearest-neighbour check");
         app.add_option("--exact-below", o->p.desc.exact_below, "exact search when both sets are smaller")->check(CLI::NonNegativeNumber);
         app.add_option("--checks", o->p.desc.flann_checks, "leaves visited by the approximate search")->check(CLI::PositiveNumber);
+        app.add_flag("--global", o->global, "search every descriptor pair instead of the epipolar band");
+        app.add_option("--epipolar-band", o->p.guide.band, "guided search: pixels across the epipolar line")->check(CLI::PositiveNumber);
+        app.add_option("--parallax-margin", o->p.guide.parallax_margin, "guided search: pixels added to each parallax range")
+            ->check(CLI::NonNegativeNumber);
+        app.add_option("--ratio-region", o->p.guide.ratio_margin, "guided search: the ratio test's region is this much wider, pixels")
+            ->check(CLI::NonNegativeNumber);
         app.add_option("--threshold", o->p.ransac_threshold, "RANSAC inlier distance, pixels")->check(CLI::PositiveNumber);
         app.add_option("--iterations", o->p.ransac_iterations, "RANSAC iterations at most")->check(CLI::PositiveNumber);
         app.add_option("--seed", o->p.seed, "RANSAC seed");
@@ -68,6 +75,7 @@ int main(int argc, char** argv) {
             throw tpkit::UsageError("--stretch needs 0 <= LOW < HIGH <= 100");
           if (o->p.lsm.window % 2 == 0) throw tpkit::UsageError("--window must be odd");
           o->p.desc.mutual = !o->no_mutual;
+          o->p.guided = !o->global;
           o->p.refine = !o->no_refine;
           o->p.lsm.l1 = !o->l2;
           o->p.threads = o->threads > 0 ? o->threads : std::max(1u, std::thread::hardware_concurrency());
@@ -81,7 +89,8 @@ int main(int argc, char** argv) {
                         " (do the images overlap?): writing a file with zero records");
           tpkit::save_matches(o->out, m);
           if (!o->quiet) {
-            std::cerr << "tp-match: keypoints " << st.keypoints1 << " / " << st.keypoints2 << ", putative " << st.putative
+            std::cerr << "tp-match: keypoints " << st.keypoints1 << (st.cached1 ? " (cached)" : "") << " / " << st.keypoints2
+                      << (st.cached2 ? " (cached)" : "") << ", putative " << st.putative
                       << ", verified " << st.verified << " (rms " << st.ransac_rms << " px)";
             if (o->p.grid > 0) std::cerr << ", after grid " << st.gridded;
             if (o->p.refine) {

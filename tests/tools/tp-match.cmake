@@ -22,6 +22,13 @@ tpkit_tool_test(tp-match.no-overlap
 # Same input and seed, any thread count: the same file.
 tpkit_tool_test(tp-match.deterministic
   COMMAND "tp-synth --out s --size 384 --seed 4 && tp-match s/view1.tif s/view2.tif --threads 1 -q -o a.m && tp-match s/view1.tif s/view2.tif --threads 2 -q -o b.m && cmp a.m b.m && test $(grep -vc '^#' a.m) -gt 100")
+# The keypoint cache: the second run reads both images' keypoints from it and writes the same file as
+# a run without the cache; the guided search finds at least the matches of the global one.
+tpkit_tool_test(tp-match.cache
+  COMMAND "tp-synth --out s --size 384 --seed 4 && tp-match s/view1.tif s/view2.tif --cache kp -q -o a.m && tp-match s/view1.tif s/view2.tif -q -o b.m && tp-match s/view1.tif s/view2.tif --cache kp -o c.m && cmp a.m b.m && cmp a.m c.m && test $(ls kp/*.sift | wc -l) -eq 2"
+  STDERR_MATCH "keypoints [0-9]+ \\(cached\\) / [0-9]+ \\(cached\\)")
+tpkit_tool_test(tp-match.guided-vs-global
+  COMMAND "tp-synth --out s --size 384 --seed 4 && tp-match s/view1.tif s/view2.tif -q -o g.m && tp-match s/view1.tif s/view2.tif --global -q -o a.m && test $(grep -vc '^#' g.m) -ge $(grep -vc '^#' a.m) && grep -q '^# putative: .*guided: coarse affine F' g.m && grep -q '^# putative: .*; global)' a.m")
 tpkit_tool_test(tp-match.no-refine
   COMMAND "tp-synth --out s --size 256 --seed 5 && tp-match s/view1.tif s/view2.tif --no-refine -o raw.m && awk '!/^#/ && ($5 != $7 || $6 != $8) {bad++} END {exit bad > 0}' raw.m"
   CHECK_FILE raw.m FILE_MATCH "refinement: none.*# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\n[0-9]")

@@ -1,5 +1,6 @@
 // tp-match's pipeline for one pair of images (image 1 -> image 2): SIFT by tiles (sift_tiles.hpp),
-// ratio + mutual nearest neighbours (match_descriptors.hpp), affine fundamental matrix RANSAC
+// ratio + mutual nearest neighbours searched along the epipolar band of a coarse affine F
+// (guided_matching.hpp; over all descriptors, match_descriptors.hpp, if that finds no geometry), affine fundamental matrix RANSAC
 // (affine_fundamental.hpp), optional grid thinning, then least-squares matching of each verified
 // match (lsm_refine.hpp) region by region. Image 1's position of every record is its keypoint
 // position (the LSM template is fixed there); image 2's is refined.
@@ -11,6 +12,7 @@
 #include <string>
 
 #include "tpkit/formats.hpp"
+#include "tpkit/guided_matching.hpp"
 #include "tpkit/image_tiles.hpp"
 #include "tpkit/lsm_refine.hpp"
 #include "tpkit/match_descriptors.hpp"
@@ -21,6 +23,8 @@ namespace tpkit {
 struct PairMatchOptions {
   SiftOptions sift;
   DescriptorMatchOptions desc;
+  bool guided = true;             // descriptor search guided by a coarse epipolar geometry (guided_matching.hpp)
+  GuidedMatchOptions guide;
   double ransac_threshold = 1.0;  // pixels (geometric distance to the affine F, R^4)
   int ransac_iterations = 20000;
   uint64_t seed = 1;
@@ -29,6 +33,7 @@ struct PairMatchOptions {
   int per_cell = 4;               // matches kept per grid cell (best ratio first)
   bool refine = true;
   LsmOptions lsm;
+  std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
   long refine_tile = 256;         // image-1 region refined at a time (bounded memory, one per thread)
   int threads = 1;
   bool progress = false;
@@ -37,6 +42,9 @@ struct PairMatchOptions {
 struct PairMatchStats {
   long keypoints1 = 0, keypoints2 = 0, putative = 0, verified = 0, gridded = 0, refined = 0;
   double ransac_rms = 0;
+  bool cached1 = false, cached2 = false;       // keypoints read from the cache
+  bool guided = false;                         // the guided search ran (else the global one)
+  GuidedMatchResult guide;                     // its figures (matches moved out)
   double seconds[4] = {0, 0, 0, 0};             // wall time of detection, matching, verification, refinement
   long dropped[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // by LsmStatus
   bool overlap = true;                         // false: too few verified matches, zero records

@@ -10,6 +10,7 @@
 
 #include "tpkit/affine_fundamental.hpp"
 #include "tpkit/error.hpp"
+#include "tpkit/keypoint_cache.hpp"
 #include "tpkit/text_table.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -70,10 +71,10 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
   {
     std::unique_ptr<Progress> p1, p2;
     if (o.progress) p1 = std::make_unique<Progress>("detect " + a.path, (long)tile_grid(a.info.width, a.info.height, o.sift.tile, o.sift.overlap).size());
-    K1 = detect_sift_tiles(a, o.sift, o.threads, p1.get());
+    K1 = detect_sift_cached(a, o.sift, o.threads, o.cache_dir, p1.get(), &st.cached1);
     if (p1) p1->done();
     if (o.progress) p2 = std::make_unique<Progress>("detect " + b.path, (long)tile_grid(b.info.width, b.info.height, o.sift.tile, o.sift.overlap).size());
-    K2 = detect_sift_tiles(b, o.sift, o.threads, p2.get());
+    K2 = detect_sift_cached(b, o.sift, o.threads, o.cache_dir, p2.get(), &st.cached2);
     if (p2) p2->done();
   }
   st.keypoints1 = static_cast<long>(K1.kp.size());
@@ -81,7 +82,18 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
 
   lap(st.seconds[0]);
   // 2. putative matches
-  std::vector<DescriptorMatch> put = match_descriptors(K1.desc, K2.desc, o.desc);
+  std::vector<DescriptorMatch> put;
+  if (o.guided) {
+    AffineFundamentalRansac cr;
+    cr.threshold = o.ransac_threshold;
+    cr.max_iterations = o.ransac_iterations;
+    cr.seed = o.seed;
+    st.guide = guided_match(K1, K2, a.info.width, a.info.height, o.desc, o.guide, cr, o.min_inliers, o.threads);
+    st.guided = st.guide.ok;
+    put = std::move(st.guide.matches);
+    st.guide.matches.clear();
+  }
+  if (!st.guided) put = match_descriptors(K1.desc, K2.desc, o.desc);
   st.putative = static_cast<long>(put.size());
   K1.desc.release();
   K2.desc.release();
@@ -227,8 +239,18 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
   meta_set(M.meta, "detector1", detector_tag(o.sift, a));
   meta_set(M.meta, "detector2", detector_tag(o.sift, b));
   meta_set(M.meta, "keypoints", std::to_string(st.keypoints1) + " " + std::to_string(st.keypoints2));
+  std::string search = "global";
+  if (st.guided) {
+    search = "guided: coarse affine F from " + std::to_string(st.guide.coarse_inliers) + " of " +
+             std::to_string(st.guide.coarse_putative) + " matches of the strongest keypoints, band " +
+             format_number(o.guide.band) + " px, parallax " + format_number(std::round(st.guide.parallax_min * 10) / 10) +
+             ".." + format_number(std::round(st.guide.parallax_max * 10) / 10) + " px + margin " +
+             format_number(o.guide.parallax_margin) + ", ratio region +" + format_number(o.guide.ratio_margin) + " px";
+  } else if (o.guided) {
+    search = "global (the guided search found no coarse geometry)";
+  }
   meta_set(M.meta, "putative", std::to_string(st.putative) + " (ratio " + format_number(o.desc.ratio) +
-                                   (o.desc.mutual ? ", mutual" : "") + ")");
+                                   (o.desc.mutual ? ", mutual" : "") + "; " + search + ")");
   meta_set(M.meta, "verified", std::to_string(st.verified) + " (affine F RANSAC, threshold " + format_number(o.ransac_threshold) +
                                    " px, seed " + std::to_string(o.seed) + ", inlier rms " + format_number(std::round(st.ransac_rms * 1e4) / 1e4) + " px)");
   if (o.grid > 0) meta_set(M.meta, "grid", std::to_string(o.grid) + "x" + std::to_string(o.grid) + ", " + std::to_string(o.per_cell) + " per cell: " + std::to_string(st.gridded));

@@ -1,0 +1,32 @@
+// Keypoints and descriptors of an image kept on disk, so that an image matched in several pairs is
+// detected once (tp-match --cache DIR), as COLMAP keeps its features in its database.
+//
+// One binary file per image and detector: DIR/<file name>.<16 hex digits>.sift, the digits a hash of
+// the image's absolute path, size, modification time and the detector tag (detector_tag(): every
+// option that changes the keypoints). Layout: a text line "tpkit-sift 1\n", a line with the identity
+// string (path, size, mtime, tag) and the count, then per keypoint x y size angle response (float32),
+// octave class_id (int32), id (int64), descriptor (128 bytes), little-endian as the machine. A file
+// whose identity line differs (edited image, other options, hash collision), that is truncated or
+// unreadable counts as missing and is rewritten. Written atomically (temporary file + rename), so
+// parallel runs that share a folder only ever read whole files.
+#pragma once
+#include <string>
+
+#include "tpkit/sift_tiles.hpp"
+
+namespace tpkit {
+
+// The identity of (image, detector options) that a cache file must match.
+std::string keypoint_cache_identity(const ImageSource& src, const SiftOptions& o);
+std::string keypoint_cache_path(const std::string& dir, const ImageSource& src, const SiftOptions& o);
+
+// True and K filled when `path` holds the keypoints of `identity`.
+bool load_keypoints(const std::string& path, const std::string& identity, Keypoints& K);
+void save_keypoints(const std::string& path, const std::string& identity, const Keypoints& K);
+
+// detect_sift_tiles() through the cache folder `dir` (none when empty): loads when present, else
+// detects and saves. `from_cache` (may be null) tells which.
+Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int threads, const std::string& dir,
+                             Progress* progress = nullptr, bool* from_cache = nullptr);
+
+}  // namespace tpkit

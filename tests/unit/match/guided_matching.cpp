@@ -1,0 +1,137 @@
+// Guided descriptor matching on a synthetic affine pair with known correspondences: the epipolar band
+// and parallax ranges find the true pairs and only them, the ratio test rejects repeated texture along
+// the band, the result does not depend on the thread count; and the keypoint cache round trip.
+#include "tpkit/guided_matching.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "tpkit/keypoint_cache.hpp"
+
+using namespace tpkit;
+
+namespace {
+
+// n true points: image 2 = affine map of image 1 + parallax along the direction (cos 10 deg, sin 10 deg)
+// (the epipolar direction), in [-30, 40] px; descriptors = a random base vector + small noise.
+// `distractors` extra keypoints in each image with unrelated descriptors.
+struct Pair {
+  Keypoints K1, K2;
+  std::vector<int> truth;  // truth[i] = row of K2 matching row i of K1 (first n rows), else -1
+};
+
+Pair make_pair(int n, int distractors, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> ux(0, 1000), upar(-30, 40);
+  std::normal_distribution<float> noise(0, 4);
+  std::uniform_int_distribution<int> byte(0, 255);
+  Pair p;
+  const int m = n + distractors;
+  p.K1.desc.create(m, 128, CV_8U);
+  p.K2.desc.create(m, 128, CV_8U);
+  const float c = std::cos(0.1745f), s = std::sin(0.1745f);
+  for (int i = 0; i < m; ++i) {
+    const float x = ux(rng), y = ux(rng);
+    p.K1.kp.emplace_back(x, y, 4.f, 0.f, 0.01f + 0.001f * (i % 7));
+    p.K1.id.push_back(i);
+    for (int k = 0; k < 128; ++k) p.K1.desc.at<uint8_t>(i, k) = static_cast<uint8_t>(byte(rng));
+  }
+  for (int i = 0; i < m; ++i) {
+    if (i < n) {
+      const float x = p.K1.kp[i].pt.x, y = p.K1.kp[i].pt.y, par = upar(rng);
+      p.K2.kp.emplace_back(0.98f * x + 0.05f * y + 12 + par * c, -0.04f * x + 1.01f * y - 7 + par * s, 4.f, 0.f, 0.01f);
+      for (int k = 0; k < 128; ++k)
+        p.K2.desc.at<uint8_t>(i, k) =
+            static_cast<uint8_t>(std::clamp(static_cast<float>(p.K1.desc.at<uint8_t>(i, k)) + noise(rng), 0.f, 255.f));
+    } else {
+      p.K2.kp.emplace_back(ux(rng), ux(rng), 4.f, 0.f, 0.01f);
+      for (int k = 0; k < 128; ++k) p.K2.desc.at<uint8_t>(i, k) = static_cast<uint8_t>(byte(rng));
+    }
+    p.K2.id.push_back(i);
+    p.truth.push_back(i < n ? i : -1);
+  }
+  return p;
+}
+
+GuidedMatchResult run(const Pair& p, int threads, GuidedMatchOptions g = {}) {
+  AffineFundamentalRansac r;
+  r.threshold = 1.0;
+  return guided_match(p.K1, p.K2, 1000, 1000, DescriptorMatchOptions{}, g, r, 12, threads);
+}
+
+}  // namespace
+
+TEST(GuidedMatch, FindsTheTruePairsOnly) {
+  const Pair p = make_pair(3000, 3000, 1);
+  const GuidedMatchResult g = run(p, 2);
+  ASSERT_TRUE(g.ok);
+  long right = 0, wrong = 0;
+  for (const auto& m : g.matches) (p.truth[m.i1] == m.i2 ? right : wrong)++;
+  EXPECT_GE(right, 2970);
+  EXPECT_EQ(wrong, 0);
+  EXPECT_NEAR(g.parallax_max - g.parallax_min, 70.0, 3.0);  // the parallax span of the scene
+  EXPECT_LT(g.candidates_per_query, 200.0);                // far from the 6000 of a global search
+}
+
+TEST(GuidedMatch, SameResultForAnyThreadCount) {
+  const Pair p = make_pair(2000, 1000, 2);
+  const GuidedMatchResult a = run(p, 1), b = run(p, 2), c = run(p, 5);
+  ASSERT_EQ(a.matches.size(), b.matches.size());
+  ASSERT_EQ(a.matches.size(), c.matches.size());
+  for (size_t k = 0; k < a.matches.size(); ++k) {
+    EXPECT_EQ(a.matches[k].i1, b.matches[k].i1);
+    EXPECT_EQ(a.matches[k].i2, b.matches[k].i2);
+    EXPECT_EQ(a.matches[k].i2, c.matches[k].i2);
+  }
+}
+
+// A copy of a true keypoint's descriptor 20 px along the epipolar line (repeated texture, e.g. a row
+// of identical roofs): inside the ratio test's region, so the ambiguous match is rejected.
+TEST(GuidedMatch, RatioTestSeesRepeatsAlongTheBand) {
+  Pair p = make_pair(2000, 0, 3);
+  const int victim = 100;
+  bool found = false;
+  for (const auto& m : run(p, 2).matches) found |= m.i1 == victim && m.i2 == victim;
+  ASSERT_TRUE(found);  // matched without the twin
+  const float c = std::cos(0.1745f), s = std::sin(0.1745f);
+  cv::KeyPoint twin = p.K2.kp[victim];
+  twin.pt.x += 20 * c;
+  twin.pt.y += 20 * s;
+  p.K2.kp.push_back(twin);
+  p.K2.id.push_back(static_cast<long long>(p.K2.kp.size()) - 1);
+  cv::Mat d = p.K2.desc.row(victim).clone();
+  p.K2.desc.push_back(d);
+  const GuidedMatchResult g = run(p, 2);
+  ASSERT_TRUE(g.ok);
+  for (const auto& m : g.matches) EXPECT_NE(m.i1, victim);
+}
+
+TEST(GuidedMatch, NoGeometryWithoutOverlap) {
+  Pair p = make_pair(0, 2000, 4);
+  EXPECT_FALSE(run(p, 2).ok);
+}
+
+TEST(KeypointCache, RoundTripAndStaleFiles) {
+  const auto dir = std::filesystem::temp_directory_path() / ("tpkit_kpcache_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const Pair p = make_pair(50, 0, 5);
+  const std::string f = (dir / "a.sift").string();
+  save_keypoints(f, "image=a detector=x", p.K1);
+  Keypoints K;
+  ASSERT_TRUE(load_keypoints(f, "image=a detector=x", K));
+  ASSERT_EQ(K.kp.size(), p.K1.kp.size());
+  for (size_t i = 0; i < K.kp.size(); ++i) {
+    EXPECT_EQ(K.kp[i].pt, p.K1.kp[i].pt);
+    EXPECT_EQ(K.kp[i].response, p.K1.kp[i].response);
+    EXPECT_EQ(K.id[i], p.K1.id[i]);
+  }
+  EXPECT_EQ(cv::norm(K.desc, p.K1.desc, cv::NORM_INF), 0.0);
+  EXPECT_FALSE(load_keypoints(f, "image=a detector=y", K));  // other options
+  std::filesystem::resize_file(f, std::filesystem::file_size(f) - 10);
+  EXPECT_FALSE(load_keypoints(f, "image=a detector=x", K));  // truncated
+  EXPECT_FALSE(load_keypoints((dir / "none.sift").string(), "image=a detector=x", K));
+  std::filesystem::remove_all(dir);
+}
