@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <mutex>
 #include <numeric>
 #include <opencv2/features2d.hpp>
@@ -113,31 +114,43 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
   cv::setNumThreads(saved);
   if (err) std::rethrow_exception(err);
 
-  // gather and sort into the stable order
+  // Gather into the stable order. Tile cores split the rows into bands, so sorting by y first never
+  // mixes two bands: gather band by band and free each band's tiles once copied. The output is
+  // allocated once at its final size; the allocator maps it lazily, so resident memory grows as the
+  // tiles shrink and peaks near one copy of the keypoints, not two.
+  size_t total = 0;
+  for (const auto& r : res) total += r.kp.size();
+  K.kp.reserve(total);
+  K.id.reserve(total);
+  K.desc.create(static_cast<int>(total), 128, CV_8U);
   struct Ref {
     size_t tile;
     int row;
   };
-  std::vector<Ref> refs;
-  for (size_t t = 0; t < res.size(); ++t)
-    for (int r = 0; r < static_cast<int>(res[t].kp.size()); ++r) refs.push_back({t, r});
-  auto key = [&](const Ref& a) { return std::make_tuple(a.tile, a.row); };
-  (void)key;
-  std::sort(refs.begin(), refs.end(), [&](const Ref& a, const Ref& b) {
-    const cv::KeyPoint &p = res[a.tile].kp[a.row], &q = res[b.tile].kp[b.row];
-    if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;
-    if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
-    if (p.size != q.size) return p.size < q.size;
-    if (p.angle != q.angle) return p.angle < q.angle;
-    if (p.response != q.response) return p.response < q.response;
-    return p.octave < q.octave;
-  });
-  K.kp.reserve(refs.size());
-  K.desc.create(static_cast<int>(refs.size()), 128, CV_8U);
-  for (size_t i = 0; i < refs.size(); ++i) {
-    K.kp.push_back(res[refs[i].tile].kp[refs[i].row]);
-    res[refs[i].tile].desc.row(refs[i].row).copyTo(K.desc.row(static_cast<int>(i)));
-    K.id.push_back(static_cast<long long>(i));
+  size_t t0 = 0;
+  while (t0 < tiles.size()) {
+    size_t t1 = t0;
+    while (t1 < tiles.size() && tiles[t1].cy0 == tiles[t0].cy0) ++t1;
+    std::vector<Ref> refs;
+    for (size_t t = t0; t < t1; ++t)
+      for (int r = 0; r < static_cast<int>(res[t].kp.size()); ++r) refs.push_back({t, r});
+    std::sort(refs.begin(), refs.end(), [&](const Ref& a, const Ref& b) {
+      const cv::KeyPoint &p = res[a.tile].kp[a.row], &q = res[b.tile].kp[b.row];
+      if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;
+      if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
+      if (p.size != q.size) return p.size < q.size;
+      if (p.angle != q.angle) return p.angle < q.angle;
+      if (p.response != q.response) return p.response < q.response;
+      return p.octave < q.octave;
+    });
+    for (const Ref& r : refs) {
+      const int i = static_cast<int>(K.kp.size());
+      K.kp.push_back(res[r.tile].kp[r.row]);
+      std::memcpy(K.desc.ptr<uint8_t>(i), res[r.tile].desc.ptr<uint8_t>(r.row), 128);
+      K.id.push_back(static_cast<long long>(i));
+    }
+    for (size_t t = t0; t < t1; ++t) res[t] = TileResult{};
+    t0 = t1;
   }
   return K;
 }
