@@ -8,6 +8,8 @@
 //       X = ground_point(view 1, x1, y1), truth = project(view v, X) when visible.
 //       --check: exit status 1 when the triplets' median or 90th percentile (views 2 and 3 together)
 //       is above MED / P90.
+//       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
+//       the true local map's Jacobian and Hessians (central differences, 1 px) for error analysis.
 //   bench_match_accuracy --tracks FILE [--check-rmse R]
 //       Affine maximum-likelihood fit of the tracks (Tomasi-Kanade: rank-3 factorization of the
 //       centred 2K x n measurement matrix) and its reprojection RMSE, sqrt(mean squared 2-D residual)
@@ -89,6 +91,11 @@ int main(int argc, char** argv) {
     int window = 21;
     double taper = 3;
     bool l2 = false;
+    std::string dump;
+    int quad = -1;
+    double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
+    int adaptive = -1, sit = -1;
+    double stol = -1;
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       auto need = [&](int k) {
@@ -102,6 +109,16 @@ int main(int argc, char** argv) {
       else if (a == "--window") need(1), window = std::stoi(argv[++i]);
       else if (a == "--taper") need(1), taper = std::stod(argv[++i]);
       else if (a == "--l2") l2 = true;
+      else if (a == "--dump") need(1), dump = argv[++i];
+      else if (a == "--quadratic") need(1), quad = std::stoi(argv[++i]);
+      else if (a == "--support") need(1), cut = std::stod(argv[++i]);
+      else if (a == "--adaptive") need(1), adaptive = std::stoi(argv[++i]);
+      else if (a == "--taper-min") need(1), tmin = std::stod(argv[++i]);
+      else if (a == "--taper-max") need(1), tmax = std::stod(argv[++i]);
+      else if (a == "--curvature-ref") need(1), cref = std::stod(argv[++i]);
+      else if (a == "--tolerance") need(1), tol = std::stod(argv[++i]);
+      else if (a == "--stage-tolerance") need(1), stol = std::stod(argv[++i]);
+      else if (a == "--stage-iterations") need(1), sit = std::stoi(argv[++i]);
       else if (a == "--render8") need(2), r_in = argv[++i], r_out = argv[++i];
       else {
         std::fprintf(stderr, "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n");
@@ -142,7 +159,19 @@ int main(int argc, char** argv) {
       po.lsm.window = window;
       po.lsm.taper = taper;
       po.lsm.l1 = !l2;
+      if (quad >= 0) po.lsm.quadratic = quad != 0;
+      if (cut >= 0) po.lsm.support = cut;
+      if (adaptive >= 0) po.lsm.adaptive = adaptive != 0;
+      if (tmin > 0) po.lsm.taper_min = tmin;
+      if (tmax > 0) po.lsm.taper_max = tmax;
+      if (cref > 0) po.lsm.curvature_ref = cref;
+      if (tol > 0) po.lsm.tolerance = tol;
+      if (stol > 0) po.lsm.stage_tolerance = stol;
+      if (sit > 0) po.lsm.stage_iterations = sit;
       const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+      FILE* df = dump.empty() ? nullptr : std::fopen(dump.c_str(), "w");
+      if (df)
+        std::fprintf(df, "# pair x1 y1 ex ey kex key J11 J12 J21 J22 Hx_uu Hx_uv Hx_vv Hy_uu Hy_uv Hy_vv sigma corr tx2 ty2\n");
       std::vector<tpkit::Matches> ms;
       for (auto& p : pairs) {
         auto t0 = std::chrono::steady_clock::now();
@@ -157,6 +186,26 @@ int main(int argc, char** argv) {
           Eigen::Vector2d tr = scene.project(p[1], *X);
           eraw.push_back((Eigen::Vector2d(m.extra.values(r, ckx), m.extra.values(r, cky)) - tr).norm());
           eref.push_back((Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3)) - tr).norm());
+          if (df) {
+            // true local map f(d) = project(view 2, ground_point(view 1, p1 + d)): Jacobian and Hessians
+            // by central differences (step 1 px)
+            auto f = [&](double u, double v) -> Eigen::Vector2d {
+              auto G = ground_of(scene, p[0], m.xy(r, 0) + u, m.xy(r, 1) + v);
+              return G ? scene.project(p[1], *G) : Eigen::Vector2d(NAN, NAN);
+            };
+            const double hs = 1.0;
+            Eigen::Vector2d f0 = f(0, 0), fu = f(hs, 0), fm = f(-hs, 0), fv = f(0, hs), fn = f(0, -hs);
+            Eigen::Vector2d fuv = (f(hs, hs) - f(hs, -hs) - f(-hs, hs) + f(-hs, -hs)) / (4 * hs * hs);
+            Eigen::Vector2d Ju = (fu - fm) / (2 * hs), Jv = (fv - fn) / (2 * hs);
+            Eigen::Vector2d Huu = (fu - 2 * f0 + fm) / (hs * hs), Hvv = (fv - 2 * f0 + fn) / (hs * hs);
+            Eigen::Vector2d e = Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3)) - tr;
+            Eigen::Vector2d ek = Eigen::Vector2d(m.extra.values(r, ckx), m.extra.values(r, cky)) - tr;
+            int cs = m.extra.find("sigma"), cc = m.extra.find("corr");
+            std::fprintf(df, "%d%d %.3f %.3f %.5f %.5f %.4f %.4f %.5f %.5f %.5f %.5f %.6f %.6f %.6f %.6f %.6f %.6f %.5f %.4f %.4f %.4f\n",
+                         p[0] + 1, p[1] + 1, m.xy(r, 0), m.xy(r, 1), e.x(), e.y(), ek.x(), ek.y(), Ju.x(), Jv.x(), Ju.y(),
+                         Jv.y(), Huu.x(), fuv.x(), Hvv.x(), Huu.y(), fuv.y(), Hvv.y(), m.extra.values(r, cs),
+                         m.extra.values(r, cc), tr.x(), tr.y());
+          }
         }
         std::printf("pair view%d-view%d: keypoints %ld/%ld, verified %ld, refined %ld, %.2f s\n", p[0] + 1, p[1] + 1,
                     st.keypoints1, st.keypoints2, st.verified, st.refined, dt);
@@ -165,6 +214,7 @@ int main(int argc, char** argv) {
         print("refined LSM (x2, y2)", df);
         ms.push_back(std::move(m));
       }
+      if (df) std::fclose(df);
       tpkit::ChainOptions co;
       co.images = {v[0], v[1], v[2]};
       tpkit::ChainStats cs;

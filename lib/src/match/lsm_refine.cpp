@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -22,53 +23,163 @@ const char* to_string(LsmStatus s) {
 }
 
 namespace {
+// Keys (a = -0.5) weights of the samples at offsets -1, 0, 1, 2 for the fractional position t in [0, 1),
+// and their derivatives d/dt.
 inline void keys(double t, double w[4], double dw[4]) {
-  // weights of samples at offsets -1, 0, 1, 2 for fractional position t in [0, 1), and d/dt
-  const double a = -0.5;
-  auto k = [a](double s) {
-    s = std::abs(s);
-    if (s < 1) return ((a + 2) * s - (a + 3)) * s * s + 1;
-    if (s < 2) return ((a * s - 5 * a) * s + 8 * a) * s - 4 * a;
-    return 0.0;
-  };
-  auto dk = [a](double s) {  // derivative of k(s) with respect to s
-    double as = std::abs(s), sg = s < 0 ? -1.0 : 1.0;
-    if (as < 1) return sg * (3 * (a + 2) * as * as - 2 * (a + 3) * as);
-    if (as < 2) return sg * (3 * a * as * as - 10 * a * as + 8 * a);
-    return 0.0;
-  };
-  for (int i = 0; i < 4; ++i) {
-    double s = t - (i - 1);  // distance from sample i-1
-    w[i] = k(s);
-    dw[i] = dk(s);
-  }
+  const double t2 = t * t, t3 = t2 * t;
+  w[0] = -0.5 * t3 + t2 - 0.5 * t;
+  w[1] = 1.5 * t3 - 2.5 * t2 + 1;
+  w[2] = -1.5 * t3 + 2 * t2 + 0.5 * t;
+  w[3] = 0.5 * t3 - 0.5 * t2;
+  dw[0] = -1.5 * t2 + 2 * t - 0.5;
+  dw[1] = 4.5 * t2 - 5 * t;
+  dw[2] = -4.5 * t2 + 4 * t + 0.5;
+  dw[3] = 1.5 * t2 - t;
 }
-}  // namespace
 
-bool bicubic(const Raster& r, double x, double y, double& value, double* gx, double* gy) {
-  double lx = x - r.x0, ly = y - r.y0;
-  long ix = static_cast<long>(std::floor(lx)), iy = static_cast<long>(std::floor(ly));
+// Bicubic value and gradient at local (lx, ly) of r; false outside the support or on NaN.
+inline bool bicubic_local(const Raster& r, double lx, double ly, double& value, double& gx, double& gy) {
+  const double fx = std::floor(lx), fy = std::floor(ly);
+  const long ix = static_cast<long>(fx), iy = static_cast<long>(fy);
   if (ix < 1 || iy < 1 || ix + 2 >= r.width || iy + 2 >= r.height) return false;
   double wx[4], dwx[4], wy[4], dwy[4];
-  keys(lx - ix, wx, dwx);
-  keys(ly - iy, wy, dwy);
+  keys(lx - fx, wx, dwx);
+  keys(ly - fy, wy, dwy);
+  const float* row = r.data.data() + static_cast<size_t>(iy - 1) * r.width + (ix - 1);
   double v = 0, vx = 0, vy = 0;
-  for (int j = 0; j < 4; ++j) {
-    const float* row = r.data.data() + static_cast<size_t>(iy - 1 + j) * r.width + (ix - 1);
-    double s = 0, sx = 0;
-    for (int i = 0; i < 4; ++i) {
-      s += wx[i] * row[i];
-      sx += dwx[i] * row[i];
-    }
+  for (int j = 0; j < 4; ++j, row += r.width) {
+    const double a0 = row[0], a1 = row[1], a2 = row[2], a3 = row[3];
+    const double s = wx[0] * a0 + wx[1] * a1 + wx[2] * a2 + wx[3] * a3;
+    const double sx = dwx[0] * a0 + dwx[1] * a1 + dwx[2] * a2 + dwx[3] * a3;
     v += wy[j] * s;
     vx += wy[j] * sx;
     vy += dwy[j] * s;
   }
   if (std::isnan(v)) return false;
   value = v;
+  gx = vx;
+  gy = vy;
+  return true;
+}
+}  // namespace
+
+bool bicubic(const Raster& r, double x, double y, double& value, double* gx, double* gy) {
+  double vx, vy;
+  if (!bicubic_local(r, x - r.x0, y - r.y0, value, vx, vy)) return false;
   if (gx) *gx = vx;
   if (gy) *gy = vy;
   return true;
+}
+namespace {
+constexpr int kMaxP = 14;  // p2 (2), A (4), r0, r1, quadratic terms (6)
+
+// Per-thread scratch, so that a call allocates nothing once the thread has seen the window size.
+// Pixels are held in order of increasing distance of their integer offset from the window centre, so
+// that the pixels within a radius are a prefix.
+struct Scratch {
+  int w = -1;
+  std::vector<int> oi, oj, or2;  // integer offsets from the centre pixel, and their squared radius
+  std::vector<double> du, dv, t, tap, g, gx, gy, r, wt;
+  void prepare(int win) {
+    if (win == w) return;
+    w = win;
+    const int h = w / 2, n = w * w;
+    std::vector<int> idx(n);
+    for (int k = 0; k < n; ++k) idx[k] = k;
+    auto r2 = [&](int k) { return (k % w - h) * (k % w - h) + (k / w - h) * (k / w - h); };
+    std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) { return r2(a) < r2(b); });
+    oi.resize(n), oj.resize(n), or2.resize(n);
+    for (int k = 0; k < n; ++k) oi[k] = idx[k] % w - h, oj[k] = idx[k] / w - h, or2[k] = r2(idx[k]);
+    for (auto* v : {&du, &dv, &t, &tap, &g, &gx, &gy, &r, &wt}) v->resize(n);
+  }
+  // number of pixels within `radius` of the centre pixel
+  int within(double radius) const {
+    const double R2 = radius * radius;
+    return static_cast<int>(std::upper_bound(or2.begin(), or2.end(), R2, [](double x, int v) { return x < v; }) - or2.begin());
+  }
+};
+
+// Lower triangle of the normal matrix (row-major) and the right-hand side, P parameters.
+template <int P>
+struct Normal {
+  double N[P * (P + 1) / 2];
+  double b[P];
+};
+
+// Accumulates the weighted normal equations of the first m pixels. Jacobian row of the residual
+// r = r0 + r1 g(q(d)) - t: r1 gx (1, u, v), r1 gy (1, u, v) in the order p2x, p2y, a11, a12, a21, a22;
+// then 1, g; then (P = 14) r1 gx (U, W, V), r1 gy (U, W, V) with U = qs u^2, W = qs u v, V = qs v^2.
+template <int P>
+void accumulate(const Scratch& s, int m, double r1, double qs, Normal<P>& ne, bool with_b) {
+  std::fill(std::begin(ne.N), std::end(ne.N), 0.0);
+  std::fill(std::begin(ne.b), std::end(ne.b), 0.0);
+  double j[P];
+  for (int k = 0; k < m; ++k) {
+    const double u = s.du[k], v = s.dv[k];
+    const double ax = r1 * s.gx[k], ay = r1 * s.gy[k];
+    j[0] = ax;
+    j[1] = ay;
+    j[2] = ax * u;
+    j[3] = ax * v;
+    j[4] = ay * u;
+    j[5] = ay * v;
+    j[6] = 1.0;
+    j[7] = s.g[k];
+    if constexpr (P > 8) {
+      const double U = qs * u * u, W = qs * u * v, V = qs * v * v;
+      j[8] = ax * U;
+      j[9] = ax * W;
+      j[10] = ax * V;
+      j[11] = ay * U;
+      j[12] = ay * W;
+      j[13] = ay * V;
+    }
+    const double w = s.wt[k];
+    int e = 0;
+    for (int a = 0; a < P; ++a) {
+      const double wa = w * j[a];
+      if (with_b) ne.b[a] += wa * s.r[k];
+      for (int c = 0; c <= a; ++c) ne.N[e++] += wa * j[c];
+    }
+  }
+}
+
+template <int P>
+Eigen::Matrix<double, P, P> full(const Normal<P>& ne) {
+  Eigen::Matrix<double, P, P> N;
+  for (int a = 0, e = 0; a < P; ++a)
+    for (int c = 0; c <= a; ++c, ++e) N(a, c) = N(c, a) = ne.N[e];
+  return N;
+}
+
+// Gauss-Newton step of the first P parameters; false when the system is singular or the step not finite.
+template <int P>
+bool gn_step(const Normal<P>& ne, Eigen::Matrix<double, kMaxP, 1>& delta) {
+  Eigen::LDLT<Eigen::Matrix<double, P, P>> ldlt(full<P>(ne));
+  if (ldlt.info() != Eigen::Success) return false;
+  Eigen::Matrix<double, P, 1> b = Eigen::Map<const Eigen::Matrix<double, P, 1>>(ne.b);
+  Eigen::Matrix<double, P, 1> d = -ldlt.solve(b);
+  if (!d.allFinite()) return false;
+  delta.setZero();
+  delta.template head<P>() = d;
+  return true;
+}
+
+template <int P>
+double var_p2(const Normal<P>& ne) {
+  Eigen::Matrix<double, P, P> C = full<P>(ne).ldlt().solve(Eigen::Matrix<double, P, P>::Identity());
+  return 0.5 * (C(0, 0) + C(1, 1));
+}
+}  // namespace
+
+double lsm_curvature(const Eigen::Matrix<double, 6, 1>& H) {
+  // second derivatives: d2x/du2 = 2 H0, d2x/dudv = H1, d2x/dv2 = 2 H2 (y: H3..H5)
+  double s = 0;
+  for (int c = 0; c < 2; ++c) {
+    const double a = 2 * H(3 * c), b = H(3 * c + 1), d = 2 * H(3 * c + 2);
+    s += a * a + 2 * b * b + d * d;
+  }
+  return std::sqrt(s);
 }
 
 LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector2d& p1, const Eigen::Vector2d& p2,
@@ -77,110 +188,124 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   res.p2 = p2;
   res.A = A0;
   const int h = o.window / 2, w = 2 * h + 1, n = w * w;
+  thread_local Scratch s;
+  s.prepare(w);
   // template (fixed): image 1's own pixels around p1, no resampling; offsets d from p1 are fractional
-  std::vector<double> t(n), du(n), dv(n);
-  double mt = 0;
   const long cx = std::lround(p1.x()), cy = std::lround(p1.y());
-  for (int j = 0, k = 0; j < w; ++j)
-    for (int i = 0; i < w; ++i, ++k) {
-      long X = cx + i - h, Y = cy + j - h;
-      du[k] = X - p1.x();
-      dv[k] = Y - p1.y();
-      long lx = X - img1.x0, ly = Y - img1.y0;
-      if (lx < 0 || ly < 0 || lx >= img1.width || ly >= img1.height) {
-        res.status = LsmStatus::OutOfImage;
-        return res;
-      }
-      t[k] = img1.at(lx, ly);
-      if (std::isnan(t[k])) {
-        res.status = LsmStatus::Invalid;
-        return res;
-      }
-      mt += t[k];
+  const double fx = cx - p1.x(), fy = cy - p1.y();
+  double mt = 0;
+  for (int k = 0; k < n; ++k) {
+    const long X = cx + s.oi[k], Y = cy + s.oj[k];
+    const long lx = X - img1.x0, ly = Y - img1.y0;
+    if (lx < 0 || ly < 0 || lx >= img1.width || ly >= img1.height) {
+      res.status = LsmStatus::OutOfImage;
+      return res;
     }
+    s.du[k] = s.oi[k] + fx;
+    s.dv[k] = s.oj[k] + fy;
+    s.t[k] = img1.at(lx, ly);
+    if (std::isnan(s.t[k])) {
+      res.status = LsmStatus::Invalid;
+      return res;
+    }
+    mt += s.t[k];
+  }
   mt /= n;
   double st = 0;
-  for (double v : t) st += (v - mt) * (v - mt);
+  for (int k = 0; k < n; ++k) st += (s.t[k] - mt) * (s.t[k] - mt);
   st = std::sqrt(st / n);
   if (!(st > 1e-6 * (1 + std::abs(mt)))) {
     res.status = LsmStatus::Flat;
     return res;
   }
-  for (double& v : t) v = (v - mt) / st;
+  for (int k = 0; k < n; ++k) s.t[k] = (s.t[k] - mt) / st;
 
   // image 2 scaled once by the initial window's statistics, so that r0 ~ 0 and r1 ~ 1
+  const double ox = p2.x() - img2.x0, oy = p2.y() - img2.y0;
   double m2 = 0, s2 = 0;
-  {
-    std::vector<double> g(n);
-    for (int k = 0; k < n; ++k) {
-      Eigen::Vector2d q = p2 + A0 * Eigen::Vector2d(du[k], dv[k]);
-      if (!bicubic(img2, q.x(), q.y(), g[k])) {
-        res.status = LsmStatus::OutOfImage;
-        return res;
-      }
-      m2 += g[k];
-    }
-    m2 /= n;
-    for (double v : g) s2 += (v - m2) * (v - m2);
-    s2 = std::sqrt(s2 / n);
-    if (!(s2 > 1e-6 * (1 + std::abs(m2)))) {
-      res.status = LsmStatus::Flat;
+  for (int k = 0; k < n; ++k) {
+    const double u = s.du[k], v = s.dv[k];
+    if (!bicubic_local(img2, ox + A0(0, 0) * u + A0(0, 1) * v, oy + A0(1, 0) * u + A0(1, 1) * v, s.g[k], s.gx[k], s.gy[k])) {
+      res.status = LsmStatus::OutOfImage;
       return res;
     }
+    m2 += s.g[k];
+  }
+  m2 /= n;
+  for (int k = 0; k < n; ++k) s2 += (s.g[k] - m2) * (s.g[k] - m2);
+  s2 = std::sqrt(s2 / n);
+  if (!(s2 > 1e-6 * (1 + std::abs(m2)))) {
+    res.status = LsmStatus::Flat;
+    return res;
   }
   const double inv_s2 = 1.0 / s2;
 
-  // parameters: 0,1 p2; 2..5 A (a11 a12 a21 a22); 6 r0; 7 r1
-  Eigen::Matrix<double, 8, 1> th;
-  th << p2.x(), p2.y(), A0(0, 0), A0(0, 1), A0(1, 0), A0(1, 1), 0.0, 1.0;
-  Eigen::Matrix<double, 8, 8> N;
-  Eigen::Matrix<double, 8, 1> b;
-  std::vector<double> r(n), g(n), gx(n), gy(n), wgt(n, 1.0), taper(n, 1.0);
-  if (o.taper > 0)
-    for (int k = 0; k < n; ++k) taper[k] = std::exp(-(du[k] * du[k] + dv[k] * dv[k]) / (2 * o.taper * o.taper));
-  wgt = taper;
-  bool converged = false;
-  Eigen::Matrix<double, Eigen::Dynamic, 8> Jm(n, 8), WJ(n, 8);
-  Eigen::VectorXd wv(n), rv(n);
-  double sum_wr2 = 0;
-  auto evaluate = [&](const Eigen::Matrix<double, 8, 1>& p) -> bool {
-    for (int k = 0; k < n; ++k) {
-      double qx = p(0) + p(2) * du[k] + p(3) * dv[k];
-      double qy = p(1) + p(4) * du[k] + p(5) * dv[k];
-      double v, vx, vy;
-      if (!bicubic(img2, qx, qy, v, &vx, &vy)) return false;
-      g[k] = (v - m2) * inv_s2;
-      gx[k] = vx * inv_s2;
-      gy[k] = vy * inv_s2;
-      r[k] = p(6) + p(7) * g[k] - t[k];
+  // taper of the current stage and the pixels it uses (a prefix of m pixels)
+  int m = n;
+  double sigma_t = o.taper;
+  auto set_taper = [&](double sg) {
+    sigma_t = sg;
+    m = sg > 0 && o.support > 0 ? std::min(n, s.within(o.support * sg)) : n;
+    const double den = sg > 0 ? 1.0 / (2 * sg * sg) : 0.0;
+    for (int k = 0; k < m; ++k) s.tap[k] = sg > 0 ? std::exp(-(s.du[k] * s.du[k] + s.dv[k] * s.dv[k]) * den) : 1.0;
+  };
+  set_taper(o.taper);
+
+  // parameters: 0,1 p2; 2..5 A (a11 a12 a21 a22); 6 r0; 7 r1; 8..13 quadratic terms of x, y (u^2, uv, v^2) x qs
+  const double qscale = o.taper > 0 ? o.taper : std::max(1, h);
+  const double qs = 1.0 / (qscale * qscale);
+  Eigen::Matrix<double, kMaxP, 1> th = Eigen::Matrix<double, kMaxP, 1>::Zero();
+  th.head<8>() << p2.x(), p2.y(), A0(0, 0), A0(0, 1), A0(1, 0), A0(1, 1), 0.0, 1.0;
+  auto evaluate = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count) -> bool {
+    const double bx = p(0) - img2.x0, by = p(1) - img2.y0;
+    for (int k = 0; k < count; ++k) {
+      const double u = s.du[k], v = s.dv[k];
+      const double U = qs * u * u, W = qs * u * v, V = qs * v * v;
+      const double qx = bx + p(2) * u + p(3) * v + p(8) * U + p(9) * W + p(10) * V;
+      const double qy = by + p(4) * u + p(5) * v + p(11) * U + p(12) * W + p(13) * V;
+      double val, vx, vy;
+      if (!bicubic_local(img2, qx, qy, val, vx, vy)) return false;
+      s.g[k] = (val - m2) * inv_s2;
+      s.gx[k] = vx * inv_s2;
+      s.gy[k] = vy * inv_s2;
+      s.r[k] = p(6) + p(7) * s.g[k] - s.t[k];
     }
     return true;
   };
+  Normal<8> n8;
+  Normal<kMaxP> n14;
+  // stages: 0 affine (taper); 1 quadratic (taper); 2 quadratic with the taper chosen from stage 1's curvature
+  int stage = 0, P = 8, stage_start = 0;
+  bool converged = false, fallback = false;
   int it = 0;
+  Eigen::Matrix<double, kMaxP, 1> delta, th_affine = th;
   for (; it < o.max_iterations; ++it) {
-    if (!evaluate(th)) {
+    if (stage > 0 && it - stage_start >= o.stage_iterations) {
+      fallback = true;  // the quadratic stages did not settle: keep the affine solution
+      break;
+    }
+    if (!evaluate(th, m)) {
       res.status = LsmStatus::OutOfImage;
       return res;
     }
     // IRLS weights: plain least squares for the first two iterations, then L1
     if (o.l1 && it >= 2)
-      for (int k = 0; k < n; ++k) wgt[k] = taper[k] / std::max(std::abs(r[k]), o.eps);
-    const double r1 = th(7);
-    for (int k = 0; k < n; ++k) {
-      Jm.row(k) << r1 * gx[k], r1 * gy[k], r1 * gx[k] * du[k], r1 * gx[k] * dv[k], r1 * gy[k] * du[k], r1 * gy[k] * dv[k], 1.0, g[k];
-      wv(k) = wgt[k];
-      rv(k) = r[k];
+      for (int k = 0; k < m; ++k) s.wt[k] = s.tap[k] / std::max(std::abs(s.r[k]), o.eps);
+    else
+      for (int k = 0; k < m; ++k) s.wt[k] = s.tap[k];
+    bool ok;
+    if (P == 8) {
+      accumulate<8>(s, m, th(7), qs, n8, true);
+      ok = gn_step<8>(n8, delta);
+    } else {
+      accumulate<kMaxP>(s, m, th(7), qs, n14, true);
+      ok = gn_step<kMaxP>(n14, delta);
     }
-    WJ = Jm.array().colwise() * wv.array();
-    N.noalias() = WJ.transpose() * Jm;
-    b.noalias() = WJ.transpose() * rv;
-    Eigen::LDLT<Eigen::Matrix<double, 8, 8>> ldlt(N);
-    if (ldlt.info() != Eigen::Success) {
-      res.status = LsmStatus::Diverged;
-      return res;
-    }
-    Eigen::Matrix<double, 8, 1> delta = -ldlt.solve(b);
-    if (!delta.allFinite()) {
+    if (!ok) {
+      if (stage > 0) {
+        fallback = true;
+        break;
+      }
       res.status = LsmStatus::Diverged;
       return res;
     }
@@ -189,53 +314,90 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     if (step > 1.0) delta *= 1.0 / step;
     th += delta;
     if ((th.head<2>() - p2).norm() > 3 * o.max_shift + 2) {
+      if (stage > 0) {
+        fallback = true;
+        break;
+      }
       res.status = LsmStatus::Diverged;
       return res;
     }
-    if (step < o.tolerance && (!o.l1 || it >= 3)) {
+    if (step < (stage == 0 ? o.tolerance : o.stage_tolerance) && (!o.l1 || it >= 3)) {
+      if (stage == 0 && o.quadratic) {
+        stage = 1;
+        stage_start = it + 1;
+        P = kMaxP;
+        th_affine = th;
+        continue;
+      }
+      if (stage == 1 && o.adaptive) {
+        stage = 2;
+        Eigen::Matrix<double, 6, 1> H = th.segment<6>(8) * qs;
+        const double c = lsm_curvature(H);
+        double sg = c > 0 ? o.taper * std::pow(c / o.curvature_ref, -0.25) : o.taper_max;
+        sg = std::clamp(sg, o.taper_min, o.taper_max);
+        if (std::abs(sg - sigma_t) > 0.25) {
+          set_taper(sg);
+          stage_start = it + 1;
+          continue;
+        }
+      }
       converged = true;
       ++it;
       break;
     }
   }
+  if (fallback) {
+    // back to the converged affine solution, with its taper and its L1 weights
+    th = th_affine;
+    P = 8;
+    set_taper(o.taper);
+    if (!evaluate(th, m)) {
+      res.status = LsmStatus::OutOfImage;
+      return res;
+    }
+    for (int k = 0; k < m; ++k) s.wt[k] = o.l1 ? s.tap[k] / std::max(std::abs(s.r[k]), o.eps) : s.tap[k];
+    converged = true;
+  }
   res.iterations = it;
+  res.quadratic = P > 8;
+  res.taper = sigma_t;
   res.p2 = th.head<2>();
   res.A << th(2), th(3), th(4), th(5);
   res.r0 = th(6);
   res.r1 = th(7);
+  res.H = th.segment<6>(8) * qs;
   if (!converged) {
     res.status = LsmStatus::NotConverged;
     return res;
   }
-  // final residuals, covariance and correlation at the solution
-  if (!evaluate(th)) {
+  // final residuals, covariance and correlation at the solution (weights of the last iteration)
+  if (!evaluate(th, n)) {
     res.status = LsmStatus::OutOfImage;
     return res;
   }
   {
-    sum_wr2 = 0;
-    const double r1 = th(7);
-    for (int k = 0; k < n; ++k) {
-      Jm.row(k) << r1 * gx[k], r1 * gy[k], r1 * gx[k] * du[k], r1 * gx[k] * dv[k], r1 * gy[k] * du[k], r1 * gy[k] * dv[k], 1.0, g[k];
-      wv(k) = wgt[k];
-      sum_wr2 += wgt[k] * r[k] * r[k];
+    double sum_wr2 = 0;
+    for (int k = 0; k < m; ++k) sum_wr2 += s.wt[k] * s.r[k] * s.r[k];
+    double var;
+    if (P == 8) {
+      accumulate<8>(s, m, th(7), qs, n8, false);
+      var = var_p2<8>(n8);
+    } else {
+      accumulate<kMaxP>(s, m, th(7), qs, n14, false);
+      var = var_p2<kMaxP>(n14);
     }
-    WJ = Jm.array().colwise() * wv.array();
-    N.noalias() = WJ.transpose() * Jm;
-    Eigen::Matrix<double, 8, 8> C = N.ldlt().solve(Eigen::Matrix<double, 8, 8>::Identity());
-    double s0 = sum_wr2 / std::max(1, n - 8);
-    double var = s0 * 0.5 * (C(0, 0) + C(1, 1));
+    var *= sum_wr2 / std::max(1, m - P);
     res.sigma = var > 0 && std::isfinite(var) ? std::sqrt(var) : 0;
   }
   {
     double mg = 0;
-    for (double v : g) mg += v;
+    for (int k = 0; k < n; ++k) mg += s.g[k];
     mg /= n;
     double sgg = 0, stg = 0, stt = 0;
     for (int k = 0; k < n; ++k) {
-      sgg += (g[k] - mg) * (g[k] - mg);
-      stg += (g[k] - mg) * t[k];
-      stt += t[k] * t[k];
+      sgg += (s.g[k] - mg) * (s.g[k] - mg);
+      stg += (s.g[k] - mg) * s.t[k];
+      stt += s.t[k] * s.t[k];
     }
     res.corr = sgg > 0 ? stg / std::sqrt(sgg * stt) : 0;
   }

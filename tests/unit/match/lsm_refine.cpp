@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -143,4 +144,85 @@ TEST(Lsm, DropsFlatAndFarAndNodata) {
   EXPECT_FALSE(lsm_refine(I1, I2, {55, 58}, {55, 58}, Eigen::Matrix2d::Identity(), o).ok());
   // window leaving the image
   EXPECT_EQ(lsm_refine(I1, I2, {3, 58}, {3, 58}, Eigen::Matrix2d::Identity(), o).status, LsmStatus::OutOfImage);
+}
+
+TEST(Lsm, QuadraticStageRemovesCurvatureBias) {
+  // image 2 = image 1 under a known quadratic warp x2 = c + B (x1 - c) + (0, k |x1 - c|^2): the affine
+  // window estimates the window average of the warp, biased by about k x 2 taper^2 along y at the
+  // centre; the quadratic stage follows it.
+  Texture tex(13);
+  const long S = 160;
+  const Eigen::Vector2d c(80, 80);
+  const double kq = 0.004;  // px^-1
+  Eigen::Matrix2d B;
+  B << 1.02, 0.0, -0.05, 1.1;
+  auto warp = [&](const Eigen::Vector2d& x1) {
+    Eigen::Vector2d d = x1 - c;
+    return Eigen::Vector2d(c + B * d + Eigen::Vector2d(0, kq * d.squaredNorm()));
+  };
+  // render image 2 by inverting the warp per subsample (Newton), so that I2(warp(x1)) = I1(x1)
+  Raster I1 = render(tex, S, Eigen::Matrix2d::Identity(), c, 300, 1000, 1.0, 7);
+  Raster I2;
+  I2.width = I2.height = S;
+  I2.data.resize(S * S);
+  std::mt19937 rng(8);
+  std::normal_distribution<double> g(0, 1.0);
+  for (long y = 0; y < S; ++y)
+    for (long x = 0; x < S; ++x) {
+      double sum = 0;
+      for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+          Eigen::Vector2d q(x - 0.375 + 0.25 * i, y - 0.375 + 0.25 * j), p = c + B.inverse() * (q - c);
+          for (int it = 0; it < 20; ++it) {
+            Eigen::Vector2d d = p - c;
+            Eigen::Matrix2d J = B;
+            J.row(1) += Eigen::RowVector2d(2 * kq * d.x(), 2 * kq * d.y());
+            p -= J.inverse() * (warp(p) - q);
+          }
+          sum += tex(p.x() - c.x(), p.y() - c.y());
+        }
+      I2.at(x, y) = static_cast<float>(900 + 280 * sum / 16 + g(rng));
+    }
+  LsmOptions aff;
+  LsmOptions quad;
+  quad.quadratic = true;
+  quad.adaptive = false;
+  std::vector<double> ea, eq;
+  for (double px : {62.3, 78.0, 91.7})
+    for (double py : {64.1, 80.5, 94.4}) {
+      Eigen::Vector2d p1(px, py), truth = warp(p1);
+      Eigen::Matrix2d J = B;
+      J.row(1) += Eigen::RowVector2d(2 * kq * (px - c.x()), 2 * kq * (py - c.y()));
+      LsmResult a = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.4, -0.3), J, aff);
+      LsmResult q = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.4, -0.3), J, quad);
+      ASSERT_TRUE(a.ok()) << to_string(a.status);
+      ASSERT_TRUE(q.ok()) << to_string(q.status);
+      EXPECT_TRUE(q.quadratic);
+      ea.push_back((a.p2 - truth).norm());
+      eq.push_back((q.p2 - truth).norm());
+      // second derivative of y along u and v: 2 kq each
+      EXPECT_NEAR(2 * q.H(3), 2 * kq, 0.002);
+      EXPECT_NEAR(2 * q.H(5), 2 * kq, 0.002);
+    }
+  std::sort(ea.begin(), ea.end());
+  std::sort(eq.begin(), eq.end());
+  EXPECT_GT(ea[ea.size() / 2], 0.04);  // the affine bias (about 2 kq taper^2 = 0.07 px less the weighting)
+  EXPECT_LT(eq[eq.size() / 2], 0.015);
+  EXPECT_LT(eq.back(), 0.03);
+}
+
+TEST(Lsm, SupportDiscChangesLittle) {
+  // only pixels within 3 taper sigmas: the same solution to well below the accuracy
+  Texture tex(21);
+  const Eigen::Vector2d c(80, 80);
+  Raster I1 = render(tex, 160, Eigen::Matrix2d::Identity(), c, 300, 1000, 2.0, 9);
+  Raster I2 = render(tex, 160, Eigen::Matrix2d::Identity(), c + Eigen::Vector2d(0.3, 0.45), 300, 1000, 2.0, 10);
+  LsmOptions full, disc;
+  full.support = 0;
+  disc.support = 3;
+  LsmResult a = lsm_refine(I1, I2, {70.2, 85.6}, {70.2, 85.6}, Eigen::Matrix2d::Identity(), full);
+  LsmResult b = lsm_refine(I1, I2, {70.2, 85.6}, {70.2, 85.6}, Eigen::Matrix2d::Identity(), disc);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_LT((a.p2 - b.p2).norm(), 0.005);
+  EXPECT_LT((b.p2 - Eigen::Vector2d(70.5, 86.05)).norm(), 0.03);
 }
