@@ -34,7 +34,7 @@ struct PairMatchOptions {
   bool refine = true;
   LsmOptions lsm;
   std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
-  long refine_tile = 256;         // image-1 region refined at a time (bounded memory, one per thread)
+  long refine_tile = 256;         // rows of the image-1 bands refined one after the other (bounded memory)
   int threads = 1;
   bool progress = false;
 };

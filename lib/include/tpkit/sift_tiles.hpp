@@ -1,6 +1,6 @@
 // SIFT keypoints of one image band, found tile by tile on an 8-bit percentile-stretched rendering
 // (image_tiles.hpp), with stable ids. Positions are in the full image's pixels (x = column, y = row,
-// (0, 0) the centre of the top-left pixel). Memory is bounded by one tile per worker plus the
+// (0, 0) the centre of the top-left pixel). Memory is bounded by one band of tiles (a tile row, full width) and one tile per worker plus the
 // keypoints and their 128-byte descriptors.
 //
 // Ids: keypoints are sorted by (y, x, size, angle, response) and numbered from 0, so the same image,

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -148,63 +149,65 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
     recs[j] = {K1.id[m.i1], K2.id[m.i2], k1.pt.x, k1.pt.y, k2.pt.x, k2.pt.y, k2.pt.x, k2.pt.y, 0, 0, true, LsmStatus::Ok};
   }
   if (o.refine && !recs.empty()) {
-    std::vector<Tile> tiles = tile_grid(a.info.width, a.info.height, o.refine_tile, 0);
-    std::vector<std::vector<size_t>> by_tile(tiles.size());
-    long nx = (a.info.width + o.refine_tile - 1) / o.refine_tile;
+    // Image 1 in bands of refine_tile rows, one after the other: each band's region of image 1 and the
+    // region of image 2 its windows reach are read once (a strip-stored file is decoded about once in
+    // all), and the band's points are refined in parallel. A band whose image-2 region would be too
+    // large (strong rotation between the images) is split along x until it fits.
+    std::vector<Eigen::Matrix2d> A0(recs.size());
     for (size_t j = 0; j < recs.size(); ++j) {
-      // find the tile whose core holds x1 (cores of tile_grid are an even split)
-      size_t best = 0;
-      for (size_t t = 0; t < tiles.size(); ++t)
-        if (recs[j].x1 + 0.5 >= tiles[t].cx0 && recs[j].x1 + 0.5 < tiles[t].cx1 && recs[j].y1 + 0.5 >= tiles[t].cy0 &&
-            recs[j].y1 + 0.5 < tiles[t].cy1) {
-          best = t;
-          break;
-        }
-      by_tile[best].push_back(j);
+      const auto& m = put[ver[j]];
+      A0[j] = keypoint_affine(K1.kp[m.i1].size, K1.kp[m.i1].angle, K2.kp[m.i2].size, K2.kp[m.i2].angle);
     }
-    (void)nx;
+    const long B = std::max(16L, o.refine_tile);
+    std::vector<std::vector<size_t>> bands(static_cast<size_t>((a.info.height + B - 1) / B) + 1);
+    for (size_t j = 0; j < recs.size(); ++j)
+      bands[std::clamp<size_t>(static_cast<size_t>(std::max(0.0, recs[j].y1 + 0.5) / B), 0, bands.size() - 1)].push_back(j);
     std::unique_ptr<Progress> pr;
     if (o.progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
     const int h = o.lsm.window / 2;
-    parallel_for(tiles.size(), o.threads, [&](size_t t) {
-      const auto& js = by_tile[t];
+    const double max_area = 64.0 * 1024 * 1024;  // pixels of an image-2 region (256 MB as float)
+    std::function<void(std::vector<size_t>&)> refine_group = [&](std::vector<size_t>& js) {
       if (js.empty()) return;
       // regions that hold every window (plus the interpolation support and the allowed drift)
       double ax0 = 1e300, ay0 = 1e300, ax1 = -1e300, ay1 = -1e300, bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
-      std::vector<Eigen::Matrix2d> A0(js.size());
-      for (size_t q = 0; q < js.size(); ++q) {
-        const Rec& r = recs[js[q]];
-        const auto& m = put[ver[js[q]]];
-        A0[q] = keypoint_affine(K1.kp[m.i1].size, K1.kp[m.i1].angle, K2.kp[m.i2].size, K2.kp[m.i2].angle);
-        double ext1 = h * std::sqrt(2.0) + 3;
-        double ext2 = h * std::sqrt(2.0) * A0[q].norm() * 1.5 + o.lsm.max_shift * 3 + 6;
-        ax0 = std::min(ax0, r.x1 - ext1);
-        ax1 = std::max(ax1, r.x1 + ext1);
-        ay0 = std::min(ay0, r.y1 - ext1);
-        ay1 = std::max(ay1, r.y1 + ext1);
-        bx0 = std::min(bx0, r.kx2 - ext2);
-        bx1 = std::max(bx1, r.kx2 + ext2);
-        by0 = std::min(by0, r.ky2 - ext2);
-        by1 = std::max(by1, r.ky2 + ext2);
+      for (size_t j : js) {
+        const Rec& r = recs[j];
+        const double ext1 = h * std::sqrt(2.0) + 3;
+        const double ext2 = h * std::sqrt(2.0) * A0[j].norm() * 1.5 + o.lsm.max_shift * 3 + 6;
+        ax0 = std::min(ax0, r.x1 - ext1), ax1 = std::max(ax1, r.x1 + ext1);
+        ay0 = std::min(ay0, r.y1 - ext1), ay1 = std::max(ay1, r.y1 + ext1);
+        bx0 = std::min(bx0, r.kx2 - ext2), bx1 = std::max(bx1, r.kx2 + ext2);
+        by0 = std::min(by0, r.ky2 - ext2), by1 = std::max(by1, r.ky2 + ext2);
       }
-      Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
-                                    (long)std::ceil(ay1 - ay0) + 2);
-      Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
-                                    (long)std::ceil(by1 - by0) + 2);
-      for (size_t q = 0; q < js.size(); ++q) {
-        Rec& r = recs[js[q]];
-        LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[q], o.lsm);
-        r.ok = L.ok();
-        r.status = L.status;
-        if (r.ok) {
-          r.x2 = L.p2.x();
-          r.y2 = L.p2.y();
-          r.sigma = L.sigma;
-          r.corr = L.corr;
+      if ((bx1 - bx0) * (by1 - by0) > max_area && js.size() > 1) {
+        std::sort(js.begin(), js.end(), [&](size_t p, size_t q) { return recs[p].x1 < recs[q].x1 || (recs[p].x1 == recs[q].x1 && p < q); });
+        std::vector<size_t> lo(js.begin(), js.begin() + static_cast<long>(js.size() / 2)), hi(js.begin() + static_cast<long>(js.size() / 2), js.end());
+        refine_group(lo);
+        refine_group(hi);
+        return;
+      }
+      const Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
+                                          (long)std::ceil(ay1 - ay0) + 2);
+      const Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
+                                          (long)std::ceil(by1 - by0) + 2);
+      const size_t chunk = 64;
+      parallel_for((js.size() + chunk - 1) / chunk, o.threads, [&](size_t c) {
+        for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
+          Rec& r = recs[js[q]];
+          LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], o.lsm);
+          r.ok = L.ok();
+          r.status = L.status;
+          if (r.ok) {
+            r.x2 = L.p2.x();
+            r.y2 = L.p2.y();
+            r.sigma = L.sigma;
+            r.corr = L.corr;
+          }
         }
-      }
+      });
       if (pr) pr->add(static_cast<long>(js.size()));
-    });
+    };
+    for (auto& js : bands) refine_group(js);
     if (pr) pr->done();
   }
 

@@ -34,8 +34,22 @@ struct TileResult {
   cv::Mat desc;
 };
 
-TileResult detect_tile(const ImageSource& src, const SiftOptions& o, const Stretch& st, const Tile& t) {
-  Raster r = read_valid_region(src, t.rx0, t.ry0, t.rx1 - t.rx0, t.ry1 - t.ry0);
+// The part [x0, x0 + w) x [y0, y0 + h) of a raster that holds it.
+Raster crop(const Raster& band, long x0, long y0, long w, long h) {
+  Raster r;
+  r.x0 = x0;
+  r.y0 = y0;
+  r.width = w;
+  r.height = h;
+  r.data.resize(static_cast<size_t>(w) * h);
+  for (long y = 0; y < h; ++y)
+    std::memcpy(r.data.data() + static_cast<size_t>(y) * w, &band.data[static_cast<size_t>(y0 - band.y0 + y) * band.width + (x0 - band.x0)],
+                static_cast<size_t>(w) * sizeof(float));
+  return r;
+}
+
+TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOptions& o, const Stretch& st, const Tile& t) {
+  Raster r = crop(band, t.rx0, t.ry0, t.rx1 - t.rx0, t.ry1 - t.ry0);
   std::vector<uint8_t> valid;
   std::vector<uint8_t> u8 = render_u8(r, st, &valid);
   cv::Mat img(static_cast<int>(r.height), static_cast<int>(r.width), CV_8U, u8.data());
@@ -85,32 +99,46 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
   K.tiles = static_cast<long>(tiles.size());
   std::vector<TileResult> res(tiles.size());
   threads = std::max(1, threads);
-  int workers = std::min<int>(threads, static_cast<int>(tiles.size()));
-  // OpenCV parallelises inside one tile; share the threads between tile workers and OpenCV
-  int saved = cv::getNumThreads();
-  cv::setNumThreads(std::max(1, threads / workers));
-  std::atomic<size_t> next{0};
+  // Tile rows one at a time: the row's band of the image (full width, with the overlaps) is read once
+  // and the row's tiles are cut from it, so that a file stored in strips is decoded once per row, not
+  // once per tile (a 10000-pixel-wide strip image would otherwise be decoded ten times over).
+  const int saved = cv::getNumThreads();
   std::exception_ptr err;
-  std::mutex m;
-  auto work = [&]() {
-    for (;;) {
-      size_t i = next++;
-      if (i >= tiles.size()) return;
-      try {
-        res[i] = detect_tile(src, o, K.stretch, tiles[i]);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(m);
-        if (!err) err = std::current_exception();
-        next = tiles.size();
-        return;
-      }
-      if (progress) progress->add(1);
+  for (size_t r0 = 0; r0 < tiles.size() && !err;) {
+    size_t r1 = r0;
+    long ya = tiles[r0].ry0, yb = tiles[r0].ry1;
+    while (r1 < tiles.size() && tiles[r1].cy0 == tiles[r0].cy0) {
+      ya = std::min(ya, tiles[r1].ry0);
+      yb = std::max(yb, tiles[r1].ry1);
+      ++r1;
     }
-  };
-  std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
+    const Raster band = read_valid_region(src, 0, ya, src.info.width, yb - ya);
+    const int workers = std::min<int>(threads, static_cast<int>(r1 - r0));
+    // OpenCV parallelises inside one tile; share the threads between tile workers and OpenCV
+    cv::setNumThreads(std::max(1, threads / workers));
+    std::atomic<size_t> next{r0};
+    std::mutex m;
+    auto work = [&]() {
+      for (;;) {
+        size_t i = next++;
+        if (i >= r1) return;
+        try {
+          res[i] = detect_tile(src, band, o, K.stretch, tiles[i]);
+        } catch (...) {
+          std::lock_guard<std::mutex> lock(m);
+          if (!err) err = std::current_exception();
+          next = r1;
+          return;
+        }
+        if (progress) progress->add(1);
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+    work();
+    for (auto& t : pool) t.join();
+    r0 = r1;
+  }
   cv::setNumThreads(saved);
   if (err) std::rethrow_exception(err);
 
