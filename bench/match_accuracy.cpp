@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
     int threads = std::max(1u, std::thread::hardware_concurrency());
     int window = 21;
     double taper = 3;
-    bool l2 = false;
+    bool l2 = false, global = false;
     std::string dump;
     int quad = -1;
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
@@ -109,6 +109,7 @@ int main(int argc, char** argv) {
       else if (a == "--window") need(1), window = std::stoi(argv[++i]);
       else if (a == "--taper") need(1), taper = std::stod(argv[++i]);
       else if (a == "--l2") l2 = true;
+      else if (a == "--global") global = true;
       else if (a == "--dump") need(1), dump = argv[++i];
       else if (a == "--quadratic") need(1), quad = std::stoi(argv[++i]);
       else if (a == "--support") need(1), cut = std::stod(argv[++i]);
@@ -159,6 +160,7 @@ int main(int argc, char** argv) {
       po.lsm.window = window;
       po.lsm.taper = taper;
       po.lsm.l1 = !l2;
+      po.guided = !global;
       if (quad >= 0) po.lsm.quadratic = quad != 0;
       if (cut >= 0) po.lsm.support = cut;
       if (adaptive >= 0) po.lsm.adaptive = adaptive != 0;
