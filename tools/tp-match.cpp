@@ -1,11 +1,16 @@
-// tp-match: sub-pixel tie points between two images (SIFT + affine F RANSAC + least-squares matching).
+// tp-match: sub-pixel tie points between two images (SIFT + affine F RANSAC + least-squares matching),
+// or between every pair of several images.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <chrono>
 #include <thread>
 
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
+#include "tpkit/keypoint_cache.hpp"
+#include "tpkit/parallel_for.hpp"
 #include "tpkit/match_pair.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -13,7 +18,8 @@ extern const char* const tpkit_man_page;
 
 namespace {
 struct Opts {
-  std::string img1, img2, out = "-", mask1, mask2;
+  std::vector<std::string> images;
+  std::string out = "-", mask1, mask2;
   int band = 1;
   std::optional<double> nodata;
   int threads = 0;
@@ -27,9 +33,10 @@ int main(int argc, char** argv) {
       "tp-match", argc, argv,
       [&](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<Opts>();
-        app.add_option("IMG1", o->img1, "image 1 (template side)")->required();
-        app.add_option("IMG2", o->img2, "image 2 (search side)")->required();
-        app.add_option("-o,--output", o->out, "output matches file (- = stdout)");
+        app.add_option("IMAGES", o->images, "IMG1 IMG2 (image 1 is the template side), or three or more images: every pair")
+            ->required()
+            ->expected(2, 1 << 16);
+        app.add_option("-o,--output", o->out, "output matches file (- = stdout); with more than two images, a folder");
         app.add_option("--band", o->band, "band, from 1")->check(CLI::PositiveNumber);
         app.add_option("--nodata", o->nodata, "nodata grey level (default: the GDAL_NODATA tag)");
         app.add_option("--mask1", o->mask1, "mask image of IMG1 (0 = invalid)");
@@ -81,18 +88,21 @@ int main(int argc, char** argv) {
           o->p.lsm.l1 = !o->l2;
           o->p.threads = o->threads > 0 ? o->threads : std::max(1u, std::thread::hardware_concurrency());
           o->p.progress = !o->quiet;
-          tpkit::ImageSource a = tpkit::open_image_source(o->img1, o->band - 1, o->nodata, o->mask1);
-          tpkit::ImageSource b = tpkit::open_image_source(o->img2, o->band - 1, o->nodata, o->mask2);
-          tpkit::PairMatchStats st;
-          tpkit::Matches m = tpkit::match_pair(a, b, o->p, &st);
-          if (!st.overlap)
-            tpkit::warn("no verified matches between " + o->img1 + " and " + o->img2 +
-                        " (do the images overlap?): writing a file with zero records");
-          tpkit::save_matches(o->out, m);
-          if (!o->quiet) {
-            std::cerr << "tp-match: keypoints " << st.keypoints1 << (st.cached1 ? " (cached)" : "") << " / " << st.keypoints2
-                      << (st.cached2 ? " (cached)" : "") << ", putative " << st.putative
-                      << ", verified " << st.verified << " (rms " << st.ransac_rms << " px)";
+          const size_t n = o->images.size();
+          if (n > 2 && (o->out == "-" || o->out.empty()))
+            throw tpkit::UsageError("with more than two images, -o must name a folder for the pair files");
+          if (n > 2 && (!o->mask1.empty() || !o->mask2.empty()))
+            throw tpkit::UsageError("--mask1 / --mask2 apply to two images only");
+          std::vector<tpkit::ImageSource> src;
+          for (size_t i = 0; i < n; ++i)
+            src.push_back(tpkit::open_image_source(o->images[i], o->band - 1, o->nodata, i == 0 ? o->mask1 : i == 1 ? o->mask2 : ""));
+          auto report = [&](const std::string& what, const tpkit::PairMatchStats& st) {
+            if (!st.overlap)
+              tpkit::warn("no verified matches between " + what + " (do the images overlap?): writing a file with zero records");
+            if (o->quiet) return;
+            std::cerr << "tp-match: " << (n > 2 ? what + ": " : std::string()) << "keypoints " << st.keypoints1
+                      << (st.cached1 ? " (cached)" : "") << " / " << st.keypoints2 << (st.cached2 ? " (cached)" : "")
+                      << ", putative " << st.putative << ", verified " << st.verified << " (rms " << st.ransac_rms << " px)";
             if (o->p.grid > 0) std::cerr << ", after grid " << st.gridded;
             if (o->p.refine) {
               std::cerr << ", refined " << st.refined;
@@ -106,7 +116,38 @@ int main(int argc, char** argv) {
             }
             std::cerr << "; seconds: detect " << st.seconds[0] << ", match " << st.seconds[1] << ", verify " << st.seconds[2]
                       << ", refine " << st.seconds[3] << "\n";
+          };
+          if (n == 2) {
+            tpkit::PairMatchStats st;
+            tpkit::Matches m = tpkit::match_pair(src[0], src[1], o->p, &st);
+            tpkit::save_matches(o->out, m);
+            report(o->images[0] + " and " + o->images[1], st);
+            return 0;
           }
+          // every pair: each image detected once, the images in parallel (one worker per image)
+          std::filesystem::create_directories(o->out);
+          std::vector<tpkit::Keypoints> K(n);
+          std::vector<char> cached(n, 0);
+          const auto t0 = std::chrono::steady_clock::now();
+          tpkit::parallel_for(n, o->p.threads, [&](size_t i) {
+            bool c = false;
+            const int per = std::max(1, o->p.threads / static_cast<int>(std::min<size_t>(n, o->p.threads)));
+            K[i] = tpkit::detect_sift_cached(src[i], o->p.sift, per, o->p.cache_dir, nullptr, &c);
+            cached[i] = c;
+          });
+          const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          if (!o->quiet) std::cerr << "tp-match: detected " << n << " images in " << detect_s << " s\n";
+          for (size_t i = 0; i < n; ++i)
+            for (size_t j = i + 1; j < n; ++j) {
+              tpkit::PairMatchStats st;
+              tpkit::Matches m = tpkit::match_keypoints(src[i], src[j], K[i], K[j], o->p, &st);
+              st.cached1 = cached[i];
+              st.cached2 = cached[j];
+              const std::string f =
+                  (std::filesystem::path(o->out) / ("pair-" + std::to_string(i + 1) + "-" + std::to_string(j + 1) + ".matches")).string();
+              tpkit::save_matches(f, m);
+              report(f, st);
+            }
           return 0;
         };
       },

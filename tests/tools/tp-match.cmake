@@ -29,6 +29,12 @@ tpkit_tool_test(tp-match.cache
   STDERR_MATCH "keypoints [0-9]+ \\(cached\\) / [0-9]+ \\(cached\\)")
 tpkit_tool_test(tp-match.guided-vs-global
   COMMAND "tp-synth --out s --size 384 --seed 4 && tp-match s/view1.tif s/view2.tif -q -o g.m && tp-match s/view1.tif s/view2.tif --global -q -o a.m && test $(grep -vc '^#' g.m) -ge $(grep -vc '^#' a.m) && grep -q '^# putative: .*guided: coarse affine F' g.m && grep -q '^# putative: .*; global)' a.m")
+# Three images: every pair, each file the same as a run on that pair alone.
+tpkit_tool_test(tp-match.every-pair
+  COMMAND "tp-synth --out s --size 384 --seed 4 --relief 30 && tp-match s/view1.tif s/view2.tif s/view3.tif -q -o pairs && tp-match s/view2.tif s/view3.tif -q -o b.m && cmp pairs/pair-2-3.matches b.m && test $(grep -vc '^#' pairs/pair-1-3.matches) -gt 50 && test $(ls pairs | wc -l) -eq 3")
+tpkit_tool_test(tp-match.every-pair-needs-folder
+  COMMAND "tp-synth --out s --size 128 --seed 1 && tp-match s/view1.tif s/view2.tif s/view3.tif"
+  EXPECT_FAIL STDERR_MATCH "with more than two images, -o must name a folder")
 tpkit_tool_test(tp-match.no-refine
   COMMAND "tp-synth --out s --size 256 --seed 5 && tp-match s/view1.tif s/view2.tif --no-refine -o raw.m && awk '!/^#/ && ($5 != $7 || $6 != $8) {bad++} END {exit bad > 0}' raw.m"
   CHECK_FILE raw.m FILE_MATCH "refinement: none.*# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\n[0-9]")

@@ -52,6 +52,11 @@ struct PairMatchStats {
 
 Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOptions& o, PairMatchStats* stats = nullptr);
 
+// The same from keypoints already detected (detect_sift_cached with o.sift) of a and b; the pipeline
+// from step 2 on. The descriptors are released once matched (shallow copies keep the caller's).
+Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
+                        PairMatchStats* stats = nullptr);
+
 // Initial local map image 1 -> image 2 from two SIFT keypoints: (size2 / size1) R(angle2 - angle1),
 // angles in OpenCV's convention (degrees, from +x towards +y in pixel coordinates).
 Eigen::Matrix2d keypoint_affine(double size1, double angle1_deg, double size2, double angle2_deg);

@@ -12,6 +12,7 @@
 #include "tpkit/affine_fundamental.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/keypoint_cache.hpp"
+#include "tpkit/parallel_for.hpp"
 #include "tpkit/text_table.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -26,36 +27,32 @@ Eigen::Matrix2d keypoint_affine(double size1, double angle1_deg, double size2, d
   return s * R;
 }
 
-namespace {
-template <class F>
-void parallel_for(size_t n, int threads, F&& f) {
-  std::atomic<size_t> next{0};
-  std::exception_ptr err;
-  std::mutex m;
-  auto work = [&]() {
-    for (;;) {
-      size_t i = next++;
-      if (i >= n) return;
-      try {
-        f(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(m);
-        if (!err) err = std::current_exception();
-        next = n;
-        return;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  int w = std::min<int>(std::max(1, threads), static_cast<int>(std::max<size_t>(1, n)));
-  for (int k = 1; k < w; ++k) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  if (err) std::rethrow_exception(err);
-}
-}  // namespace
 
 Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOptions& o, PairMatchStats* stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Keypoints K1, K2;
+  bool c1 = false, c2 = false;
+  {
+    std::unique_ptr<Progress> p1, p2;
+    if (o.progress) p1 = std::make_unique<Progress>("detect " + a.path, (long)tile_grid(a.info.width, a.info.height, o.sift.tile, o.sift.overlap).size());
+    K1 = detect_sift_cached(a, o.sift, o.threads, o.cache_dir, p1.get(), &c1);
+    if (p1) p1->done();
+    if (o.progress) p2 = std::make_unique<Progress>("detect " + b.path, (long)tile_grid(b.info.width, b.info.height, o.sift.tile, o.sift.overlap).size());
+    K2 = detect_sift_cached(b, o.sift, o.threads, o.cache_dir, p2.get(), &c2);
+    if (p2) p2->done();
+  }
+  Matches M = match_keypoints(a, b, std::move(K1), std::move(K2), o, stats);
+  if (stats) {
+    stats->cached1 = c1;
+    stats->cached2 = c2;
+    stats->seconds[0] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() -
+                        stats->seconds[1] - stats->seconds[2] - stats->seconds[3];
+  }
+  return M;
+}
+
+Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
+                        PairMatchStats* stats) {
   PairMatchStats st;
   Matches M;
   M.image1 = {a.path, a.info.width, a.info.height};
@@ -67,21 +64,9 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
     out = std::chrono::duration<double>(now - clock).count();
     clock = now;
   };
-  // 1. keypoints
-  Keypoints K1, K2;
-  {
-    std::unique_ptr<Progress> p1, p2;
-    if (o.progress) p1 = std::make_unique<Progress>("detect " + a.path, (long)tile_grid(a.info.width, a.info.height, o.sift.tile, o.sift.overlap).size());
-    K1 = detect_sift_cached(a, o.sift, o.threads, o.cache_dir, p1.get(), &st.cached1);
-    if (p1) p1->done();
-    if (o.progress) p2 = std::make_unique<Progress>("detect " + b.path, (long)tile_grid(b.info.width, b.info.height, o.sift.tile, o.sift.overlap).size());
-    K2 = detect_sift_cached(b, o.sift, o.threads, o.cache_dir, p2.get(), &st.cached2);
-    if (p2) p2->done();
-  }
   st.keypoints1 = static_cast<long>(K1.kp.size());
   st.keypoints2 = static_cast<long>(K2.kp.size());
 
-  lap(st.seconds[0]);
   // 2. putative matches
   std::vector<DescriptorMatch> put;
   if (o.guided) {
