@@ -124,17 +124,23 @@ int main(int argc, char** argv) {
             report(o->images[0] + " and " + o->images[1], st);
             return 0;
           }
-          // every pair: each image detected once, the images in parallel (one worker per image)
+          // every pair: each image detected once; whole groups of `threads` images run one per thread
+          // (parallel over images scales better than inside one detector), the rest share the threads
           std::filesystem::create_directories(o->out);
           std::vector<tpkit::Keypoints> K(n);
           std::vector<char> cached(n, 0);
           const auto t0 = std::chrono::steady_clock::now();
-          tpkit::parallel_for(n, o->p.threads, [&](size_t i) {
+          const size_t T = static_cast<size_t>(o->p.threads), whole = n / T * T;
+          auto detect = [&](size_t i, int threads) {
             bool c = false;
-            const int per = std::max(1, o->p.threads / static_cast<int>(std::min<size_t>(n, o->p.threads)));
-            K[i] = tpkit::detect_sift_cached(src[i], o->p.sift, per, o->p.cache_dir, nullptr, &c);
+            K[i] = tpkit::detect_sift_cached(src[i], o->p.sift, threads, o->p.cache_dir, nullptr, &c);
             cached[i] = c;
-          });
+          };
+          tpkit::parallel_for(whole, o->p.threads, [&](size_t i) { detect(i, 1); });
+          if (whole < n) {
+            const int per = std::max(1, o->p.threads / static_cast<int>(n - whole));
+            tpkit::parallel_for(n - whole, o->p.threads, [&](size_t i) { detect(whole + i, per); });
+          }
           const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           if (!o->quiet) std::cerr << "tp-match: detected " << n << " images in " << detect_s << " s\n";
           for (size_t i = 0; i < n; ++i)
