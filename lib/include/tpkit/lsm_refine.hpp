@@ -23,6 +23,9 @@
 // `stage_iterations` iterations (or breaks down) falls back to the affine solution.
 // Precision: the covariance sigma0^2 (J^T W J)^-1 of the final model with sigma0^2 = sum(w r^2) / (n - P);
 // `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error).
+// Arithmetic: the iterations interpolate image 2 in single precision (4 taps at a time) and build the
+// affine normal matrix in single precision, 4 pixels at a time; positions, residuals, the right-hand side
+// J^T W r (which fixes the solution) and the final covariance are double. Results do not depend on threads.
 #pragma once
 #include <Eigen/Core>
 #include <string>

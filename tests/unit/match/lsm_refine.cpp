@@ -226,3 +226,36 @@ TEST(Lsm, SupportDiscChangesLittle) {
   EXPECT_LT((a.p2 - b.p2).norm(), 0.005);
   EXPECT_LT((b.p2 - Eigen::Vector2d(70.5, 86.05)).norm(), 0.03);
 }
+
+TEST(Lsm, RegionOffsetAndTightCrop) {
+  // image 2 given as a region (x0, y0) a few pixels larger than the window and its interpolation
+  // support: the same solution as on the whole image; a region starting at the window's first column
+  // leaves no support on that side.
+  Texture tex(13);
+  const Eigen::Vector2d c(60, 60);
+  Raster I1 = render(tex, 120, Eigen::Matrix2d::Identity(), c, 300, 1000, 1.0, 7);
+  Raster I2 = render(tex, 120, Eigen::Matrix2d::Identity(), c + Eigen::Vector2d(0.4, -0.3), 300, 1000, 1.0, 8);
+  LsmOptions o;
+  o.support = 0;  // the whole 21 x 21 window
+  const Eigen::Vector2d p1(55.2, 58.7);
+  LsmResult full = lsm_refine(I1, I2, p1, p1, Eigen::Matrix2d::Identity(), o);
+  ASSERT_TRUE(full.ok()) << to_string(full.status);
+  auto crop = [&](long x0, long y0, long w, long h) {
+    Raster r;
+    r.x0 = x0, r.y0 = y0, r.width = w, r.height = h;
+    r.data.resize(static_cast<size_t>(w * h));
+    for (long y = 0; y < h; ++y)
+      for (long x = 0; x < w; ++x) r.at(x, y) = I2.at(x0 + x, y0 + y);
+    return r;
+  };
+  // window: p2 +- (10 + drift) px, plus the bicubic support (1 before, 2 after)
+  const long x0 = 55 - 13, y0 = 58 - 13, w = 28, h = 28;
+  LsmResult part = lsm_refine(I1, crop(x0, y0, w, h), p1, p1, Eigen::Matrix2d::Identity(), o);
+  ASSERT_TRUE(part.ok()) << to_string(part.status);
+  EXPECT_NEAR(part.p2.x(), full.p2.x(), 1e-9);
+  EXPECT_NEAR(part.p2.y(), full.p2.y(), 1e-9);
+  EXPECT_NEAR(part.sigma, full.sigma, 1e-9);
+  EXPECT_EQ(part.iterations, full.iterations);
+  // the window's first column falls on the region's first pixel: no support left of it
+  EXPECT_EQ(lsm_refine(I1, crop(55 - 10, y0, w, h), p1, p1, Eigen::Matrix2d::Identity(), o).status, LsmStatus::OutOfImage);
+}
