@@ -45,11 +45,16 @@ cv::Mat rows_of(const cv::Mat& m, const std::vector<int>& idx) {
   return out;
 }
 
-inline int dist2_u8(const uint8_t* a, const uint8_t* b) {
+// Squared L2 distance of two 128-byte descriptors, or some value > bound as soon as the partial sum
+// over whole 32-byte blocks exceeds `bound` (the rest cannot bring it back).
+inline int dist2_u8(const uint8_t* a, const uint8_t* b, int bound) {
   int s = 0;
-  for (int k = 0; k < 128; ++k) {
-    const int d = static_cast<int>(a[k]) - static_cast<int>(b[k]);
-    s += d * d;
+  for (int blk = 0; blk < 128; blk += 32) {
+    for (int k = blk; k < blk + 32; ++k) {
+      const int d = static_cast<int>(a[k]) - static_cast<int>(b[k]);
+      s += d * d;
+    }
+    if (s > bound) return s;
   }
   return s;
 }
@@ -206,8 +211,11 @@ GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1
               const int j = B.items[static_cast<size_t>(t)];
               const double dd = B.d[static_cast<size_t>(j)] - dp, ss = B.s[static_cast<size_t>(j)];
               if (std::abs(dd) > rd || ss < ws_lo || ss > ws_hi) continue;
-              const int d2 = dist2_u8(q, K2.desc.ptr<uint8_t>(j));
+              // a pair farther than both i's second best and j's best so far changes nothing
+              Best& r = bk[static_cast<size_t>(j)];
+              const int d2 = dist2_u8(q, K2.desc.ptr<uint8_t>(j), std::max(m2.dist, r.dist));
               ++cmp;
+              if (d2 > m2.dist && d2 > r.dist) continue;
               if (d2 < m1.dist || (d2 == m1.dist && j < m1.idx)) {
                 m2 = m1;
                 m1 = {d2, j};
@@ -216,7 +224,6 @@ GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1
               }
               if (std::abs(dd) <= g.band && ss >= s_lo && ss <= s_hi && (d2 < acc.dist || (d2 == acc.dist && j < acc.idx)))
                 acc = {d2, j};
-              Best& r = bk[static_cast<size_t>(j)];
               if (d2 < r.dist || (d2 == r.dist && i < r.idx)) r = {d2, i};
             }
           }
