@@ -1,5 +1,7 @@
 #include "tpkit/guided_matching.hpp"
 
+#include "tpkit/parallel_for.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
@@ -7,7 +9,6 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
-#include <thread>
 
 namespace tpkit {
 
@@ -239,10 +240,7 @@ GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1
     }
     compared[static_cast<size_t>(w)] = cmp;
   };
-  std::vector<std::thread> pool;
-  for (int w = 1; w < W; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (auto& t : pool) t.join();
+  parallel_for(static_cast<size_t>(W), W, [&](size_t w) { work(static_cast<int>(w)); });
 
   std::vector<Best> bj = std::move(back[0]);
   for (int w = 1; w < W; ++w)

@@ -1,17 +1,15 @@
 #include "tpkit/sift_tiles.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstring>
-#include <mutex>
 #include <numeric>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
-#include <thread>
 
 #include "tpkit/error.hpp"
+#include "tpkit/parallel_for.hpp"
 #include "tpkit/text_table.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -102,9 +100,11 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
   // Tile rows one at a time: the row's band of the image (full width, with the overlaps) is read once
   // and the row's tiles are cut from it, so that a file stored in strips is decoded once per row, not
   // once per tile (a 10000-pixel-wide strip image would otherwise be decoded ten times over).
-  const int saved = cv::getNumThreads();
-  std::exception_ptr err;
-  for (size_t r0 = 0; r0 < tiles.size() && !err;) {
+  struct RestoreThreads {
+    int n = cv::getNumThreads();
+    ~RestoreThreads() { cv::setNumThreads(n); }
+  } restore;
+  for (size_t r0 = 0; r0 < tiles.size();) {
     size_t r1 = r0;
     long ya = tiles[r0].ry0, yb = tiles[r0].ry1;
     while (r1 < tiles.size() && tiles[r1].cy0 == tiles[r0].cy0) {
@@ -116,31 +116,12 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
     const int workers = std::min<int>(threads, static_cast<int>(r1 - r0));
     // OpenCV parallelises inside one tile; share the threads between tile workers and OpenCV
     cv::setNumThreads(std::max(1, threads / workers));
-    std::atomic<size_t> next{r0};
-    std::mutex m;
-    auto work = [&]() {
-      for (;;) {
-        size_t i = next++;
-        if (i >= r1) return;
-        try {
-          res[i] = detect_tile(src, band, o, K.stretch, tiles[i]);
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(m);
-          if (!err) err = std::current_exception();
-          next = r1;
-          return;
-        }
-        if (progress) progress->add(1);
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int w = 1; w < workers; ++w) pool.emplace_back(work);
-    work();
-    for (auto& t : pool) t.join();
+    parallel_for(r1 - r0, workers, [&](size_t k) {
+      res[r0 + k] = detect_tile(src, band, o, K.stretch, tiles[r0 + k]);
+      if (progress) progress->add(1);
+    });
     r0 = r1;
   }
-  cv::setNumThreads(saved);
-  if (err) std::rethrow_exception(err);
 
   // Gather into the stable order. Tile cores split the rows into bands, so sorting by y first never
   // mixes two bands: gather band by band and free each band's tiles once copied. The output is
