@@ -1,16 +1,15 @@
 // tp-match: sub-pixel tie points between two images (SIFT + affine F RANSAC + least-squares matching),
 // or between every pair of several images.
+#include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <chrono>
 #include <thread>
 
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
 #include "tpkit/keypoint_cache.hpp"
-#include "tpkit/parallel_for.hpp"
 #include "tpkit/match_pair.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -124,23 +123,11 @@ int main(int argc, char** argv) {
             report(o->images[0] + " and " + o->images[1], st);
             return 0;
           }
-          // every pair: each image detected once; whole groups of `threads` images run one per thread
-          // (parallel over images scales better than inside one detector), the rest share the threads
+          // every pair: each image detected once
           std::filesystem::create_directories(o->out);
-          std::vector<tpkit::Keypoints> K(n);
-          std::vector<char> cached(n, 0);
           const auto t0 = std::chrono::steady_clock::now();
-          const size_t T = static_cast<size_t>(o->p.threads), whole = n / T * T;
-          auto detect = [&](size_t i, int threads) {
-            bool c = false;
-            K[i] = tpkit::detect_sift_cached(src[i], o->p.sift, threads, o->p.cache_dir, nullptr, &c);
-            cached[i] = c;
-          };
-          tpkit::parallel_for(whole, o->p.threads, [&](size_t i) { detect(i, 1); });
-          if (whole < n) {
-            const int per = std::max(1, o->p.threads / static_cast<int>(n - whole));
-            tpkit::parallel_for(n - whole, o->p.threads, [&](size_t i) { detect(whole + i, per); });
-          }
+          std::vector<char> cached;
+          std::vector<tpkit::Keypoints> K = tpkit::detect_sift_images(src, o->p.sift, o->p.threads, o->p.cache_dir, &cached);
           const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           if (!o->quiet) std::cerr << "tp-match: detected " << n << " images in " << detect_s << " s\n";
           for (size_t i = 0; i < n; ++i)

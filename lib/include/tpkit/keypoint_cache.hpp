@@ -11,6 +11,7 @@
 // parallel runs that share a folder only ever read whole files.
 #pragma once
 #include <string>
+#include <vector>
 
 #include "tpkit/sift_tiles.hpp"
 
@@ -28,5 +29,11 @@ void save_keypoints(const std::string& path, const std::string& identity, const 
 // detects and saves. `from_cache` (may be null) tells which.
 Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int threads, const std::string& dir,
                              Progress* progress = nullptr, bool* from_cache = nullptr);
+
+// Keypoints of several images (detect_sift_cached each). Whole groups of `threads` images run one per
+// thread (parallel over images scales better than inside one detector); the rest share the threads.
+// `from_cache` (may be null) gets one flag per image.
+std::vector<Keypoints> detect_sift_images(const std::vector<ImageSource>& src, const SiftOptions& o, int threads,
+                                          const std::string& dir, std::vector<char>* from_cache = nullptr);
 
 }  // namespace tpkit

@@ -1,13 +1,10 @@
 #include "tpkit/match_pair.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <functional>
 #include <memory>
-#include <mutex>
-#include <thread>
 
 #include "tpkit/affine_fundamental.hpp"
 #include "tpkit/error.hpp"
