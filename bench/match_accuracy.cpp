@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
     std::string dump;
     int quad = -1;
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
-    int adaptive = -1, sit = -1;
+    int adaptive = -1, sit = -1, epic = -1;
     double stol = -1;
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
       else if (a == "--global") global = true;
       else if (a == "--dump") need(1), dump = argv[++i];
       else if (a == "--quadratic") need(1), quad = std::stoi(argv[++i]);
+      else if (a == "--epipolar-curvature") need(1), epic = std::stoi(argv[++i]);
       else if (a == "--support") need(1), cut = std::stod(argv[++i]);
       else if (a == "--adaptive") need(1), adaptive = std::stoi(argv[++i]);
       else if (a == "--taper-min") need(1), tmin = std::stod(argv[++i]);
@@ -165,6 +166,7 @@ int main(int argc, char** argv) {
       if (quad >= 0) po.lsm.quadratic = quad != 0;
       if (cut >= 0) po.lsm.support = cut;
       if (adaptive >= 0) po.lsm.adaptive = adaptive != 0;
+      if (epic >= 0) po.lsm.epipolar_curvature = epic != 0;
       if (tmin > 0) po.lsm.taper_min = tmin;
       if (tmax > 0) po.lsm.taper_max = tmax;
       if (cref > 0) po.lsm.curvature_ref = cref;

@@ -20,7 +20,10 @@
 // ones where it is smooth). The affine window estimates the window-averaged map, which is biased by
 // about taper^2 x (second derivative) on curved (steep) terrain; the quadratic model removes that
 // bias at the cost of more noise. A quadratic stage that does not reach `stage_tolerance` within
-// `stage_iterations` iterations (or breaks down) falls back to the affine solution.
+// `stage_iterations` iterations (or breaks down) falls back to the affine solution. With `epipolar_dir`
+// set, the quadratic terms act only along that direction of image 2 (3 parameters, H = e (K0, K1, K2)):
+// for affine views the parallax of the terrain moves a point only along the epipolar lines, so this is
+// the map's exact second-order form, with 3 fewer unknowns than the general one.
 // Precision: the covariance sigma0^2 (J^T W J)^-1 of the final model with sigma0^2 = sum(w r^2) / (n - P);
 // `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error).
 // Arithmetic: the iterations interpolate image 2 in single precision (4 taps at a time) and build the
@@ -49,7 +52,11 @@ struct LsmOptions {
   double curvature_ref = 0.0625;  // adaptive taper = taper * (curvature / curvature_ref)^(-1/4), px^-1
   double taper_min = 2.5, taper_max = 6;  // bounds of the adaptive taper, pixels
   double stage_tolerance = 3e-3;  // pixels, on the update of p2 in the quadratic stages
-  int stage_iterations = 10;  // a quadratic stage not converged after this many: keep the affine solution
+  int stage_iterations = 30;  // a quadratic stage not converged after this many: keep the affine solution
+  // Epipolar direction in image 2 (any length; zero = unknown). When given, the quadratic stages bend the
+  // map only along it: q(d) = p2 + A d + e (K0 u^2 + K1 u v + K2 v^2), 3 curvature terms instead of 6.
+  Eigen::Vector2d epipolar_dir = Eigen::Vector2d::Zero();
+  bool epipolar_curvature = true;  // match_keypoints: pass the verified affine F's epipolar direction
 };
 
 enum class LsmStatus { Ok, OutOfImage, Invalid, Flat, Diverged, NotConverged, Drifted, LowCorrelation };

@@ -145,8 +145,9 @@ struct Normal {
 // Accumulates the weighted normal equations of the first m pixels. Jacobian row of the residual
 // r = r0 + r1 g(q(d)) - t: r1 gx (1, u, v), r1 gy (1, u, v) in the order p2x, p2y, a11, a12, a21, a22;
 // then 1, g; then (P = 14) r1 gx (U, W, V), r1 gy (U, W, V) with U = qs u^2, W = qs u v, V = qs v^2.
+// P = 11: the curvature terms act along the unit direction e (image 2): r1 (gx ex + gy ey) (U, W, V).
 template <int P>
-void accumulate(const Scratch& s, int m, double r1, double qs, Normal<P>& ne, bool with_b) {
+void accumulate(const Scratch& s, int m, double r1, double qs, Normal<P>& ne, bool with_b, double ex = 0, double ey = 0) {
   std::fill(std::begin(ne.N), std::end(ne.N), 0.0);
   std::fill(std::begin(ne.b), std::end(ne.b), 0.0);
   double j[P];
@@ -161,7 +162,12 @@ void accumulate(const Scratch& s, int m, double r1, double qs, Normal<P>& ne, bo
     j[5] = ay * v;
     j[6] = 1.0;
     j[7] = s.g[k];
-    if constexpr (P > 8) {
+    if constexpr (P == 11) {
+      const double ae = ax * ex + ay * ey;
+      j[8] = ae * qs * u * u;
+      j[9] = ae * qs * u * v;
+      j[10] = ae * qs * v * v;
+    } else if constexpr (P > 8) {
       const double U = qs * u * u, W = qs * u * v, V = qs * v * v;
       j[8] = ax * U;
       j[9] = ax * W;
@@ -184,7 +190,7 @@ void accumulate(const Scratch& s, int m, double r1, double qs, Normal<P>& ne, bo
 // so the result does not depend on threads), in double.
 typedef double v2d __attribute__((vector_size(16)));
 template <>
-void accumulate<8>(const Scratch& s, int m, double r1, double, Normal<8>& ne, bool with_b) {
+void accumulate<8>(const Scratch& s, int m, double r1, double, Normal<8>& ne, bool with_b, double, double) {
   v2d N[36], B[8];
   for (auto& x : N) x = v2d{0, 0};
   for (auto& x : B) x = v2d{0, 0};
@@ -372,6 +378,11 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   // parameters: 0,1 p2; 2..5 A (a11 a12 a21 a22); 6 r0; 7 r1; 8..13 quadratic terms of x, y (u^2, uv, v^2) x qs
   const double qscale = o.taper > 0 ? o.taper : std::max(1, h);
   const double qs = 1.0 / (qscale * qscale);
+  // curvature only along the epipolar direction of image 2 (11 parameters) when it is given
+  const double en = o.epipolar_dir.norm();
+  const bool epi = en > 0;
+  const double ex = epi ? o.epipolar_dir.x() / en : 0, ey = epi ? o.epipolar_dir.y() / en : 0;
+  const int PQ = epi ? 11 : kMaxP;
   Eigen::Matrix<double, kMaxP, 1> th = Eigen::Matrix<double, kMaxP, 1>::Zero();
   th.head<8>() << p2.x(), p2.y(), A0(0, 0), A0(0, 1), A0(1, 0), A0(1, 1), 0.0, 1.0;
   auto evaluate_model = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count, auto quad) -> bool {
@@ -382,8 +393,14 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       double qx = bx + a11 * u + a12 * v, qy = by + a21 * u + a22 * v;
       if constexpr (decltype(quad)::value) {
         const double U = qs * u * u, W = qs * u * v, V = qs * v * v;
-        qx = qx + p(8) * U + p(9) * W + p(10) * V;
-        qy = qy + p(11) * U + p(12) * W + p(13) * V;
+        if (epi) {
+          const double c = p(8) * U + p(9) * W + p(10) * V;
+          qx += ex * c;
+          qy += ey * c;
+        } else {
+          qx = qx + p(8) * U + p(9) * W + p(10) * V;
+          qy = qy + p(11) * U + p(12) * W + p(13) * V;
+        }
       }
       double val, vx, vy;
       if (!bicubic_fast(img2, qx, qy, val, vx, vy)) return false;
@@ -397,17 +414,28 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   };
   // the affine model skips the quadratic terms (zero then, so the positions are the same)
   auto evaluate = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count) -> bool {
-    if (p.segment<6>(8).isZero(0)) return evaluate_model(p, count, std::false_type());
+    if (p.segment<6>(8).isZero(0)) return evaluate_model(p, count, std::false_type());  // also the affine stage
     return evaluate_model(p, count, std::true_type());
+  };
+  // the six quadratic terms (x: u^2 uv v^2, y: same) of the parameter vector, unscaled by qs
+  auto quadratic_terms = [&](const Eigen::Matrix<double, kMaxP, 1>& p) -> Eigen::Matrix<double, 6, 1> {
+    Eigen::Matrix<double, 6, 1> H;
+    if (epi) H << ex * p(8), ex * p(9), ex * p(10), ey * p(8), ey * p(9), ey * p(10);
+    else H = p.segment<6>(8);
+    return H;
   };
   Normal<8> n8;
   Normal<kMaxP> n14;
+  Normal<11> n11;
   // stages: 0 affine (taper); 1 quadratic (taper); 2 quadratic with the taper chosen from stage 1's curvature
   int stage = 0, P = 8, stage_start = 0;
   bool converged = false, fallback = false;
   int it = 0;
   Eigen::Matrix<double, kMaxP, 1> delta, th_affine = th;
-  for (; it < o.max_iterations; ++it) {
+  // the quadratic stages have their own budget beyond the affine stage's max_iterations
+  const int cap = o.max_iterations + (o.quadratic ? o.stage_iterations * (o.adaptive ? 2 : 1) : 0);
+  for (; it < cap; ++it) {
+    if (stage == 0 && it >= o.max_iterations) break;
     if (stage > 0 && it - stage_start >= o.stage_iterations) {
       fallback = true;  // the quadratic stages did not settle: keep the affine solution
       break;
@@ -425,6 +453,9 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     if (P == 8) {
       accumulate8_fast(s, m, th(7), n8);
       ok = gn_step<8>(n8, delta);
+    } else if (P == 11) {
+      accumulate<11>(s, m, th(7), qs, n11, true, ex, ey);
+      ok = gn_step<11>(n11, delta);
     } else {
       accumulate<kMaxP>(s, m, th(7), qs, n14, true);
       ok = gn_step<kMaxP>(n14, delta);
@@ -453,13 +484,13 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       if (stage == 0 && o.quadratic) {
         stage = 1;
         stage_start = it + 1;
-        P = kMaxP;
+        P = PQ;
         th_affine = th;
         continue;
       }
       if (stage == 1 && o.adaptive) {
         stage = 2;
-        Eigen::Matrix<double, 6, 1> H = th.segment<6>(8) * qs;
+        const Eigen::Matrix<double, 6, 1> H = quadratic_terms(th) * qs;
         const double c = lsm_curvature(H);
         double sg = c > 0 ? o.taper * std::pow(c / o.curvature_ref, -0.25) : o.taper_max;
         sg = std::clamp(sg, o.taper_min, o.taper_max);
@@ -474,6 +505,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       break;
     }
   }
+  if (!converged && stage > 0) fallback = true;  // the iteration cap came in a quadratic stage
   if (fallback) {
     // back to the converged affine solution, with its taper and its L1 weights
     th = th_affine;
@@ -493,7 +525,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   res.A << th(2), th(3), th(4), th(5);
   res.r0 = th(6);
   res.r1 = th(7);
-  res.H = th.segment<6>(8) * qs;
+  res.H = quadratic_terms(th) * qs;
   if (!converged) {
     res.status = LsmStatus::NotConverged;
     return res;
@@ -510,6 +542,9 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     if (P == 8) {
       accumulate<8>(s, m, th(7), qs, n8, false);
       var = var_p2<8>(n8);
+    } else if (P == 11) {
+      accumulate<11>(s, m, th(7), qs, n11, false, ex, ey);
+      var = var_p2<11>(n11);
     } else {
       accumulate<kMaxP>(s, m, th(7), qs, n14, false);
       var = var_p2<kMaxP>(n14);

@@ -147,6 +147,9 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     std::unique_ptr<Progress> pr;
     if (o.progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
     const int h = o.lsm.window / 2;
+    LsmOptions lsm = o.lsm;
+    // epipolar lines of image 2 run along (-b, a): the direction in which the map bends with the terrain
+    if (lsm.epipolar_curvature && rr.ok) lsm.epipolar_dir = Eigen::Vector2d(-rr.F.n(1), rr.F.n(0));
     const double max_area = 64.0 * 1024 * 1024;  // pixels of an image-2 region (256 MB as float)
     std::function<void(std::vector<size_t>&)> refine_group = [&](std::vector<size_t>& js) {
       if (js.empty()) return;
@@ -176,7 +179,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
       parallel_for((js.size() + chunk - 1) / chunk, o.threads, [&](size_t c) {
         for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
           Rec& r = recs[js[q]];
-          LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], o.lsm);
+          LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], lsm);
           r.ok = L.ok();
           r.status = L.status;
           if (r.ok) {

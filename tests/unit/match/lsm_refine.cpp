@@ -187,7 +187,10 @@ TEST(Lsm, QuadraticStageRemovesCurvatureBias) {
   LsmOptions quad;
   quad.quadratic = true;
   quad.adaptive = false;
-  std::vector<double> ea, eq;
+  // the same warp bends along y only: the epipolar model (3 curvature terms along y) must follow it too
+  LsmOptions epi = quad;
+  epi.epipolar_dir = Eigen::Vector2d(0, 2.5);
+  std::vector<double> ea, eq, ee;
   for (double px : {62.3, 78.0, 91.7})
     for (double py : {64.1, 80.5, 94.4}) {
       Eigen::Vector2d p1(px, py), truth = warp(p1);
@@ -195,15 +198,26 @@ TEST(Lsm, QuadraticStageRemovesCurvatureBias) {
       J.row(1) += Eigen::RowVector2d(2 * kq * (px - c.x()), 2 * kq * (py - c.y()));
       LsmResult a = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.4, -0.3), J, aff);
       LsmResult q = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.4, -0.3), J, quad);
+      LsmResult e = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.4, -0.3), J, epi);
       ASSERT_TRUE(a.ok()) << to_string(a.status);
       ASSERT_TRUE(q.ok()) << to_string(q.status);
+      ASSERT_TRUE(e.ok()) << to_string(e.status);
       EXPECT_TRUE(q.quadratic);
+      EXPECT_TRUE(e.quadratic);
       ea.push_back((a.p2 - truth).norm());
       eq.push_back((q.p2 - truth).norm());
+      ee.push_back((e.p2 - truth).norm());
       // second derivative of y along u and v: 2 kq each
       EXPECT_NEAR(2 * q.H(3), 2 * kq, 0.002);
       EXPECT_NEAR(2 * q.H(5), 2 * kq, 0.002);
+      EXPECT_NEAR(2 * e.H(3), 2 * kq, 0.002);
+      EXPECT_NEAR(2 * e.H(5), 2 * kq, 0.002);
+      EXPECT_EQ(e.H(0), 0.0);  // nothing across the epipolar direction
+      EXPECT_EQ(e.H(2), 0.0);
     }
+  std::sort(ee.begin(), ee.end());
+  EXPECT_LT(ee[ee.size() / 2], 0.015);
+  EXPECT_LT(ee.back(), 0.03);
   std::sort(ea.begin(), ea.end());
   std::sort(eq.begin(), eq.end());
   EXPECT_GT(ea[ea.size() / 2], 0.04);  // the affine bias (about 2 kq taper^2 = 0.07 px less the weighting)
