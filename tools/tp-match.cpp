@@ -10,6 +10,7 @@
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
 #include "tpkit/keypoint_cache.hpp"
+#include "tpkit/match_every_pair.hpp"
 #include "tpkit/match_pair.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -123,24 +124,19 @@ int main(int argc, char** argv) {
             report(o->images[0] + " and " + o->images[1], st);
             return 0;
           }
-          // every pair: each image detected once
+          // every pair: each image detected once, the first pairs matched while the last images are detected
           std::filesystem::create_directories(o->out);
-          const auto t0 = std::chrono::steady_clock::now();
-          std::vector<char> cached;
-          std::vector<tpkit::Keypoints> K = tpkit::detect_sift_images(src, o->p.sift, o->p.threads, o->p.cache_dir, &cached);
-          const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          if (!o->quiet) std::cerr << "tp-match: detected " << n << " images in " << detect_s << " s\n";
-          for (size_t i = 0; i < n; ++i)
-            for (size_t j = i + 1; j < n; ++j) {
-              tpkit::PairMatchStats st;
-              tpkit::Matches m = tpkit::match_keypoints(src[i], src[j], K[i], K[j], o->p, &st);
-              st.cached1 = cached[i];
-              st.cached2 = cached[j];
-              const std::string f =
-                  (std::filesystem::path(o->out) / ("pair-" + std::to_string(i + 1) + "-" + std::to_string(j + 1) + ".matches")).string();
-              tpkit::save_matches(f, m);
-              report(f, st);
-            }
+          double detect_s = 0;
+          tpkit::match_every_pair(
+              src, o->p,
+              [&](size_t i, size_t j, tpkit::Matches& m, const tpkit::PairMatchStats& st) {
+                const std::string f =
+                    (std::filesystem::path(o->out) / ("pair-" + std::to_string(i + 1) + "-" + std::to_string(j + 1) + ".matches")).string();
+                tpkit::save_matches(f, m);
+                report(f, st);
+              },
+              &detect_s);
+          if (!o->quiet) std::cerr << "tp-match: detection of the " << n << " images ended after " << detect_s << " s\n";
           return 0;
         };
       },

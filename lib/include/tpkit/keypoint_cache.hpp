@@ -30,10 +30,4 @@ void save_keypoints(const std::string& path, const std::string& identity, const 
 Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int threads, const std::string& dir,
                              Progress* progress = nullptr, bool* from_cache = nullptr);
 
-// Keypoints of several images (detect_sift_cached each). Whole groups of `threads` images run one per
-// thread (parallel over images scales better than inside one detector); the rest share the threads.
-// `from_cache` (may be null) gets one flag per image.
-std::vector<Keypoints> detect_sift_images(const std::vector<ImageSource>& src, const SiftOptions& o, int threads,
-                                          const std::string& dir, std::vector<char>* from_cache = nullptr);
-
 }  // namespace tpkit

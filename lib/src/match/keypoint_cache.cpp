@@ -12,7 +12,6 @@
 
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
-#include "tpkit/parallel_for.hpp"
 #include "tpkit/tool_support.hpp"
 
 namespace tpkit {
@@ -112,25 +111,6 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
   }
   K = detect_sift_tiles(src, o, threads, progress);
   save_keypoints(path, identity, K);
-  return K;
-}
-
-std::vector<Keypoints> detect_sift_images(const std::vector<ImageSource>& src, const SiftOptions& o, int threads,
-                                          const std::string& dir, std::vector<char>* from_cache) {
-  const size_t n = src.size(), T = static_cast<size_t>(std::max(1, threads)), whole = n / T * T;
-  std::vector<Keypoints> K(n);
-  std::vector<char> cached(n, 0);
-  auto detect = [&](size_t i, int t) {
-    bool c = false;
-    K[i] = detect_sift_cached(src[i], o, t, dir, nullptr, &c);
-    cached[i] = c;
-  };
-  parallel_for(whole, static_cast<int>(T), [&](size_t i) { detect(i, 1); });
-  if (whole < n) {
-    const int per = std::max(1, static_cast<int>(T / (n - whole)));
-    parallel_for(n - whole, static_cast<int>(T), [&](size_t i) { detect(whole + i, per); });
-  }
-  if (from_cache) *from_cache = std::move(cached);
   return K;
 }
 

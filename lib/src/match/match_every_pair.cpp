@@ -1,0 +1,84 @@
+#include "tpkit/match_every_pair.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <future>
+#include <thread>
+
+#include "tpkit/keypoint_cache.hpp"
+#include "tpkit/parallel_for.hpp"
+
+namespace tpkit {
+
+void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOptions& o,
+                      const std::function<void(size_t, size_t, Matches&, const PairMatchStats&)>& on_pair,
+                      double* detect_seconds) {
+  const size_t n = src.size();
+  const int T = std::max(1, o.threads);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<Keypoints> K(n);
+  std::vector<char> cached(n, 0);
+  std::vector<std::promise<void>> ready(n);
+  std::vector<std::shared_future<void>> detected(n);
+  for (size_t i = 0; i < n; ++i) detected[i] = ready[i].get_future().share();
+  std::atomic<int> detecting{0};  // threads detection holds now
+  std::atomic<bool> done{false};
+  double dt = 0;
+
+  auto detect_all = [&]() {
+    auto detect = [&](size_t i, int threads) {
+      try {
+        bool c = false;
+        K[i] = detect_sift_cached(src[i], o.sift, threads, o.cache_dir, nullptr, &c);
+        cached[i] = c;
+        ready[i].set_value();
+      } catch (...) {
+        ready[i].set_exception(std::current_exception());
+      }
+    };
+    const size_t whole = n / static_cast<size_t>(T) * static_cast<size_t>(T), rest = n - whole;
+    detecting = T;
+    parallel_for(whole, T, [&](size_t i) { detect(i, 1); });
+    if (rest > 0) {
+      // when pairs can already run (T > 1 and some image done), leave them one thread
+      const int avail = whole > 0 && T > 1 ? T - 1 : T;
+      const int per = std::max(1, avail / static_cast<int>(rest));
+      detecting = std::min(T, per * static_cast<int>(rest));
+      parallel_for(rest, T, [&](size_t i) { detect(whole + i, per); });
+    }
+    dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    detecting = 0;
+    done = true;
+  };
+
+  if (T == 1) {
+    detect_all();
+  }
+  std::thread detector;
+  if (T > 1) detector = std::thread(detect_all);
+  struct Join {
+    std::thread& t;
+    ~Join() {
+      if (t.joinable()) t.join();
+    }
+  } join{detector};
+
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j) {
+      detected[i].get();
+      detected[j].get();
+      PairMatchOptions po = o;
+      if (!done) po.threads = std::max(1, T - detecting.load());
+      PairMatchStats st;
+      Matches m = match_keypoints(src[i], src[j], K[i], K[j], po, &st);
+      st.cached1 = cached[i];
+      st.cached2 = cached[j];
+      on_pair(i, j, m, st);
+    }
+  if (detector.joinable()) detector.join();
+  if (detect_seconds) *detect_seconds = dt;
+}
+
+}  // namespace tpkit
