@@ -40,7 +40,7 @@ namespace tpkit {
 struct LsmOptions {
   int window = 21;          // template size in pixels (odd)
   int max_iterations = 40;
-  double tolerance = 3e-3;  // pixels, on the update of p2
+  double tolerance = 5e-3;  // pixels, on the update of p2
   double max_shift = 1.5;   // pixels: drop when p2 ends farther than this from its initial value
   double min_corr = 0.8;    // drop when the final normalised cross-correlation is lower
   bool l1 = true;           // robust L1 (IRLS); false: plain least squares

@@ -7,7 +7,8 @@
 // are matched in order (0,1), (0,2), ..., (1,2), ... on the calling thread as soon as both images are
 // detected, so that the first pairs overlap the detection of the last images instead of leaving
 // threads idle; a pair that starts while detection still runs gets the threads detection leaves free
-// (at least one), the others get T. With T = 1 everything runs in sequence.
+// (at least one) and all T from its next refinement band once detection ends; later pairs get T.
+// With T = 1 everything runs in sequence.
 #pragma once
 #include <functional>
 #include <vector>

@@ -8,6 +8,7 @@
 // Records: id1 x1 y1 id2 x2 y2 kx2 ky2 [sigma corr] -- (kx2, ky2) is image 2's keypoint position,
 // sigma the LSM standard deviation of (x2, y2) in pixels, corr the final correlation.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <string>
 
@@ -36,6 +37,9 @@ struct PairMatchOptions {
   std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
   long refine_tile = 256;         // rows of the image-1 bands refined one after the other (bounded memory)
   int threads = 1;
+  // When set, refinement takes its current value for each band instead of `threads`: a pair matched
+  // beside another job (match_every_pair) gets back the threads that job frees.
+  const std::atomic<int>* live_threads = nullptr;
   bool progress = false;
 };
 

@@ -24,6 +24,7 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
   std::vector<std::shared_future<void>> detected(n);
   for (size_t i = 0; i < n; ++i) detected[i] = ready[i].get_future().share();
   std::atomic<int> detecting{0};  // threads detection holds now
+  std::atomic<int> free_threads{T};  // what a pair started beside detection may use now
   std::atomic<bool> done{false};
   double dt = 0;
 
@@ -40,16 +41,19 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
     };
     const size_t whole = n / static_cast<size_t>(T) * static_cast<size_t>(T), rest = n - whole;
     detecting = T;
+    free_threads = 1;
     parallel_for(whole, T, [&](size_t i) { detect(i, 1); });
     if (rest > 0) {
       // when pairs can already run (T > 1 and some image done), leave them one thread
       const int avail = whole > 0 && T > 1 ? T - 1 : T;
       const int per = std::max(1, avail / static_cast<int>(rest));
       detecting = std::min(T, per * static_cast<int>(rest));
+      free_threads = std::max(1, T - detecting.load());
       parallel_for(rest, T, [&](size_t i) { detect(whole + i, per); });
     }
     dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     detecting = 0;
+    free_threads = T;
     done = true;
   };
 
@@ -70,7 +74,10 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
       detected[i].get();
       detected[j].get();
       PairMatchOptions po = o;
-      if (!done) po.threads = std::max(1, T - detecting.load());
+      if (!done) {  // beside detection: the threads it leaves, all of them once it ends (from the next band)
+        po.threads = std::max(1, T - detecting.load());
+        po.live_threads = &free_threads;
+      }
       PairMatchStats st;
       Matches m = match_keypoints(src[i], src[j], K[i], K[j], po, &st);
       st.cached1 = cached[i];

@@ -176,7 +176,8 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
       const Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
                                           (long)std::ceil(by1 - by0) + 2);
       const size_t chunk = 64;
-      parallel_for((js.size() + chunk - 1) / chunk, o.threads, [&](size_t c) {
+      const int threads = o.live_threads ? std::max(1, o.live_threads->load()) : o.threads;
+      parallel_for((js.size() + chunk - 1) / chunk, threads, [&](size_t c) {
         for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
           Rec& r = recs[js[q]];
           LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], lsm);
