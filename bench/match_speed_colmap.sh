@@ -7,6 +7,11 @@
 #
 #   bench/match_speed_colmap.sh [BUILD_DIR] [DATA_DIR] [WORK_DIR]
 #
+# ROUNDS=N (default 5): the three measurements run N times in turn, each round from an empty keypoint
+# cache and database, and the ratios are taken within each round (a shared VM's speed drifts by tens
+# of percent over a minute, so ratios of separate medians would mix different machines); the median
+# round ratio is the figure.
+#
 # COLMAP is a benchmark peer only: it is installed here (apt-get, needs root and the network) when
 # missing, never by the build or CI. Peak memory comes from /usr/bin/time -v.
 set -euo pipefail
@@ -37,47 +42,53 @@ timed() {  # label, command...: prints wall seconds and peak RSS
   echo "$label $wall $rss"
 }
 
-echo "== tpkit (threads $threads)"
-tp_total=0
-for p in "1 2" "1 3" "2 3"; do
-  set -- $p
-  r=$(timed "tp-match-$1$2" "$bin/tp-match" "$data/img_0$1.tif" "$data/img_0$2.tif" --threads $threads --cache tp/keypoints -q -o "tp/$1$2.matches")
-  echo "$r" | awk '{printf "tp-match %s: %.2f s, peak RSS %d MB\n", $1, $2, $3 / 1024}'
+echo "== tpkit (threads $threads) and COLMAP $(colmap -h 2>&1 | head -1 | awk '{print $2}') (threads $threads, CPU)"
+rounds=${ROUNDS:-5}
+ratios3=() ratios1=()
+for round in $(seq 1 "$rounds"); do
+  rm -rf tp tp1 colmap.db
+  mkdir -p tp
+  tp_total=0
+  for p in "1 2" "1 3" "2 3"; do
+    set -- $p
+    r=$(timed "tp-match-$1$2" "$bin/tp-match" "$data/img_0$1.tif" "$data/img_0$2.tif" --threads $threads --cache tp/keypoints -q -o "tp/$1$2.matches")
+    [ "$round" = 1 ] && echo "$r" | awk '{printf "tp-match %s: %.2f s, peak RSS %d MB\n", $1, $2, $3 / 1024}'
+    tp_total=$(echo "$tp_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
+  done
+  r=$(timed tp-chain "$bin/tp-chain" tp/12.matches tp/13.matches tp/23.matches -q -o tp/triplets.tracks)
   tp_total=$(echo "$tp_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
-done
-r=$(timed tp-chain "$bin/tp-chain" tp/12.matches tp/13.matches tp/23.matches -q -o tp/triplets.tracks)
-tp_total=$(echo "$tp_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
-for p in 12 13 23; do
-  echo "tp-match pair $p: $(grep -m1 '^# verified:' tp/$p.matches | awk '{print $3}') verified, $(grep -vc '^#' tp/$p.matches) refined"
-done
-echo "tp-chain: $(grep -vc '^#' tp/triplets.tracks) triplets"
-echo "tpkit total wall (three runs, keypoint cache): $tp_total s"
 
-echo "== tpkit, one run for the three pairs (threads $threads)"
-r=$(timed tp-match-all "$bin/tp-match" "$data/img_01.tif" "$data/img_02.tif" "$data/img_03.tif" --threads $threads -q -o tp1)
-echo "$r" | awk '{printf "tp-match (every pair): %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
-one_total=$(echo "$r" | awk '{print $2}')
-r=$(timed tp-chain1 "$bin/tp-chain" tp1/pair-1-2.matches tp1/pair-1-3.matches tp1/pair-2-3.matches -q -o tp1/triplets.tracks)
-one_total=$(echo "$one_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
-for p in 1-2 1-3 2-3; do
-  echo "tp-match pair $p: $(grep -m1 '^# verified:' tp1/pair-$p.matches | awk '{print $3}') verified, $(grep -vc '^#' tp1/pair-$p.matches) refined"
-done
-echo "tpkit total wall (one run): $one_total s"
+  r=$(timed tp-match-all "$bin/tp-match" "$data/img_01.tif" "$data/img_02.tif" "$data/img_03.tif" --threads $threads -q -o tp1)
+  [ "$round" = 1 ] && echo "$r" | awk '{printf "tp-match (every pair, one run): %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
+  one_total=$(echo "$r" | awk '{print $2}')
+  r=$(timed tp-chain1 "$bin/tp-chain" tp1/pair-1-2.matches tp1/pair-1-3.matches tp1/pair-2-3.matches -q -o tp1/triplets.tracks)
+  one_total=$(echo "$one_total $(echo "$r" | awk '{print $2}')" | awk '{print $1 + $2}')
 
-echo "== COLMAP $(colmap -h 2>&1 | head -1 | awk '{print $2}') (threads $threads, CPU)"
-rm -f colmap.db
-r1=$(timed colmap-extract colmap feature_extractor --database_path colmap.db --image_path images \
-  --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads $threads)
-r2=$(timed colmap-match colmap exhaustive_matcher --database_path colmap.db \
-  --SiftMatching.use_gpu 0 --SiftMatching.num_threads $threads)
-echo "$r1" | awk '{printf "colmap feature_extractor: %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
-echo "$r2" | awk '{printf "colmap exhaustive_matcher: %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
-colmap_total=$(echo "$r1 $r2" | awk '{print $2 + $5}')
-# pair_id = image_id1 * 2147483647 + image_id2 (COLMAP's encoding, image_id1 < image_id2)
-sqlite3 colmap.db "select image_id, rows from keypoints order by image_id;" | awk -F'|' '{print "colmap keypoints image " $1 ": " $2}'
-sqlite3 colmap.db "select pair_id, rows from two_view_geometries order by pair_id;" |
-  awk -F'|' '{id2 = $1 % 2147483647; id1 = ($1 - id2) / 2147483647; print "colmap pair " id1 id2 ": " $2 " verified"}'
-echo "COLMAP total wall: $colmap_total s"
-awk -v a="$tp_total" -v c="$one_total" -v b="$colmap_total" 'BEGIN {
-  printf "ratio tpkit / COLMAP wall time: three runs %.2f, one run %.2f (goal <= 0.5)\n", a / b, c / b}'
+  r1=$(timed colmap-extract colmap feature_extractor --database_path colmap.db --image_path images \
+    --SiftExtraction.use_gpu 0 --SiftExtraction.num_threads $threads)
+  r2=$(timed colmap-match colmap exhaustive_matcher --database_path colmap.db \
+    --SiftMatching.use_gpu 0 --SiftMatching.num_threads $threads)
+  colmap_total=$(echo "$r1 $r2" | awk '{print $2 + $5}')
+  if [ "$round" = 1 ]; then
+    echo "$r1" | awk '{printf "colmap feature_extractor: %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
+    echo "$r2" | awk '{printf "colmap exhaustive_matcher: %.2f s, peak RSS %d MB\n", $2, $3 / 1024}'
+    for p in 12 13 23; do
+      echo "tp-match pair $p (three runs): $(grep -m1 '^# verified:' tp/$p.matches | awk '{print $3}') verified, $(grep -vc '^#' tp/$p.matches) refined"
+    done
+    for p in 1-2 1-3 2-3; do
+      echo "tp-match pair $p (one run): $(grep -m1 '^# verified:' tp1/pair-$p.matches | awk '{print $3}') verified, $(grep -vc '^#' tp1/pair-$p.matches) refined"
+    done
+    echo "tp-chain: $(grep -vc '^#' tp/triplets.tracks) triplets (three runs), $(grep -vc '^#' tp1/triplets.tracks) (one run)"
+    # pair_id = image_id1 * 2147483647 + image_id2 (COLMAP's encoding, image_id1 < image_id2)
+    sqlite3 colmap.db "select image_id, rows from keypoints order by image_id;" | awk -F'|' '{print "colmap keypoints image " $1 ": " $2}'
+    sqlite3 colmap.db "select pair_id, rows from two_view_geometries order by pair_id;" |
+      awk -F'|' '{id2 = $1 % 2147483647; id1 = ($1 - id2) / 2147483647; print "colmap pair " id1 id2 ": " $2 " verified"}'
+  fi
+  ratio3=$(awk -v a="$tp_total" -v b="$colmap_total" 'BEGIN {printf "%.3f", a / b}')
+  ratio1=$(awk -v a="$one_total" -v b="$colmap_total" 'BEGIN {printf "%.3f", a / b}')
+  ratios3+=("$ratio3") ratios1+=("$ratio1")
+  echo "round $round: tpkit three runs $tp_total s, one run $one_total s; COLMAP $colmap_total s; ratio three runs $ratio3, one run $ratio1"
+done
+median() { printf '%s\n' "$@" | sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+echo "median ratio tpkit / COLMAP wall time over $rounds rounds: three runs $(median "${ratios3[@]}"), one run $(median "${ratios1[@]}") (goal <= 0.5)"
 echo "work folder: $work"
