@@ -23,8 +23,7 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
   std::vector<std::promise<void>> ready(n);
   std::vector<std::shared_future<void>> detected(n);
   for (size_t i = 0; i < n; ++i) detected[i] = ready[i].get_future().share();
-  std::atomic<int> detecting{0};  // threads detection holds now
-  std::atomic<int> free_threads{T};  // what a pair started beside detection may use now
+  std::atomic<int> free_threads{T};  // threads detection leaves to a pair matched beside it (at least 1)
   std::atomic<bool> done{false};
   double dt = 0;
 
@@ -40,28 +39,23 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
       }
     };
     const size_t whole = n / static_cast<size_t>(T) * static_cast<size_t>(T), rest = n - whole;
-    detecting = T;
     free_threads = 1;
     parallel_for(whole, T, [&](size_t i) { detect(i, 1); });
     if (rest > 0) {
       // when pairs can already run (T > 1 and some image done), leave them one thread
       const int avail = whole > 0 && T > 1 ? T - 1 : T;
       const int per = std::max(1, avail / static_cast<int>(rest));
-      detecting = std::min(T, per * static_cast<int>(rest));
-      free_threads = std::max(1, T - detecting.load());
+      free_threads = std::max(1, T - per * static_cast<int>(rest));
       parallel_for(rest, T, [&](size_t i) { detect(whole + i, per); });
     }
     dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    detecting = 0;
     free_threads = T;
     done = true;
   };
 
-  if (T == 1) {
-    detect_all();
-  }
   std::thread detector;
-  if (T > 1) detector = std::thread(detect_all);
+  if (T == 1) detect_all();
+  else detector = std::thread(detect_all);
   struct Join {
     std::thread& t;
     ~Join() {
@@ -75,7 +69,7 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
       detected[j].get();
       PairMatchOptions po = o;
       if (!done) {  // beside detection: the threads it leaves, all of them once it ends (from the next band)
-        po.threads = std::max(1, T - detecting.load());
+        po.threads = free_threads.load();
         po.live_threads = &free_threads;
       }
       PairMatchStats st;
