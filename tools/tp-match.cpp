@@ -1,6 +1,5 @@
 // tp-match: sub-pixel tie points between two images (SIFT + affine F RANSAC + least-squares matching),
 // or between every pair of several images.
-#include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -9,7 +8,6 @@
 
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
-#include "tpkit/keypoint_cache.hpp"
 #include "tpkit/match_every_pair.hpp"
 #include "tpkit/match_pair.hpp"
 #include "tpkit/tool_support.hpp"
@@ -76,7 +74,7 @@ int main(int argc, char** argv) {
         app.add_option("--taper", o->p.lsm.taper, "Gaussian weight of the LSM window, sigma in pixels (0 = flat)")
             ->check(CLI::NonNegativeNumber);
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
-        app.add_flag("--quadratic", o->p.lsm.quadratic, "LSM: a quadratic stage with an adaptive window after the affine one");
+        app.add_flag("--quadratic", o->p.lsm.quadratic, "LSM: after the affine fit, bend the map along the epipolar lines (steep terrain)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
           if (o->p.sift.stretch_lo < 0 || o->p.sift.stretch_hi > 100 || !(o->p.sift.stretch_lo < o->p.sift.stretch_hi))

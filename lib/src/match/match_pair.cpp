@@ -125,6 +125,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     LsmStatus status;
   };
   std::vector<Rec> recs(ver.size());
+  const bool lsm_epipolar = o.lsm.epipolar_curvature && rr.ok;  // the quadratic stage bends along F's epipolar lines
   for (size_t j = 0; j < ver.size(); ++j) {
     const auto& m = put[ver[j]];
     const auto &k1 = K1.kp[m.i1], &k2 = K2.kp[m.i2];
@@ -149,7 +150,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     const int h = o.lsm.window / 2;
     LsmOptions lsm = o.lsm;
     // epipolar lines of image 2 run along (-b, a): the direction in which the map bends with the terrain
-    if (lsm.epipolar_curvature && rr.ok) lsm.epipolar_dir = Eigen::Vector2d(-rr.F.n(1), rr.F.n(0));
+    if (lsm_epipolar) lsm.epipolar_dir = Eigen::Vector2d(-rr.F.n(1), rr.F.n(0));
     const double max_area = 64.0 * 1024 * 1024;  // pixels of an image-2 region (256 MB as float)
     std::function<void(std::vector<size_t>&)> refine_group = [&](std::vector<size_t>& js) {
       if (js.empty()) return;
@@ -246,6 +247,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   if (o.refine)
     meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (o.lsm.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") + " taper " + format_number(o.lsm.taper) +
                                        " max_shift " + format_number(o.lsm.max_shift) + " min_corr " + format_number(o.lsm.min_corr) +
+                                       (o.lsm.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
                                        ": " + std::to_string(st.refined) + " converged");
   else
     meta_set(M.meta, "refinement", "none (raw SIFT positions)");
