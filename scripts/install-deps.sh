@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # Installs the Debian packages tpkit needs, only those that are missing. Debian 12; run as root (or with
 # sudo available). Used by scripts/demo.sh and scripts/test.sh, so each is complete on its own.
+# openimageio-tools: Debian's libopenimageio-dev ships a CMake config (OpenImageIOTargets.cmake) that
+# declares the command-line programs (iconvert, oiiotool, ...) as imported targets and fails when their
+# files are missing, yet does not depend on the package that has them. tpkit keeps that config, which
+# brings OIIO's own transitive dependencies right, and installs the tools it checks for.
 set -euo pipefail
 packages=(
   g++ cmake make pkg-config
-  libeigen3-dev libopencv-dev libopenimageio-dev libtiff-dev libgeographiclib-dev
+  libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libtiff-dev libgeographiclib-dev
   libcli11-dev libceres-dev libnanoflann-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
@@ -17,6 +21,7 @@ for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 [ ${#missing[@]} -eq 0 ] && exit 0
+t0=$(date +%s)
 echo "install-deps: installing ${missing[*]}" >&2
 SUDO=""
 if [ "$(id -u)" != 0 ]; then
@@ -26,3 +31,4 @@ fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: installed ${#missing[@]} packages and their dependencies in $(( $(date +%s) - t0 )) s" >&2
