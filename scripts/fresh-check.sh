@@ -79,7 +79,7 @@ if [ -f "$tarball" ] && [ -z "$(find "$tarball" -mtime +"$max_age_days")" ]; the
 else
   say "root: mmdebstrap --variant=apt bookworm (host sources) -> $tarball"
   rm -f "$cache"/bookworm-apt-*.tar
-  mmdebstrap --quiet --variant=apt --include=git bookworm "$tarball.tmp" "$sources" </dev/null
+  mmdebstrap --quiet --format=tar --variant=apt --include=git bookworm "$tarball.tmp" "$sources" </dev/null
   mv "$tarball.tmp" "$tarball"
 fi
 t_mmdebstrap=$(elapsed "$t0")
