@@ -78,7 +78,7 @@ if [ -f "$tarball" ] && [ -z "$(find "$tarball" -mtime +"$max_age_days")" ]; the
   say "root: cached $tarball"
 else
   say "root: mmdebstrap --variant=apt bookworm (host sources) -> $tarball"
-  rm -f "$cache"/bookworm-apt-*.tar
+  rm -rf "$cache"/bookworm-apt-*.tar "$cache"/bookworm-apt-*.tar.tmp
   mmdebstrap --quiet --format=tar --variant=apt --include=git bookworm "$tarball.tmp" "$sources" </dev/null
   mv "$tarball.tmp" "$tarball"
 fi
