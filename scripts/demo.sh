@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
-bash scripts/build.sh
+bash scripts/build.sh tools
 bin=$PWD/build/bin
 out=${1:-demo-out}
 mkdir -p "$out"

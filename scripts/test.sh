@@ -8,10 +8,11 @@
 #   TPKIT_SKIP_ASAN=1                skip the sanitizer build
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install-deps.sh --test
-jobs=$(nproc 2>/dev/null || echo 2)
 start=$(date +%s)
 stamp() { echo "== $1 ($(( $(date +%s) - start )) s)"; }
+stamp "Debian packages (scripts/install-deps.sh --test)"
+bash scripts/install-deps.sh --test
+jobs=$(nproc 2>/dev/null || echo 2)
 
 stamp "Release build"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null

@@ -3,7 +3,7 @@ tpkit_tool_test(tp-synth.small-run
   COMMAND "tp-synth --out out --size 256 --relief 20 --points 100 --seed 3 --threads 2 && for f in view1.tif view2.tif view3.tif truth.tracks truth.cameras truth.trifocal scene.params @SEMI@ do test -s out/$f || echo MISSING $f @SEMI@ done && echo records $(grep -vc '^#' out/truth.tracks)"
   STDOUT_MATCH "^records 100\n$"
   CHECK_FILE out/truth.tracks
-  FILE_MATCH "^# tpkit tracks 1\n# image1: view1.tif 256 256\n# image2: view2.tif 256 256\n# image3: view3.tif 256 256\n.*# seed: 3\n.*# relief: 20\n.*# columns: track x1 y1 x2 y2 x3 y3 X Y Z\n1 [0-9]")
+  FILE_MATCH "^# tpkit tracks 1\n# written-by: tp-synth [0-9]+\\.[0-9]+\\.[0-9]+[^\n]*\n# image1: view1.tif 256 256\n# image2: view2.tif 256 256\n# image3: view3.tif 256 256\n.*# seed: 3\n.*# relief: 20\n.*# columns: track x1 y1 x2 y2 x3 y3 X Y Z\n1 [0-9]")
 tpkit_tool_test(tp-synth.cameras-file
   COMMAND "tp-synth --out out --size 128 --relief 10 --points 20"
   CHECK_FILE out/truth.cameras

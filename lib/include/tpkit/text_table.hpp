@@ -1,6 +1,7 @@
 // The tpkit text file: the generic layer below every file kind (formats.hpp).
 //
 //   # tpkit KIND VERSION            first line: names the kind and its version
+//   # written-by: TOOL VERSION      the tool and tpkit version that wrote it (not kept as metadata)
 //   # image1: PATH WIDTH HEIGHT     images involved, numbered from 1
 //   # key: value                    any other metadata (kept in order, written back)
 //   # columns: name name ...        names every column of the records
@@ -37,6 +38,7 @@ struct TextTable {
   std::string source;      // file name for messages ("-" is shown as "<stdin>")
   std::string kind;        // from the first line; "" if the input had no header
   int version = 0;         // 0 if the input had no header
+  std::string written_by;  // "# written-by:" value, "" if absent
   std::vector<ImageRef> images;
   Meta meta;
   std::vector<std::string> columns;
@@ -75,7 +77,7 @@ std::string format_number(double v);
 // Integer-valued doubles (ids) are written without a decimal point.
 std::string format_id(double v);
 
-// Header lines: "# tpkit KIND VERSION", image lines, metadata lines, and (if non-empty) columns.
+// Header lines: "# tpkit KIND VERSION", "# written-by: TOOL VERSION" (tool_name(), version_full()), image lines, metadata lines, and (if non-empty) columns.
 void write_header(std::ostream& os, const std::string& kind, int version, const std::vector<ImageRef>& images,
                   const Meta& meta, const std::vector<std::string>& columns);
 // Writes one record, each value by format_number().

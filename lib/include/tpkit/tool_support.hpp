@@ -18,7 +18,8 @@ namespace tpkit {
 // Called with the app to declare options; returns the body to run once the command line is parsed.
 using ToolSetup = std::function<std::function<int()>(CLI::App&)>;
 
-// Parses the command line and runs the body. -h/--help prints the man page as text. With the
+// Parses the command line and runs the body. -h/--help prints the man page as text, --version the tool's
+// name and tpkit's version (version.hpp); both exit 0 before any other option is checked. With the
 // environment variable TPKIT_CHECK_HELP=1, --help also checks that every option of the app is named
 // in the man page (the tool tests use this) and fails otherwise.
 int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& setup, const char* man_page);

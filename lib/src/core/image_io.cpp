@@ -12,6 +12,7 @@
 #include <random>
 
 #include "tpkit/error.hpp"
+#include "tpkit/version.hpp"
 
 namespace tpkit {
 
@@ -160,6 +161,7 @@ TiffWriterU16::TiffWriterU16(const std::string& path, long width, long height,
   ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, TypeDesc::UINT16);
   spec.attribute("compression", "zip");
   spec.attribute("tiff:RowsPerStrip", 64);
+  spec.attribute("Software", written_by());
   for (const auto& kv : tags) spec.attribute(kv.first, kv.second);
   if (!impl_->out->open(impl_->tmp, spec)) throw InputError(path, 0, "cannot open for writing: " + impl_->out->geterror());
 }
@@ -197,6 +199,7 @@ void write_whole(const std::string& path, long width, long height, const std::ve
   auto out = ImageOutput::create(tmp);
   if (!out) throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
   ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, type);
+  spec.attribute("Software", written_by());
   bool ok = out->open(tmp, spec) && out->write_image(type, data.data()) && out->close();
   if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
     std::string err = out->geterror();

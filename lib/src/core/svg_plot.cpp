@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "tpkit/atomic_output.hpp"
+#include "tpkit/version.hpp"
 
 namespace tpkit {
 
@@ -209,7 +210,7 @@ void SvgPlot::legend(int pi, const std::vector<std::pair<std::string, std::strin
 
 std::string SvgPlot::str() const {
   std::ostringstream o;
-  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << num(width_)
+  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- written by " << written_by() << " -->\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << num(width_)
     << "\" height=\"" << num(height_) << "\" viewBox=\"0 0 " << num(width_) << ' ' << num(height_)
     << "\" font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     << body_ << "</svg>\n";

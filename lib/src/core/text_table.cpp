@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "tpkit/error.hpp"
+#include "tpkit/version.hpp"
 
 namespace tpkit {
 
@@ -141,6 +142,8 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
         }
         if (static_cast<long>(t.images.size()) < n) t.images.resize(n);
         t.images[n - 1] = ref;
+      } else if (key == "written-by") {
+        t.written_by = val;  // not metadata: a file written from this one names its own writer
       } else {
         t.meta.emplace_back(key, val);
       }
@@ -206,6 +209,7 @@ std::string format_id(double v) {
 void write_header(std::ostream& os, const std::string& kind, int version, const std::vector<ImageRef>& images,
                   const Meta& meta, const std::vector<std::string>& columns) {
   os << "# tpkit " << kind << ' ' << version << '\n';
+  os << "# written-by: " << written_by() << '\n';
   for (size_t i = 0; i < images.size(); ++i) {
     os << "# image" << (i + 1) << ": " << images[i].path;
     if (images[i].width > 0 || images[i].height > 0) os << ' ' << images[i].width << ' ' << images[i].height;

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "tpkit/error.hpp"
+#include "tpkit/version.hpp"
 
 namespace tpkit {
 
@@ -80,6 +81,8 @@ std::string unquote(const std::string& s) {
 }  // namespace
 
 const std::string& tool_name() { return g_tool; }
+
+std::string written_by() { return g_tool + ' ' + version_full(); }
 
 void warn(const std::string& message) { std::cerr << g_tool << ": warning: " << message << std::endl; }
 
@@ -208,7 +211,7 @@ std::string undocumented_options(const CLI::App& app, const std::string& page) {
   std::string missing;
   for (const CLI::Option* o : app.get_options()) {
     for (const auto& ln : o->get_lnames()) {
-      if (ln == "help") continue;
+      if (ln == "help" || ln == "version") continue;
       if (page.find("--" + ln) == std::string::npos) missing += " --" + ln;
     }
     for (const auto& sn : o->get_snames()) {
@@ -230,6 +233,7 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
     CLI::App app(tool, tool);
     app.formatter(std::make_shared<ManFormatter>(text));
     app.set_help_flag("-h,--help", "print the manual page and exit");
+    app.set_version_flag("--version", tool + " (tpkit) " + version_full(), "print the version and exit");
     auto body = setup(app);
     try {
       app.parse(argc, argv);
@@ -243,6 +247,9 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
         }
       }
       std::cout << text;
+      return 0;
+    } catch (const CLI::CallForVersion& e) {
+      std::cout << e.what() << "\n";
       return 0;
     } catch (const CLI::ParseError& e) {
       std::cerr << tool << ": " << e.what() << "\n" << tool << ": see '" << tool << " --help'\n";

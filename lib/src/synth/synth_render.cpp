@@ -128,7 +128,7 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     std::string desc = "tp-synth view " + std::to_string(v + 1) + " (" + (v == 0 ? "forward" : v == 1 ? "nadir" : "backward") +
                        "); seed " + std::to_string(p.seed) + "; 12-bit DN = gain * radiance + offset + noise; gain " +
                        format_number(scene.gain(v)) + ", offset " + format_number(scene.offset(v));
-    TiffWriterU16 writer(dir + "/" + images[v].path, W, W, {{"ImageDescription", desc}, {"Software", "tpkit tp-synth"},
+    TiffWriterU16 writer(dir + "/" + images[v].path, W, W, {{"ImageDescription", desc},
                                                                  // fixed, so that the same seed gives the same bytes
                                                                  {"DateTime", "2000:01:01 00:00:00"}});
     const long batch = 2L * threads;

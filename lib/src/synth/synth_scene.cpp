@@ -11,6 +11,7 @@
 
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
+#include "tpkit/version.hpp"
 #include "tpkit/synth_camera.hpp"
 #include "tpkit/synth_noise.hpp"
 #include "tpkit/synth_terrain.hpp"
@@ -52,6 +53,7 @@ void check_params(const SynthParams& p) {
 void save_params(const std::string& path, const SynthParams& p) {
   std::ostringstream os;
   os << "# tpkit synth-params 1\n"
+     << "# written-by: " << written_by() << "\n"
      << "seed = " << p.seed << "\n"
      << "size = " << p.size << "\n"
      << "relief = " << format_number(p.relief) << "\n"

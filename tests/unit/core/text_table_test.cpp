@@ -10,6 +10,7 @@
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
 #include "tpkit/text_table.hpp"
+#include "tpkit/version.hpp"
 
 using namespace tpkit;
 
@@ -143,4 +144,21 @@ TEST(TextTable, MissingColumnNamed) {
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(), "test.txt: missing column 'y3'");
   }
+}
+
+TEST(TextTable, WrittenByNamesTheWriterAndIsNotCarriedAlong) {
+  // a file read and written again names its new writer once, not its first writer as metadata
+  std::ostringstream os;
+  write_header(os, "matches", 1, {}, {{"method", "x"}}, {"id1", "x1", "y1", "id2", "x2", "y2"});
+  const std::string first = os.str();
+  EXPECT_NE(first.find("# tpkit matches 1\n# written-by: "), std::string::npos) << first;
+  EXPECT_NE(first.find(std::string("# written-by: ") + written_by() + "\n"), std::string::npos) << first;
+  EXPECT_NE(written_by().find(version()), std::string::npos);
+  auto t = parse(first + "1 2 3 4 5 6\n", matches_read_options());
+  EXPECT_EQ(t.written_by, written_by());
+  ASSERT_EQ(t.meta.size(), 1u);
+  EXPECT_EQ(t.meta[0].first, "method");
+  std::ostringstream again;
+  write_header(again, t.kind, t.version, t.images, t.meta, t.columns);
+  EXPECT_EQ(again.str(), first);
 }
