@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
     return [o]() {
       if (!o->scan.empty() && o->range.size() != 2) throw UsageError("--scan needs --range LO HI");
       if (o->scan.empty() && !o->range.empty()) throw UsageError("--range goes with --scan");
+      if (!o->scan.empty()) check_scan(o->scan, o->range[0], o->range[1], o->steps);
       if (!(o->trim >= 0 && o->trim < 1)) throw UsageError("--trim must be in [0, 1)");
       if (!(o->truncate >= 0)) throw UsageError("--truncate must be >= 0");
       if (!(o->target >= 0)) throw UsageError("--target must be >= 0");

@@ -10,6 +10,7 @@
 #include "tpkit/formats.hpp"
 #include "tpkit/match_every_pair.hpp"
 #include "tpkit/match_pair.hpp"
+#include "tpkit/opencv_threads.hpp"
 #include "tpkit/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
@@ -39,7 +40,7 @@ int main(int argc, char** argv) {
         app.add_option("--nodata", o->nodata, "nodata grey level (default: the GDAL_NODATA tag)");
         app.add_option("--mask1", o->mask1, "mask image of IMG1 (0 = invalid)");
         app.add_option("--mask2", o->mask2, "mask image of IMG2 (0 = invalid)");
-        app.add_option("--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+        app.add_option("--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::Range(0, tpkit::kMaxThreads));
         app.add_option("--cache", o->p.cache_dir, "keypoint cache folder: each image is detected once");
         app.add_option("--tile", o->p.sift.tile, "detection tile size, pixels")->check(CLI::Range(256L, 1L << 20));
         app.add_option("--overlap", o->p.sift.overlap, "detection tile overlap, pixels")->check(CLI::Range(16L, 4096L));
@@ -85,6 +86,8 @@ int main(int argc, char** argv) {
           o->p.refine = !o->no_refine;
           o->p.lsm.l1 = !o->l2;
           o->p.threads = o->threads > 0 ? o->threads : std::max(1u, std::thread::hardware_concurrency());
+          o->p.threads = std::min(o->p.threads, tpkit::kMaxThreads);
+          tpkit::set_opencv_threads(o->p.threads);
           o->p.progress = !o->quiet;
           const size_t n = o->images.size();
           if (n > 2 && (o->out == "-" || o->out.empty()))

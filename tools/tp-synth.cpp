@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "tpkit/error.hpp"
+#include "tpkit/parallel_for.hpp"
 #include "tpkit/synth_scene.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -30,7 +31,8 @@ int main(int argc, char** argv) {
         app.add_option("--threads", o->threads, "rendering threads (0: all cores)");
         return [o]() {
           tpkit::check_params(o->p);
-          if (o->threads < 0) throw tpkit::UsageError("--threads must be >= 0");
+          if (o->threads < 0 || o->threads > tpkit::kMaxThreads)
+            throw tpkit::UsageError("--threads must be between 0 and " + std::to_string(tpkit::kMaxThreads));
           const tpkit::SynthScene scene(o->p);
           tpkit::SynthWriteOptions w;
           w.threads = o->threads;

@@ -54,3 +54,10 @@ tpkit_tool_test(cluster-homog.scan-without-range
 tpkit_tool_test(cluster-homog.random-needs-init
   COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --optimizer random -o out.homography"
   EXPECT_FAIL STDERR_MATCH "needs a start" NO_FILE out.homography)
+# scan options are checked before the search: a billion steps is refused at once, not after the search
+tpkit_tool_test(cluster-homog.scan-steps-bounded
+  COMMAND "timeout 20 cluster-homog $SRC/share/tpkit/cluster-a.points $SRC/share/tpkit/cluster-b.points --param math --scan h11 --range 0.5 1.5 --steps 1000000000 -o s.scan"
+  EXPECT_FAIL STDERR_MATCH "^cluster-homog: --steps must be between 2 and 100000" NO_FILE s.scan)
+tpkit_tool_test(cluster-homog.scan-unknown-parameter-before-search
+  COMMAND "timeout 20 cluster-homog $SRC/share/tpkit/cluster-a.points $SRC/share/tpkit/cluster-b.points --scan h44 --range 0 1 -o s.scan"
+  EXPECT_FAIL STDERR_MATCH "unknown scan parameter 'h44'" NO_FILE s.scan)

@@ -57,3 +57,12 @@ tpkit_tool_test(tp-match.pleiades-triplets
   COMMAND "test -d ${_pl} || exit 0; for p in '1 2' '1 3' '2 3'; do set -- $p; tp-match ${_pl}/img_0$1.tif ${_pl}/img_0$2.tif --threads 2 -q -o $1$2.matches || exit 1; done && tp-chain 12.matches 13.matches 23.matches -o t.tracks && test $(grep -vc '^#' t.tracks) -ge 5000 && bench_match_accuracy --tracks t.tracks --check-rmse 0.15"
   TIMEOUT 600 LABELS slow)
 endif()
+# OpenCV's pool is sized once, never while tpkit's threads are inside it: the every-pair mode and the
+# tiled detector, many runs under a competing load on every core, each run bounded by a timeout, so
+# that a hang fails here instead of stalling the suite.
+tpkit_tool_test(tp-match.threads-stress
+  COMMAND "tp-synth --out s --size 640 --seed 4 --relief 30 --points 10 && for k in $(seq $(nproc)) @SEMI@ do (end=$((SECONDS + 240)) @SEMI@ while [ $SECONDS -lt $end ] @SEMI@ do : @SEMI@ done) & done @SEMI@ trap 'kill $(jobs -p) 2>/dev/null' EXIT @SEMI@ for i in $(seq 12) @SEMI@ do timeout 60 tp-match s/view1.tif s/view2.tif s/view3.tif -q --tile 256 --overlap 32 --threads $((1 + i % 3)) -o p$i || { echo \"run $i: exit $?\" @SEMI@ exit 1 @SEMI@ } @SEMI@ cmp p$i/pair-1-3.matches p1/pair-1-3.matches || exit 1 @SEMI@ done @SEMI@ echo stress-ok"
+  STDOUT_MATCH "stress-ok" TIMEOUT 900)
+tpkit_tool_test(tp-match.threads-out-of-range
+  COMMAND "tp-match a.tif b.tif --threads 70000 -o out.matches"
+  EXPECT_FAIL STDERR_MATCH "--threads" NO_FILE out.matches)

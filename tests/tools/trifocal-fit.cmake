@@ -52,3 +52,7 @@ tpkit_tool_test(trifocal-fit.two-views
 tpkit_tool_test(trifocal-fit.unknown-method
   COMMAND "trifocal-fit -m nope - -o t.trifocal < /dev/null"
   EXPECT_FAIL STDERR_MATCH "unknown method" NO_FILE t.trifocal)
+# a stream of zeros with no newline (a device, not a file) fails at once with its reason
+tpkit_tool_test(trifocal-fit.zero-device
+  COMMAND "timeout 20 trifocal-fit /dev/zero -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "/dev/zero:1: binary data" NO_FILE t.trifocal)

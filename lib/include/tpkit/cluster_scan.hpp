@@ -26,6 +26,12 @@ struct ScanRow {
 
 // Physical scan when `param` names a physical parameter (needs phys), math scan for h11 ... h33.
 // Throws UsageError for an unknown name, steps < 2 or lo >= hi. Values where H is singular are left out.
+// The most values one scan takes (--steps).
+constexpr int kMaxScanSteps = 100000;
+// Throws UsageError naming the option unless PARAM is a scan parameter (h11..h33 or a physical name),
+// LO < HI both finite and 2 <= STEPS <= kMaxScanSteps. Tools call it before any work.
+void check_scan(const std::string& param, double lo, double hi, int steps);
+
 std::vector<ScanRow> scan_cost(const ClusterCost& cost, const std::string& param, const Eigen::Matrix3d& H,
                                const PhysicalParams* phys, double lo, double hi, int steps);
 

@@ -11,6 +11,10 @@
 
 namespace tpkit {
 
+// The largest thread count a tool accepts (--threads): beyond it, a typo, not a machine (OpenCV's pool
+// crashes on counts above 65536).
+constexpr int kMaxThreads = 1024;
+
 template <class F>
 void parallel_for(size_t n, int threads, F&& f) {
   std::atomic<size_t> next{0};

@@ -10,18 +10,21 @@
 
 namespace tpkit {
 
+void check_scan(const std::string& param, double lo, double hi, int steps) {
+  if (steps < 2 || steps > kMaxScanSteps)
+    throw UsageError("--steps must be between 2 and " + std::to_string(kMaxScanSteps) + ", got " + std::to_string(steps));
+  if (!(lo < hi) || !std::isfinite(lo) || !std::isfinite(hi)) throw UsageError("--range needs LO < HI, both finite");
+  const bool h_entry = param.size() == 3 && param[0] == 'h' && param[1] >= '1' && param[1] <= '3' && param[2] >= '1' &&
+                       param[2] <= '3';
+  if (physical_param_index(param) < 0 && !h_entry)
+    throw UsageError("unknown scan parameter '" + param + "' (h11 ... h33, or px1 py1 rho1 alpha1 beta1 gamma1 res1 theta1 cx1 cy1 and the same with 2)");
+}
+
 std::vector<ScanRow> scan_cost(const ClusterCost& cost, const std::string& param, const Eigen::Matrix3d& H,
                                const PhysicalParams* phys, double lo, double hi, int steps) {
-  if (steps < 2) throw UsageError("--steps must be at least 2");
-  if (!(lo < hi) || !std::isfinite(lo) || !std::isfinite(hi)) throw UsageError("--range needs LO < HI, both finite");
-  int pi = physical_param_index(param);
-  int hr = -1, hc = -1;
-  if (pi < 0) {
-    if (param.size() == 3 && param[0] == 'h' && param[1] >= '1' && param[1] <= '3' && param[2] >= '1' && param[2] <= '3')
-      hr = param[1] - '1', hc = param[2] - '1';
-    else
-      throw UsageError("unknown scan parameter '" + param + "' (h11 ... h33, or px1 py1 rho1 alpha1 beta1 gamma1 res1 theta1 cx1 cy1 and the same with 2)");
-  }
+  check_scan(param, lo, hi, steps);
+  const int pi = physical_param_index(param);
+  const int hr = pi < 0 ? param[1] - '1' : -1, hc = pi < 0 ? param[2] - '1' : -1;
   if (pi >= 0 && !phys) throw UsageError("scanning a physical parameter needs physical parameters (--param physical with --init)");
   std::vector<ScanRow> rows;
   Eigen::Matrix3d Hn = normalized_homography(H);

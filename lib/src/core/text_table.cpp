@@ -76,6 +76,25 @@ bool parse_long(const std::string& s, long& v) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
+// One line into `line` (without its '\n'); false at the end of the stream. Binary data (a NUL byte) and
+// a line longer than kMaxLine are refused as they are read, so that a stream of zeros with no newline
+// (a device, a binary file) fails at once instead of filling memory.
+constexpr size_t kMaxLine = size_t(1) << 20;
+bool read_line(std::istream& in, std::string& line, const std::string& source, long lineno) {
+  line.clear();
+  std::streambuf* sb = in.rdbuf();
+  if (!sb) return false;
+  for (;;) {
+    const int c = sb->sbumpc();
+    if (c == std::char_traits<char>::eof()) return !line.empty();
+    if (c == '\n') return true;
+    if (c == 0) throw InputError(source, lineno, "binary data (NUL byte) in a text file");
+    if (line.size() >= kMaxLine)
+      throw InputError(source, lineno, "line longer than " + std::to_string(kMaxLine) + " bytes: not a tpkit text file");
+    line.push_back(static_cast<char>(c));
+  }
+}
+
 }  // namespace
 
 TextTable read_table(std::istream& in, const std::string& source_in, const ReadOptions& opt) {
@@ -85,9 +104,9 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
   long lineno = 0;
   bool header_seen = false;
   bool first_content = true;
-  while (std::getline(in, line)) {
+  while (read_line(in, line, t.source, lineno + 1)) {
     ++lineno;
-    if (line.find('\0') != std::string::npos) throw InputError(t.source, lineno, "binary data (NUL byte) in a text file");
+    if (lineno == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // a UTF-8 byte order mark
     std::string s = trim(line);
     if (s.empty()) continue;
     if (s[0] == '#') {
@@ -109,6 +128,14 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
           header_seen = true;
           continue;
         }
+      }
+      {
+        // a header anywhere but on the first line: a comment above it, or two files concatenated
+        auto w = split_ws(c);
+        long v = 0;
+        if (w.size() == 3 && w[0] == "tpkit" && parse_long(w[2], v))
+          throw InputError(t.source, lineno, header_seen ? "a second '# tpkit KIND VERSION' header (files concatenated?)"
+                                                         : "the '# tpkit KIND VERSION' header must be the first line");
       }
       size_t colon = c.find(':');
       if (colon == std::string::npos || colon == 0 || c.find(' ') < colon) {

@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -17,13 +18,7 @@
 namespace tpkit {
 
 namespace {
-constexpr const char* kMagic = "tpkit-sift 1";
-
-struct Record {
-  float x, y, size, angle, response;
-  int32_t octave, class_id;
-  int64_t id;
-};
+constexpr const char* kMagic = "tpkit-sift 2";
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -52,32 +47,86 @@ std::string keypoint_cache_path(const std::string& dir, const ImageSource& src, 
   return (std::filesystem::path(dir) / (std::filesystem::path(src.path).filename().string() + "." + hex + ".sift")).string();
 }
 
+namespace {
+// One record as stored: fields packed in this order, no padding (kRecordBytes), native byte order.
+constexpr size_t kRecordBytes = 5 * 4 + 2 * 4 + 8 + 128;
+
+void pack(const cv::KeyPoint& k, int64_t id, const uint8_t* desc, char* out) {
+  const float f[5] = {k.pt.x, k.pt.y, k.size, k.angle, k.response};
+  const int32_t i[2] = {k.octave, k.class_id};
+  std::memcpy(out, f, sizeof f);
+  std::memcpy(out + 20, i, sizeof i);
+  std::memcpy(out + 28, &id, 8);
+  std::memcpy(out + 36, desc, 128);
+}
+
+// Reads a line of at most `max` bytes; false if longer or at the end of the stream.
+bool short_line(std::istream& in, std::string& line, size_t max) {
+  line.clear();
+  for (;;) {
+    const int c = in.get();
+    if (c == std::char_traits<char>::eof()) return false;
+    if (c == '\n') return true;
+    if (line.size() >= max) return false;
+    line.push_back(static_cast<char>(c));
+  }
+}
+
+void fnv1a_bytes(uint64_t& h, const char* p, size_t n) {
+  for (size_t k = 0; k < n; ++k) {
+    h ^= static_cast<unsigned char>(p[k]);
+    h *= 1099511628211ull;
+  }
+}
+}  // namespace
+
 bool load_keypoints(const std::string& path, const std::string& identity, Keypoints& K) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
+  std::error_code ec;
+  const auto file_size = std::filesystem::file_size(path, ec);
+  if (ec) return false;
   std::string magic, ident;
-  if (!std::getline(in, magic) || magic != kMagic || !std::getline(in, ident)) return false;
+  if (!short_line(in, magic, 64) || magic != kMagic || !short_line(in, ident, 1 << 16)) return false;
   const size_t sp = ident.rfind(" count=");
   if (sp == std::string::npos || ident.substr(0, sp) != identity) return false;
   long long n = -1;
   try {
-    n = std::stoll(ident.substr(sp + 7));
+    size_t used = 0;
+    n = std::stoll(ident.substr(sp + 7), &used);
+    if (used != ident.size() - sp - 7) return false;
   } catch (...) {
     return false;
   }
-  if (n < 0 || n > (1LL << 31) - 1) return false;
+  // the count must be what the file holds: header, records, checksum (checked before any allocation)
+  const unsigned long long header = magic.size() + ident.size() + 2;
+  if (n < 0 || n > (1LL << 31) - 1 ||
+      static_cast<unsigned long long>(file_size) != header + static_cast<unsigned long long>(n) * kRecordBytes + 8)
+    return false;
   Keypoints out;
   out.kp.resize(static_cast<size_t>(n));
   out.id.resize(static_cast<size_t>(n));
   out.desc.create(static_cast<int>(n), 128, CV_8U);
+  uint64_t h = 1469598103934665603ull;
+  char rec[kRecordBytes];
   for (long long i = 0; i < n; ++i) {
-    Record r;
-    if (!in.read(reinterpret_cast<char*>(&r), sizeof r) || !in.read(reinterpret_cast<char*>(out.desc.ptr<uint8_t>(static_cast<int>(i))), 128))
-      return false;
-    out.kp[static_cast<size_t>(i)] = cv::KeyPoint(r.x, r.y, r.size, r.angle, r.response, r.octave, r.class_id);
-    out.id[static_cast<size_t>(i)] = r.id;
+    if (!in.read(rec, sizeof rec)) return false;
+    fnv1a_bytes(h, rec, sizeof rec);
+    float f[5];
+    int32_t oc[2];
+    int64_t id;
+    std::memcpy(f, rec, sizeof f);
+    std::memcpy(oc, rec + 20, sizeof oc);
+    std::memcpy(&id, rec + 28, 8);
+    for (float v : f)
+      if (!std::isfinite(v)) return false;
+    if (f[0] < -0.5f || f[1] < -0.5f || !(f[2] > 0) || id < 0) return false;
+    std::memcpy(out.desc.ptr<uint8_t>(static_cast<int>(i)), rec + 36, 128);
+    out.kp[static_cast<size_t>(i)] = cv::KeyPoint(f[0], f[1], f[2], f[3], f[4], oc[0], oc[1]);
+    out.id[static_cast<size_t>(i)] = id;
   }
-  if (in.peek() != std::char_traits<char>::eof()) return false;
+  uint64_t stored = 0;
+  if (!in.read(reinterpret_cast<char*>(&stored), 8) || stored != h) return false;
   K = std::move(out);
   return true;
 }
@@ -86,12 +135,14 @@ void save_keypoints(const std::string& path, const std::string& identity, const 
   AtomicOutput out(path);
   std::ostream& s = out.stream();
   s << kMagic << "\n" << identity << " count=" << K.kp.size() << "\n";
+  uint64_t h = 1469598103934665603ull;
+  char rec[kRecordBytes];
   for (size_t i = 0; i < K.kp.size(); ++i) {
-    const cv::KeyPoint& k = K.kp[i];
-    const Record r{k.pt.x, k.pt.y, k.size, k.angle, k.response, k.octave, k.class_id, K.id[i]};
-    s.write(reinterpret_cast<const char*>(&r), sizeof r);
-    s.write(reinterpret_cast<const char*>(K.desc.ptr<uint8_t>(static_cast<int>(i))), 128);
+    pack(K.kp[i], K.id[i], K.desc.ptr<uint8_t>(static_cast<int>(i)), rec);
+    fnv1a_bytes(h, rec, sizeof rec);
+    s.write(rec, sizeof rec);
   }
+  s.write(reinterpret_cast<const char*>(&h), 8);
   out.commit();
 }
 
@@ -109,6 +160,8 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
     if (from_cache) *from_cache = true;
     return K;
   }
+  if (std::filesystem::exists(path, ec))
+    warn(path + ": keypoint cache entry unusable (truncated, corrupt or of other options): detecting again");
   K = detect_sift_tiles(src, o, threads, progress);
   save_keypoints(path, identity, K);
   return K;

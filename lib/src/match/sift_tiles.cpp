@@ -100,10 +100,6 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
   // Tile rows one at a time: the row's band of the image (full width, with the overlaps) is read once
   // and the row's tiles are cut from it, so that a file stored in strips is decoded once per row, not
   // once per tile (a 10000-pixel-wide strip image would otherwise be decoded ten times over).
-  struct RestoreThreads {
-    int n = cv::getNumThreads();
-    ~RestoreThreads() { cv::setNumThreads(n); }
-  } restore;
   for (size_t r0 = 0; r0 < tiles.size();) {
     size_t r1 = r0;
     long ya = tiles[r0].ry0, yb = tiles[r0].ry1;
@@ -114,8 +110,7 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
     }
     const Raster band = read_valid_region(src, 0, ya, src.info.width, yb - ya);
     const int workers = std::min<int>(threads, static_cast<int>(r1 - r0));
-    // OpenCV parallelises inside one tile; share the threads between tile workers and OpenCV
-    cv::setNumThreads(std::max(1, threads / workers));
+    // OpenCV parallelises inside each tile on its own pool, sized once per process (opencv_threads.hpp)
     parallel_for(r1 - r0, workers, [&](size_t k) {
       res[r0 + k] = detect_tile(src, band, o, K.stretch, tiles[r0 + k]);
       if (progress) progress->add(1);

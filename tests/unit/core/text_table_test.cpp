@@ -2,6 +2,7 @@
 // file:line, number formatting.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -161,4 +162,47 @@ TEST(TextTable, WrittenByNamesTheWriterAndIsNotCarriedAlong) {
   std::ostringstream again;
   write_header(again, t.kind, t.version, t.images, t.meta, t.columns);
   EXPECT_EQ(again.str(), first);
+}
+
+TEST(TextTable, HeaderMustBeTheFirstLine) {
+  ReadOptions o = matches_read_options();
+  // a comment above the header would make it a free comment, and kind and version go unchecked
+  EXPECT_NE(error_of("# note\n# tpkit tracks 99\n# columns: id1 x1 y1 id2 x2 y2\n1 2 3 4 5 6\n", o)
+                .find("test.txt:2: the '# tpkit KIND VERSION' header must be the first line"),
+            std::string::npos);
+  EXPECT_NE(error_of("# tpkit matches 1\n# columns: id1 x1 y1 id2 x2 y2\n1 2 3 4 5 6\n# tpkit matches 1\n", o)
+                .find("test.txt:4: a second"),
+            std::string::npos);
+  // a byte order mark before the header is not a bad character
+  auto t = parse("\xEF\xBB\xBF# tpkit matches 1\n# columns: id1 x1 y1 id2 x2 y2\n1 2 3 4 5 6\n", o);
+  EXPECT_EQ(t.kind, "matches");
+  EXPECT_EQ(t.rows.size(), 1u);
+}
+
+TEST(TextTable, BinaryAndOverlongLinesFailAsTheyAreRead) {
+  // a stream of NUL bytes with no newline, or one endless line, is refused without reading it whole
+  struct Endless : std::streambuf {
+    char fill;
+    long served = 0;
+    char buf[4096];
+    explicit Endless(char c) : fill(c) {}
+    int_type underflow() override {
+      std::fill(buf, buf + sizeof buf, fill);
+      served += sizeof buf;
+      setg(buf, buf, buf + sizeof buf);
+      return traits_type::to_int_type(fill);
+    }
+  };
+  for (char c : {'\0', '7'}) {
+    Endless sb(c);
+    std::istream in(&sb);
+    std::string msg;
+    try {
+      read_table(in, "dev", matches_read_options());
+    } catch (const InputError& e) {
+      msg = e.what();
+    }
+    EXPECT_NE(msg.find(c == '\0' ? "dev:1: binary data" : "dev:1: line longer than"), std::string::npos) << msg;
+    EXPECT_LT(sb.served, 4L << 20) << "read far past the first bad byte";
+  }
 }

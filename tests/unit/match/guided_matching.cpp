@@ -135,3 +135,45 @@ TEST(KeypointCache, RoundTripAndStaleFiles) {
   EXPECT_FALSE(load_keypoints((dir / "none.sift").string(), "image=a detector=x", K));
   std::filesystem::remove_all(dir);
 }
+
+namespace {
+std::string slurp_bytes(const std::string& f) {
+  std::ifstream in(f, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+void spill_bytes(const std::string& f, const std::string& b) { std::ofstream(f, std::ios::binary) << b; }
+}  // namespace
+
+TEST(KeypointCache, UntrustedEntriesAreRefused) {
+  // a cache file is input like any other: a flipped byte, a forged count, a non-finite value with a
+  // valid checksum each count as missing (no crash, no giant allocation)
+  const auto dir = std::filesystem::temp_directory_path() / ("tpkit_kpcache_bad_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const Pair p = make_pair(50, 0, 5);
+  const std::string f = (dir / "a.sift").string();
+  const std::string id = "image=a detector=x";
+  save_keypoints(f, id, p.K1);
+  const std::string good = slurp_bytes(f);
+  Keypoints K;
+  ASSERT_TRUE(load_keypoints(f, id, K));
+
+  std::string flipped = good;
+  flipped[good.size() / 2] ^= 0x10;
+  spill_bytes(f, flipped);
+  EXPECT_FALSE(load_keypoints(f, id, K)) << "checksum";
+
+  std::string forged = good;
+  const std::string count = " count=" + std::to_string(p.K1.kp.size()) + "\n";
+  forged.replace(forged.find(count), count.size(), " count=2147483647\n");
+  spill_bytes(f, forged);
+  EXPECT_FALSE(load_keypoints(f, id, K)) << "forged count";
+
+  spill_bytes(f, std::string(100000, '\0'));
+  EXPECT_FALSE(load_keypoints(f, id, K)) << "zeros";
+
+  Keypoints nan = p.K1;
+  nan.kp[3].pt.x = std::numeric_limits<float>::quiet_NaN();
+  save_keypoints(f, id, nan);
+  EXPECT_FALSE(load_keypoints(f, id, K)) << "NaN with a valid checksum";
+  std::filesystem::remove_all(dir);
+}

@@ -1,0 +1,19 @@
+#include "tpkit/opencv_threads.hpp"
+
+#include <mutex>
+#include <opencv2/core/utility.hpp>
+
+namespace tpkit {
+
+bool set_opencv_threads(int threads) {
+  if (threads < 1 || threads > kMaxThreads) return false;
+  static std::once_flag once;
+  bool set = false;
+  std::call_once(once, [&]() {
+    cv::setNumThreads(threads);
+    set = true;
+  });
+  return set;
+}
+
+}  // namespace tpkit
