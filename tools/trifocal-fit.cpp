@@ -34,14 +34,16 @@ int main(int argc, char** argv) {
       [&](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<Opts>();
         app.add_option("-m,--method", o->method, "dlt, affine-dlt, algebraic, minimal, three-f, ml");
-        app.add_option("--ransac", o->ransac, "robust fit; inlier threshold in pixels");
+        CLI::Option* ransac = app.add_option("--ransac", o->ransac, "robust fit; inlier threshold in pixels");
         app.add_option("--seed", o->seed, "seed of the robust sampling");
         app.add_option("--cameras", o->cameras, "also write the cameras recovered from the tensor");
         app.add_option("--inliers", o->inliers, "with --ransac: write the tracks with an inlier column");
         app.add_option("tracks", o->input, "tracks file with three views, - for stdin");
         app.add_option("-o,--output", o->output, "trifocal file, - for stdout");
-        return [o]() {
+        return [o, ransac]() {
           using namespace tpkit;
+          if (ransac->count() > 0 && !(o->ransac > 0))
+            throw UsageError("--ransac: the inlier threshold must be a positive number of pixels, got " + num(o->ransac));
           const TrifocalMethod m = parse_trifocal_method(o->method);
           if (!o->inliers.empty() && !(o->ransac > 0)) throw UsageError("--inliers needs --ransac");
           if (o->ransac < 0) throw UsageError("--ransac: the threshold must be positive");

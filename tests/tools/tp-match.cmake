@@ -66,3 +66,9 @@ tpkit_tool_test(tp-match.threads-stress
 tpkit_tool_test(tp-match.threads-out-of-range
   COMMAND "tp-match a.tif b.tif --threads 70000 -o out.matches"
   EXPECT_FAIL STDERR_MATCH "--threads" NO_FILE out.matches)
+tpkit_tool_test(tp-match.nan-option
+  COMMAND "tp-match a.tif b.tif --ratio nan -o out.matches"
+  EXPECT_FAIL STDERR_MATCH "--ratio: must be a finite number, got 'nan'" NO_FILE out.matches)
+tpkit_tool_test(tp-match.inf-nodata
+  COMMAND "tp-match a.tif b.tif --nodata inf -o out.matches"
+  EXPECT_FAIL STDERR_MATCH "--nodata: must be a finite number" NO_FILE out.matches)

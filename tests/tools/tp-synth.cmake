@@ -40,3 +40,6 @@ tpkit_tool_test(tp-synth.missing-out
 tpkit_tool_test(tp-synth.out-is-a-file
   COMMAND "echo x > out && tp-synth --out out --size 64 --relief 5 --points 5"
   EXPECT_FAIL STDERR_MATCH "^tp-synth: out: cannot create directory")
+tpkit_tool_test(tp-synth.size-that-cannot-finish
+  COMMAND "timeout 10 tp-synth --out out --size 100000"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --size must be between 16 and 40000" NO_FILE out)

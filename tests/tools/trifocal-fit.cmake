@@ -56,3 +56,15 @@ tpkit_tool_test(trifocal-fit.unknown-method
 tpkit_tool_test(trifocal-fit.zero-device
   COMMAND "timeout 20 trifocal-fit /dev/zero -o t.trifocal"
   EXPECT_FAIL STDERR_MATCH "/dev/zero:1: binary data" NO_FILE t.trifocal)
+# a robust fit backed by its own minimal sample alone (random tracks) is no fit, for every method
+foreach(m ml affine-dlt algebraic minimal)
+  tpkit_tool_test(trifocal-fit.${m}-random-tracks-no-fit
+    COMMAND "awk 'BEGIN { srand(7) @SEMI@ print \"# tpkit tracks 1\" @SEMI@ print \"# columns: track x1 y1 x2 y2 x3 y3\" @SEMI@ for (i = 1 @SEMI@ i <= 200 @SEMI@ i++) { printf \"%d\", i @SEMI@ for (k = 0 @SEMI@ k < 6 @SEMI@ k++) printf \" %.3f\", 1000 * rand() @SEMI@ print \"\" } }' > r.tracks && trifocal-fit -m ${m} --ransac 1 r.tracks --inliers f.tracks -o t.trifocal"
+    EXPECT_FAIL STDERR_MATCH "ransac: no fit: the best model is supported by [4-7] of 200 tracks" NO_FILE t.trifocal)
+endforeach()
+tpkit_tool_test(trifocal-fit.ransac-nan
+  COMMAND "trifocal-fit --ransac nan - -o t.trifocal < /dev/null"
+  EXPECT_FAIL STDERR_MATCH "--ransac: must be a finite number" NO_FILE t.trifocal)
+tpkit_tool_test(trifocal-fit.ransac-zero
+  COMMAND "${_synth} && trifocal-fit --ransac 0 syn/truth.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "--ransac: the inlier threshold must be a positive number" NO_FILE t.trifocal)

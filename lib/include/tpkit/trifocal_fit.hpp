@@ -32,6 +32,10 @@ TrifocalTensor run_trifocal_method(TrifocalMethod m, const Eigen::MatrixXd& xy);
 // in pixels (points eliminated in closed form: for affine views this is the reprojection error after
 // optimal triangulation), LO re-fits by ml; the inliers of the best (LO-refined) model are the inlier
 // mask, and they are re-fitted with `m` (with the full input checks, flat terrain included).
+// A robust fit is refused (NumericalError) unless its inliers exceed its 4-track minimal sample by at
+// least kRobustMinSupport tracks and by at least kRobustMinFraction of all tracks.
+constexpr size_t kRobustMinSupport = 4;
+constexpr double kRobustMinFraction = 0.01;
 struct RobustTrifocalFit {
   TrifocalTensor T;
   std::vector<char> inlier;

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 #include <mutex>
@@ -235,6 +236,19 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
     app.set_help_flag("-h,--help", "print the manual page and exit");
     app.set_version_flag("--version", tool + " (tpkit) " + version_full(), "print the version and exit");
     auto body = setup(app);
+    // Every floating-point option takes finite numbers only: NaN passes every `x < limit` check and
+    // would be written into headers; Inf is never a meaningful size, threshold or level.
+    for (CLI::Option* opt : app.get_options()) {
+      if (opt->get_type_name().find("FLOAT") == std::string::npos) continue;
+      opt->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            char* end = nullptr;
+            const double d = std::strtod(v.c_str(), &end);
+            if (end != v.c_str() && !std::isfinite(d)) return "must be a finite number, got '" + v + "'";
+            return std::string();
+          },
+          "", "finite"));
+    }
     try {
       app.parse(argc, argv);
     } catch (const CLI::CallForHelp&) {

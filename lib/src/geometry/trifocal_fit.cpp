@@ -1,6 +1,10 @@
 #include "tpkit/trifocal_fit.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "tpkit/error.hpp"
+#include "tpkit/text_table.hpp"
 #include "tpkit/trifocal_affine_dlt.hpp"
 #include "tpkit/trifocal_algebraic.hpp"
 #include "tpkit/trifocal_dlt.hpp"
@@ -123,6 +127,15 @@ RobustTrifocalFit fit_trifocal_ransac(TrifocalMethod m, const Eigen::MatrixXd& x
   AffineTrifocalEstimator est(xy);
   auto rr = ransac(est, opt);
   if (!rr.found) throw NumericalError("ransac: no sample gave a model");
+  // Any 4 tracks fit the 12-parameter affine model exactly, so a model backed by its own sample alone
+  // (random tracks give exactly that) or by a sliver of the data is no fit.
+  const size_t n = static_cast<size_t>(xy.rows()), s = kMlMinTracks;
+  const size_t need = s + std::max<size_t>(kRobustMinSupport, static_cast<size_t>(std::ceil(kRobustMinFraction * n)));
+  if (rr.inliers < need)
+    throw NumericalError("ransac: no fit: the best model is supported by " + std::to_string(rr.inliers) + " of " +
+                         std::to_string(n) + " tracks within " + format_number(opt.threshold) + " px, its own " +
+                         std::to_string(s) + "-track sample included; a fit needs at least " + std::to_string(need) +
+                         " (are these tracks of one scene?)");
   RobustTrifocalFit out;
   out.iterations = rr.iterations;
   out.inlier = rr.inlier;

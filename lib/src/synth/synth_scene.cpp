@@ -40,7 +40,8 @@ struct SynthScene::Impl {
 };
 
 void check_params(const SynthParams& p) {
-  if (p.size < 16 || p.size > 100000) throw UsageError("--size must be between 16 and 100000 pixels, got " + std::to_string(p.size));
+  // 40000: a full Pléiades scene. Beyond it a run takes days and its terrain grid alone gigabytes (man page).
+  if (p.size < 16 || p.size > 40000) throw UsageError("--size must be between 16 and 40000 pixels, got " + std::to_string(p.size));
   if (!(p.relief >= 0) || !std::isfinite(p.relief)) throw UsageError("--relief must be >= 0 metres");
   if (!(p.gsd > 0) || !std::isfinite(p.gsd)) throw UsageError("--gsd must be > 0 metres/pixel");
   if (p.camera != "affine" && p.camera != "perspective")
