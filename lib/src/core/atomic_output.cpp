@@ -2,50 +2,300 @@
 
 #include <unistd.h>
 
+#include <atomic>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <mutex>
 #include <random>
+#include <system_error>
 
 #include "tpkit/error.hpp"
 
 namespace tpkit {
 
-AtomicOutput::AtomicOutput(const std::string& path) : path_(path) {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Live temporary files, readable from a signal handler: fixed slots of strdup'ed names.
+constexpr int kSlots = 4096;
+std::atomic<char*> g_temps[kSlots];
+
+void register_temp(const std::string& tmp) {
+  char* name = ::strdup(tmp.c_str());
+  if (!name) return;
+  for (auto& slot : g_temps) {
+    char* expected = nullptr;
+    if (slot.compare_exchange_strong(expected, name)) return;
+  }
+  std::free(name);  // more live temporaries than slots: this one is not removed on a signal
+}
+
+void unregister_temp(const std::string& tmp) {
+  for (auto& slot : g_temps) {
+    char* p = slot.load();
+    if (p && tmp == p && slot.compare_exchange_strong(p, nullptr)) {
+      std::free(p);
+      return;
+    }
+  }
+}
+
+extern "C" void remove_temps_on_signal(int sig) {
+  for (auto& slot : g_temps) {
+    char* p = slot.load();
+    if (p) ::unlink(p);
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+struct Pending {
+  std::string tmp, target, text;
+  bool to_stdout = false;
+};
+
+struct Transaction {
+  std::mutex m;
+  bool active = false;
+  std::vector<Pending> pending;
+  std::vector<std::pair<std::string, std::string>> claimed;  // normalized target, option
+  std::vector<std::string> inputs;                           // normalized
+  std::vector<std::string> stale;
+};
+Transaction& tx() {
+  static Transaction t;
+  return t;
+}
+
+std::string normalized(const std::string& path) {
+  if (path == "-") return path;
+  std::error_code ec;
+  fs::path p = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  return ec ? fs::absolute(path).lexically_normal().string() : p.string();
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+  if (a == "-" || b == "-") return a == b;
+  if (a == b) return true;
+  std::error_code ec;
+  return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
+}
+
+std::string errno_text() { return std::strerror(errno); }
+
+void rename_now(const std::string& tmp, const std::string& target) {
+  if (std::rename(tmp.c_str(), target.c_str()) != 0) {
+    const std::string why = errno_text();
+    std::remove(tmp.c_str());
+    unregister_temp(tmp);
+    throw InputError(target, 0, "cannot rename the temporary output onto it: " + why);
+  }
+  unregister_temp(tmp);
+}
+
+// caller holds the lock
+void check_not_input(const std::string& norm, const std::string& path, const std::string& option) {
+  for (const auto& in : tx().inputs)
+    if (same_file(in, norm))
+      throw UsageError((option.empty() ? "" : option + " ") + path + ": is also an input of this run: refusing to overwrite it");
+}
+}  // namespace
+
+std::string claim_temp(const std::string& target) {
+  static std::atomic<unsigned> counter{0};
+  std::random_device rd;
+  std::string stem = target, ext;
+  const auto dot = target.find_last_of('.'), slash = target.find_last_of('/');
+  if (dot != std::string::npos && (slash == std::string::npos || dot > slash) && dot > (slash == std::string::npos ? 0 : slash + 1)) {
+    stem = target.substr(0, dot);
+    ext = target.substr(dot);
+  }
+  const std::string tmp = stem + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++) + "." +
+                          std::to_string(rd() % 1000000) + ext;
+  register_temp(tmp);
+  return tmp;
+}
+
+void discard_temp(const std::string& tmp) {
+  std::remove(tmp.c_str());
+  unregister_temp(tmp);
+}
+
+void finish_output(const std::string& tmp, const std::string& target) {
+  {
+    std::lock_guard<std::mutex> lock(tx().m);
+    if (tx().active) {
+      tx().pending.push_back({tmp, target, "", false});
+      return;
+    }
+  }
+  rename_now(tmp, target);
+}
+
+void begin_outputs() {
+  std::lock_guard<std::mutex> lock(tx().m);
+  Transaction& t = tx();
+  t.active = true;
+  t.pending.clear();
+  t.claimed.clear();
+  t.inputs.clear();
+  t.stale.clear();
+}
+
+void note_input(const std::string& path) {
+  if (path.empty() || path == "-") return;
+  std::lock_guard<std::mutex> lock(tx().m);
+  if (!tx().active) return;
+  const std::string norm = normalized(path);
+  for (const auto& c : tx().claimed)
+    if (same_file(c.first, norm))
+      throw UsageError((c.second.empty() ? "" : c.second + " ") + path + ": is also an input of this run: refusing to overwrite it");
+  tx().inputs.push_back(norm);
+}
+
+void claim_output(const std::string& path, const std::string& option) {
+  std::lock_guard<std::mutex> lock(tx().m);
+  if (!tx().active) return;
+  const std::string norm = normalized(path);
+  for (const auto& c : tx().claimed)
+    if (c.first == norm) {
+      if (option.empty() && c.second.empty())
+        throw UsageError(path + ": written twice in one run");
+      const std::string first = c.second.empty() ? "another output" : c.second;
+      throw UsageError((option.empty() ? "an output" : option) + " and " + first + " name the same file (" + path +
+                       "): one would overwrite the other");
+    }
+  check_not_input(norm, path, option);
+  tx().claimed.emplace_back(norm, option);
+}
+
+void check_outputs(const std::vector<std::pair<std::string, std::string>>& option_and_path,
+                   const std::vector<std::string>& inputs) {
+  for (const auto& in : inputs) note_input(in);
+  for (const auto& [option, path] : option_and_path) {
+    if (path.empty()) continue;
+    claim_output(path, option);
+    if (path == "-") continue;
+    fs::path dir = fs::path(path).parent_path();
+    if (dir.empty()) dir = ".";
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) throw InputError(path, 0, "cannot write: folder " + dir.string() + " does not exist");
+    if (::access(dir.c_str(), W_OK) != 0) throw InputError(path, 0, "cannot write in folder " + dir.string() + ": " + errno_text());
+    if (fs::is_directory(path, ec)) throw InputError(path, 0, "cannot write: is a folder");
+  }
+}
+
+void remove_on_commit(const std::string& path) {
+  std::lock_guard<std::mutex> lock(tx().m);
+  if (tx().active) tx().stale.push_back(path);
+  else std::remove(path.c_str());
+}
+
+void commit_outputs() {
+  std::vector<Pending> pending;
+  std::vector<std::string> stale;
+  {
+    std::lock_guard<std::mutex> lock(tx().m);
+    pending.swap(tx().pending);
+    stale.swap(tx().stale);
+    tx().active = false;
+    tx().claimed.clear();
+    tx().inputs.clear();
+  }
+  // the files first (any of them may still fail), standard output last
+  for (size_t i = 0; i < pending.size(); ++i) {
+    if (pending[i].to_stdout) continue;
+    try {
+      rename_now(pending[i].tmp, pending[i].target);
+    } catch (...) {
+      for (size_t k = i + 1; k < pending.size(); ++k)
+        if (!pending[k].to_stdout) discard_temp(pending[k].tmp);
+      throw;
+    }
+  }
+  for (const auto& s : stale) {
+    bool rewritten = false;
+    for (const auto& p : pending) rewritten = rewritten || (!p.to_stdout && same_file(p.target, s));
+    if (!rewritten) std::remove(s.c_str());
+  }
+  for (const auto& p : pending)
+    if (p.to_stdout) std::cout << p.text;
+  std::cout.flush();
+  if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
+}
+
+void abort_outputs() {
+  std::vector<Pending> pending;
+  {
+    std::lock_guard<std::mutex> lock(tx().m);
+    pending.swap(tx().pending);
+    tx().active = false;
+    tx().claimed.clear();
+    tx().inputs.clear();
+    tx().stale.clear();
+  }
+  for (const auto& p : pending)
+    if (!p.to_stdout) discard_temp(p.tmp);
+}
+
+void install_output_signal_cleanup() {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) std::signal(sig, remove_temps_on_signal);
+}
+
+AtomicOutput::AtomicOutput(const std::string& path, bool transactional) : path_(path), transactional_(transactional) {
+  if (transactional_) claim_output(path);
   if (path == "-") {
     to_stdout_ = true;
     return;
   }
-  std::random_device rd;
-  tmp_ = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(rd() % 1000000);
+  tmp_ = claim_temp(path);
   file_.open(tmp_, std::ios::out | std::ios::trunc | std::ios::binary);
-  if (!file_) throw InputError(path, 0, "cannot open for writing");
+  if (!file_) {
+    const std::string why = errno_text();
+    discard_temp(tmp_);
+    throw InputError(path, 0, "cannot open for writing: " + why);
+  }
 }
 
 AtomicOutput::~AtomicOutput() {
   if (!to_stdout_ && !committed_) {
     file_.close();
-    std::remove(tmp_.c_str());
+    discard_temp(tmp_);
   }
 }
 
-std::ostream& AtomicOutput::stream() { return to_stdout_ ? std::cout : static_cast<std::ostream&>(file_); }
+std::ostream& AtomicOutput::stream() { return to_stdout_ ? static_cast<std::ostream&>(buffer_) : static_cast<std::ostream&>(file_); }
 
 void AtomicOutput::commit() {
   if (committed_) return;
   if (to_stdout_) {
+    {
+      std::lock_guard<std::mutex> lock(tx().m);
+      if (transactional_ && tx().active) {
+        tx().pending.push_back({"", "-", buffer_.str(), true});
+        committed_ = true;
+        return;
+      }
+    }
+    std::cout << buffer_.str();
     std::cout.flush();
-    if (!std::cout) throw InputError("-", 0, "write error on standard output");
+    if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
     committed_ = true;
     return;
   }
   file_.flush();
-  if (!file_) throw InputError(path_, 0, "write error");
+  if (!file_) throw InputError(path_, 0, "write error: " + errno_text());
   file_.close();
-  if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-    std::remove(tmp_.c_str());
-    throw InputError(path_, 0, "cannot rename the temporary output onto it");
-  }
+  if (!file_) throw InputError(path_, 0, "write error on close: " + errno_text());
   committed_ = true;
+  if (transactional_) finish_output(tmp_, path_);
+  else rename_now(tmp_, path_);
 }
 
 void write_file_atomic(const std::string& path, const std::string& content) {

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <random>
 
+#include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/version.hpp"
 
@@ -23,6 +24,7 @@ using OIIO::TypeDesc;
 
 namespace {
 std::unique_ptr<ImageInput> open_input(const std::string& path) {
+  note_input(path);
   auto in = ImageInput::open(path);
   if (!in) {
     std::string err = OIIO::geterror();
@@ -38,18 +40,6 @@ std::unique_ptr<ImageInput> open_input(const std::string& path) {
   return in;
 }
 
-std::string temp_name(const std::string& path) {
-  // keep the extension last: OIIO picks the format from it
-  std::random_device rd;
-  std::string stem = path, ext;
-  auto dot = path.find_last_of('.');
-  auto slash = path.find_last_of('/');
-  if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) {
-    stem = path.substr(0, dot);
-    ext = path.substr(dot);
-  }
-  return stem + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(rd() % 100000) + ext;
-}
 }  // namespace
 
 ImageInfo image_info(const std::string& path) {
@@ -153,23 +143,30 @@ TiffWriterU16::TiffWriterU16(const std::string& path, long width, long height,
                              const std::vector<std::pair<std::string, std::string>>& tags)
     : impl_(new Impl) {
   impl_->path = path;
-  impl_->tmp = temp_name(path);
+  claim_output(path);
+  impl_->tmp = claim_temp(path);  // keeps the extension last: OIIO picks the format from it
   impl_->width = width;
   impl_->height = height;
-  impl_->out = ImageOutput::create(impl_->tmp);
-  if (!impl_->out) throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
-  ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, TypeDesc::UINT16);
-  spec.attribute("compression", "zip");
-  spec.attribute("tiff:RowsPerStrip", 64);
-  spec.attribute("Software", written_by());
-  for (const auto& kv : tags) spec.attribute(kv.first, kv.second);
-  if (!impl_->out->open(impl_->tmp, spec)) throw InputError(path, 0, "cannot open for writing: " + impl_->out->geterror());
+  try {
+    impl_->out = ImageOutput::create(impl_->tmp);
+    if (!impl_->out) throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
+    ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, TypeDesc::UINT16);
+    spec.attribute("compression", "zip");
+    spec.attribute("tiff:RowsPerStrip", 64);
+    spec.attribute("Software", written_by());
+    for (const auto& kv : tags) spec.attribute(kv.first, kv.second);
+    if (!impl_->out->open(impl_->tmp, spec)) throw InputError(path, 0, "cannot open for writing: " + impl_->out->geterror());
+  } catch (...) {
+    if (impl_->out) impl_->out->close();
+    discard_temp(impl_->tmp);
+    throw;
+  }
 }
 
 TiffWriterU16::~TiffWriterU16() {
   if (!impl_->closed) {
     if (impl_->out) impl_->out->close();
-    std::remove(impl_->tmp.c_str());
+    discard_temp(impl_->tmp);
   }
 }
 
@@ -184,28 +181,30 @@ void TiffWriterU16::close() {
   if (impl_->closed) return;
   if (impl_->next_row != impl_->height) throw std::logic_error("TiffWriterU16: image not complete");
   if (!impl_->out->close()) throw InputError(impl_->path, 0, "write error: " + impl_->out->geterror());
-  if (std::rename(impl_->tmp.c_str(), impl_->path.c_str()) != 0) {
-    std::remove(impl_->tmp.c_str());
-    throw InputError(impl_->path, 0, "cannot rename the temporary output onto it");
-  }
   impl_->closed = true;
+  finish_output(impl_->tmp, impl_->path);
 }
 
 namespace {
 template <class T>
 void write_whole(const std::string& path, long width, long height, const std::vector<T>& data, TypeDesc type) {
   if (static_cast<long>(data.size()) != width * height) throw std::logic_error("write_image: size mismatch");
-  std::string tmp = temp_name(path);
+  claim_output(path);
+  std::string tmp = claim_temp(path);
   auto out = ImageOutput::create(tmp);
-  if (!out) throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
+  if (!out) {
+    discard_temp(tmp);
+    throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
+  }
   ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, type);
   spec.attribute("Software", written_by());
   bool ok = out->open(tmp, spec) && out->write_image(type, data.data()) && out->close();
-  if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0) {
+  if (!ok) {
     std::string err = out->geterror();
-    std::remove(tmp.c_str());
+    discard_temp(tmp);
     throw InputError(path, 0, "cannot write image" + (err.empty() ? std::string() : ": " + err));
   }
+  finish_output(tmp, path);
 }
 }  // namespace
 

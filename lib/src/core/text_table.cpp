@@ -1,11 +1,14 @@
 #include "tpkit/text_table.hpp"
 
+#include <cerrno>
 #include <charconv>
+#include <cstring>
 #include <cmath>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
+#include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/version.hpp"
 
@@ -212,8 +215,9 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
 
 TextTable read_table_file(const std::string& path, const ReadOptions& opt) {
   if (path == "-") return read_table(std::cin, "-", opt);
+  note_input(path);
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, "cannot open for reading");
+  if (!f) throw InputError(path, 0, std::string("cannot open for reading: ") + std::strerror(errno));
   return read_table(f, path, opt);
 }
 

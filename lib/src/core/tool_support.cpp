@@ -9,6 +9,7 @@
 #include <mutex>
 #include <sstream>
 
+#include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/version.hpp"
 
@@ -269,7 +270,15 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
       std::cerr << tool << ": " << e.what() << "\n" << tool << ": see '" << tool << " --help'\n";
       return 2;
     }
-    return body();
+    // the body's outputs commit together when it succeeds, and are all discarded when it fails
+    install_output_signal_cleanup();
+    begin_outputs();
+    struct Abort {
+      ~Abort() { abort_outputs(); }  // no-op after commit_outputs()
+    } abort_unless_committed;
+    const int rc = body();
+    if (rc == 0) commit_outputs();
+    return rc;
   } catch (const UsageError& e) {
     std::cerr << tool << ": " << e.what() << "\n";
     return 2;

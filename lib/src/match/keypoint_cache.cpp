@@ -132,7 +132,7 @@ bool load_keypoints(const std::string& path, const std::string& identity, Keypoi
 }
 
 void save_keypoints(const std::string& path, const std::string& identity, const Keypoints& K) {
-  AtomicOutput out(path);
+  AtomicOutput out(path, /*transactional=*/false);  // a cache entry, not an output of the run
   std::ostream& s = out.stream();
   s << kMagic << "\n" << identity << " count=" << K.kp.size() << "\n";
   uint64_t h = 1469598103934665603ull;
