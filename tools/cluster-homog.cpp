@@ -8,6 +8,7 @@
 #include "tpkit/cluster_init.hpp"
 #include "tpkit/cluster_optimize.hpp"
 #include "tpkit/cluster_scan.hpp"
+#include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
 #include "tpkit/tool_support.hpp"
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
     app.add_option("--steps", o->steps, "values of the scan");
     app.add_option("--plot", o->plot, "SVG figure of the scan, or of the clusters before and after");
     return [o]() {
+      check_outputs({{"-o", o->out}, {"--pairs", o->pairs}, {"--plot", o->plot}}, {o->a, o->b, o->init});
       if (!o->scan.empty() && o->range.size() != 2) throw UsageError("--scan needs --range LO HI");
       if (o->scan.empty() && !o->range.empty()) throw UsageError("--range goes with --scan");
       if (!o->scan.empty()) check_scan(o->scan, o->range[0], o->range[1], o->steps);

@@ -79,6 +79,9 @@ int main(int argc, char** argv) {
         app.add_option("-o,--output", o->output, "output file, - for stdout");
         return [o]() -> int {
           using namespace tpkit;
+          std::vector<std::string> inputs = o->files;
+          inputs.push_back(o->check);
+          check_outputs({{"-o", o->output}, {"--plot", o->plot}}, inputs);
           if (o->transfer) return run_transfer(*o);
           if (o->files.size() != 2) throw UsageError("expected TRIFOCAL TRACKS");
           const Trifocal tf = read_trifocal(o->files[0]);

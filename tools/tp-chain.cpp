@@ -2,6 +2,7 @@
 #include <iostream>
 #include <memory>
 
+#include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
 #include "tpkit/tool_support.hpp"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
         app.add_option("-o,--output", o->out, "output tracks file (- = stdout)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
+          tpkit::check_outputs({{"-o", o->out}}, o->files);
           std::vector<tpkit::Matches> ms;
           for (const auto& f : o->files) ms.push_back(tpkit::read_matches(f));
           tpkit::ChainOptions co;

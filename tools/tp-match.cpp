@@ -6,6 +6,7 @@
 #include <optional>
 #include <thread>
 
+#include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
 #include "tpkit/match_every_pair.hpp"
@@ -94,6 +95,10 @@ int main(int argc, char** argv) {
             throw tpkit::UsageError("with more than two images, -o must name a folder for the pair files");
           if (n > 2 && (!o->mask1.empty() || !o->mask2.empty()))
             throw tpkit::UsageError("--mask1 / --mask2 apply to two images only");
+          std::vector<std::string> inputs = o->images;
+          inputs.push_back(o->mask1);
+          inputs.push_back(o->mask2);
+          if (n == 2) tpkit::check_outputs({{"-o", o->out}}, inputs);
           std::vector<tpkit::ImageSource> src;
           for (size_t i = 0; i < n; ++i)
             src.push_back(tpkit::open_image_source(o->images[i], o->band - 1, o->nodata, i == 0 ? o->mask1 : i == 1 ? o->mask2 : ""));

@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
         app.add_option("--kind", o->kind, "kind of headerless input: tracks, matches or points");
         app.add_option("-o,--output", o->output, "output file (default: stdout)");
         return [o]() {
+          tpkit::check_outputs({{"-o", o->output}, {"--rest", o->rest}}, {o->input});
           auto opt = options_for(o->kind);
           auto t = tpkit::read_table_file(o->input, opt);
           if (t.kind.empty()) t.kind = o->kind;

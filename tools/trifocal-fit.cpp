@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
           using namespace tpkit;
           if (ransac->count() > 0 && !(o->ransac > 0))
             throw UsageError("--ransac: the inlier threshold must be a positive number of pixels, got " + num(o->ransac));
+          check_outputs({{"-o", o->output}, {"--cameras", o->cameras}, {"--inliers", o->inliers}}, {o->input});
           const TrifocalMethod m = parse_trifocal_method(o->method);
           if (!o->inliers.empty() && !(o->ransac > 0)) throw UsageError("--inliers needs --ransac");
           if (o->ransac < 0) throw UsageError("--ransac: the threshold must be positive");

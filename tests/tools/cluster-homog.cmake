@@ -61,3 +61,6 @@ tpkit_tool_test(cluster-homog.scan-steps-bounded
 tpkit_tool_test(cluster-homog.scan-unknown-parameter-before-search
   COMMAND "timeout 20 cluster-homog $SRC/share/tpkit/cluster-a.points $SRC/share/tpkit/cluster-b.points --scan h44 --range 0 1 -o s.scan"
   EXPECT_FAIL STDERR_MATCH "unknown scan parameter 'h44'" NO_FILE s.scan)
+tpkit_tool_test(cluster-homog.pairs-onto-input
+  COMMAND "cp $SRC/share/tpkit/cluster-a.points a.points && cluster-homog a.points $SRC/share/tpkit/cluster-b.points --pairs a.points -o h.homography @SEMI@ rc=$? @SEMI@ cmp a.points $SRC/share/tpkit/cluster-a.points && exit $rc"
+  EXPECT_FAIL STDERR_MATCH "--pairs a.points: is also an input of this run" NO_FILE h.homography)

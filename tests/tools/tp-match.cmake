@@ -72,3 +72,8 @@ tpkit_tool_test(tp-match.nan-option
 tpkit_tool_test(tp-match.inf-nodata
   COMMAND "tp-match a.tif b.tif --nodata inf -o out.matches"
   EXPECT_FAIL STDERR_MATCH "--nodata: must be a finite number" NO_FILE out.matches)
+# every-pair: a pair that cannot be written (its name is taken by a folder) fails the run, and the
+# pairs already matched are not left behind
+tpkit_tool_test(tp-match.every-pair-all-or-nothing
+  COMMAND "tp-synth --out s --size 256 --seed 4 --relief 20 --points 10 >/dev/null 2>&1 && mkdir -p pairs/pair-2-3.matches && tp-match s/view1.tif s/view2.tif s/view3.tif -q -o pairs @SEMI@ rc=$? @SEMI@ ls pairs @SEMI@ test ! -e pairs/pair-1-2.matches && test -z \"$(ls pairs | grep tmp)\" && exit $rc"
+  EXPECT_FAIL STDERR_MATCH "pair-2-3.matches" NO_FILE pairs/pair-1-2.matches)

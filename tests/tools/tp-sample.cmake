@@ -19,3 +19,6 @@ tpkit_tool_test(tp-sample.too-many
 tpkit_tool_test(tp-sample.bad-record
   COMMAND "${_mk} && echo '100 1 2 x 4 5' >> t.tracks && tp-sample t.tracks -o out.tracks" EXPECT_FAIL
   STDERR_MATCH "tp-sample: t.tracks:105: field 'x2' is not a number: 'x'" NO_FILE out.tracks)
+tpkit_tool_test(tp-sample.rest-and-output-one-path
+  COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 >/dev/null 2>&1 && tp-sample s/truth.tracks -n 5 --rest o -o o"
+  EXPECT_FAIL STDERR_MATCH "--rest and -o name the same file" NO_FILE o)

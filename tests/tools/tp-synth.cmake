@@ -43,3 +43,11 @@ tpkit_tool_test(tp-synth.out-is-a-file
 tpkit_tool_test(tp-synth.size-that-cannot-finish
   COMMAND "timeout 10 tp-synth --out out --size 100000"
   EXPECT_FAIL STDERR_MATCH "^tp-synth: --size must be between 16 and 40000" NO_FILE out)
+# a scene folder is all new or all old: a perspective scene over an affine one leaves no stale tensor,
+# and an interrupted run leaves the old files untouched and no temporary files
+tpkit_tool_test(tp-synth.no-stale-truth
+  COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 --camera affine && test -e s/truth.trifocal && tp-synth --out s --size 128 --relief 10 --points 20 --camera perspective && ls s"
+  NO_FILE s/truth.trifocal)
+tpkit_tool_test(tp-synth.interrupted-leaves-old-scene
+  COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 && cp -r s old && (tp-synth --out s --size 3000 --relief 10 --points 20 --seed 9 & pid=$! @SEMI@ sleep 2 @SEMI@ kill -TERM $pid @SEMI@ wait $pid @SEMI@ echo killed $?) && ls s && test -z \"$(ls s | grep tmp)\" && diff -r old s && echo untouched"
+  STDOUT_MATCH "killed 143.*untouched")

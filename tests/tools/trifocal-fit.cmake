@@ -68,3 +68,13 @@ tpkit_tool_test(trifocal-fit.ransac-nan
 tpkit_tool_test(trifocal-fit.ransac-zero
   COMMAND "${_synth} && trifocal-fit --ransac 0 syn/truth.tracks -o t.trifocal"
   EXPECT_FAIL STDERR_MATCH "--ransac: the inlier threshold must be a positive number" NO_FILE t.trifocal)
+# the outputs of one run commit together: a later output that cannot be written leaves no earlier one
+tpkit_tool_test(trifocal-fit.outputs-all-or-nothing
+  COMMAND "${_synth} && trifocal-fit syn/truth.tracks --cameras missing-dir/c -o fit.trifocal"
+  EXPECT_FAIL STDERR_MATCH "missing-dir/c: cannot write: folder missing-dir does not exist" NO_FILE fit.trifocal)
+tpkit_tool_test(trifocal-fit.two-outputs-one-path
+  COMMAND "${_synth} && trifocal-fit --ransac 1 syn/truth.tracks --inliers same -o same"
+  EXPECT_FAIL STDERR_MATCH "--inliers and -o name the same file" NO_FILE same)
+tpkit_tool_test(trifocal-fit.output-onto-input
+  COMMAND "${_synth} && cp syn/truth.tracks t.tracks && trifocal-fit t.tracks --cameras ./t.tracks -o fit.trifocal @SEMI@ rc=$? @SEMI@ cmp t.tracks syn/truth.tracks && exit $rc"
+  EXPECT_FAIL STDERR_MATCH "--cameras ./t.tracks: is also an input of this run" NO_FILE fit.trifocal)

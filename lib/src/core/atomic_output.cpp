@@ -64,7 +64,11 @@ struct Transaction {
   std::mutex m;
   bool active = false;
   std::vector<Pending> pending;
-  std::vector<std::pair<std::string, std::string>> claimed;  // normalized target, option
+  struct Claim {
+    std::string target, option;  // normalized target; the option that named it ("" for a writer)
+    bool reserved;               // by check_outputs(): the first writer of the target takes it over
+  };
+  std::vector<Claim> claimed;
   std::vector<std::string> inputs;                           // normalized
   std::vector<std::string> stale;
 };
@@ -154,25 +158,33 @@ void note_input(const std::string& path) {
   if (!tx().active) return;
   const std::string norm = normalized(path);
   for (const auto& c : tx().claimed)
-    if (same_file(c.first, norm))
-      throw UsageError((c.second.empty() ? "" : c.second + " ") + path + ": is also an input of this run: refusing to overwrite it");
+    if (same_file(c.target, norm))
+      throw UsageError((c.option.empty() ? "" : c.option + " ") + path + ": is also an input of this run: refusing to overwrite it");
   tx().inputs.push_back(norm);
 }
 
-void claim_output(const std::string& path, const std::string& option) {
-  std::lock_guard<std::mutex> lock(tx().m);
-  if (!tx().active) return;
+namespace {
+// caller holds the lock; `reserve`: a claim by check_outputs() rather than by a writer
+void claim_locked(const std::string& path, const std::string& option, bool reserve) {
   const std::string norm = normalized(path);
-  for (const auto& c : tx().claimed)
-    if (c.first == norm) {
-      if (option.empty() && c.second.empty())
-        throw UsageError(path + ": written twice in one run");
-      const std::string first = c.second.empty() ? "another output" : c.second;
-      throw UsageError((option.empty() ? "an output" : option) + " and " + first + " name the same file (" + path +
-                       "): one would overwrite the other");
+  for (auto& c : tx().claimed)
+    if (c.target == norm) {
+      if (c.reserved && !reserve) {  // the writer of a checked output
+        c.reserved = false;
+        return;
+      }
+      if (option.empty() && c.option.empty()) throw UsageError(path + ": written twice in one run");
+      throw UsageError((option.empty() ? "an output" : option) + " and " + (c.option.empty() ? "another output" : c.option) +
+                       " name the same file (" + path + "): one would overwrite the other");
     }
   check_not_input(norm, path, option);
-  tx().claimed.emplace_back(norm, option);
+  tx().claimed.push_back({norm, option, reserve});
+}
+}  // namespace
+
+void claim_output(const std::string& path, const std::string& option) {
+  std::lock_guard<std::mutex> lock(tx().m);
+  if (tx().active) claim_locked(path, option, false);
 }
 
 void check_outputs(const std::vector<std::pair<std::string, std::string>>& option_and_path,
@@ -180,7 +192,10 @@ void check_outputs(const std::vector<std::pair<std::string, std::string>>& optio
   for (const auto& in : inputs) note_input(in);
   for (const auto& [option, path] : option_and_path) {
     if (path.empty()) continue;
-    claim_output(path, option);
+    {
+      std::lock_guard<std::mutex> lock(tx().m);
+      if (tx().active) claim_locked(path, option, true);
+    }
     if (path == "-") continue;
     fs::path dir = fs::path(path).parent_path();
     if (dir.empty()) dir = ".";
@@ -207,6 +222,19 @@ void commit_outputs() {
     tx().active = false;
     tx().claimed.clear();
     tx().inputs.clear();
+  }
+  // every target checked before any is replaced, so that a rename that must fail fails before the first
+  for (const auto& p : pending) {
+    if (p.to_stdout) continue;
+    std::error_code ec;
+    std::string why;
+    if (fs::is_directory(p.target, ec)) why = "cannot write: is a folder";
+    else if (::access(p.tmp.c_str(), F_OK) != 0) why = "the temporary output vanished";
+    if (!why.empty()) {
+      for (const auto& q : pending)
+        if (!q.to_stdout) discard_temp(q.tmp);
+      throw InputError(p.target, 0, why);
+    }
   }
   // the files first (any of them may still fail), standard output last
   for (size_t i = 0; i < pending.size(); ++i) {

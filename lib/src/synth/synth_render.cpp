@@ -190,6 +190,8 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     meta_set(tf.meta, "method", "exact, from the truth cameras (H&Z T_i = a_i b_4^T - a_4 b_i^T, P1 H = [I | 0])");
     tf.T = trifocal_from_cameras(scene.camera(0), scene.camera(1), scene.camera(2));
     save_trifocal(dir + "/truth.trifocal", tf);
+  } else {
+    remove_on_commit(dir + "/truth.trifocal");  // an older affine scene's tensor is not this scene's truth
   }
   save_params(dir + "/scene.params", p);
 }
