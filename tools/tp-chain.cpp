@@ -37,6 +37,11 @@ int main(int argc, char** argv) {
           std::vector<tpkit::Matches> ms;
           for (const auto& f : o->files) ms.push_back(tpkit::read_matches(f));
           tpkit::ChainOptions co;
+          for (size_t i = 0; i < o->images.size(); ++i)
+            for (size_t j = 0; j < i; ++j)
+              if (o->images[i] == o->images[j])
+                throw tpkit::UsageError("--images names " + o->images[i] + " twice (columns " + std::to_string(j + 1) +
+                                        " and " + std::to_string(i + 1) + ")");
           co.images = o->images;
           co.same_position = o->same;
           if (o->min_views < 0) {

@@ -29,3 +29,6 @@ tpkit_tool_test(reproj-eval.missing-tracks
 tpkit_tool_test(reproj-eval.bad-trifocal
   COMMAND "printf '1 2 3\\n' > bad.trifocal && printf '1 2 3 4 5 6\\n2 3 4 5 6 7\\n' > t.tracks && reproj-eval bad.trifocal t.tracks -o r.txt"
   EXPECT_FAIL STDERR_MATCH "bad.trifocal" NO_FILE r.txt)
+tpkit_tool_test(reproj-eval.transfer-empty-stdin
+  COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 >/dev/null 2>&1 && reproj-eval --transfer s/truth.trifocal -o t.points < /dev/null"
+  EXPECT_FAIL STDERR_MATCH "empty input" NO_FILE t.points)

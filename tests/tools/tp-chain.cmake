@@ -19,3 +19,6 @@ tpkit_tool_test(tp-chain.too-many-views
 tpkit_tool_test(tp-chain.bad-record
   COMMAND "printf '# tpkit matches 1\\n# image1: A 1 1\\n# image2: B 1 1\\n# columns: id1 x1 y1 id2 x2 y2\\n1 2 3 4 5\\n' > bad.m && tp-chain bad.m -o t.tracks"
   EXPECT_FAIL STDERR_MATCH "bad.m:5:" NO_FILE t.tracks)
+tpkit_tool_test(tp-chain.images-twice
+  COMMAND "printf '# tpkit matches 1\\n# image1: a\\n# image2: b\\n# columns: id1 x1 y1 id2 x2 y2\\n' > m && tp-chain m --images a a b -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "--images names a twice" NO_FILE t.tracks)

@@ -22,3 +22,10 @@ tpkit_tool_test(tp-sample.bad-record
 tpkit_tool_test(tp-sample.rest-and-output-one-path
   COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 >/dev/null 2>&1 && tp-sample s/truth.tracks -n 5 --rest o -o o"
   EXPECT_FAIL STDERR_MATCH "--rest and -o name the same file" NO_FILE o)
+# a closed or empty stdin is no input: no empty output with exit 0
+tpkit_tool_test(tp-sample.empty-stdin
+  COMMAND "tp-sample - -n 5 -o o.tracks < /dev/null"
+  EXPECT_FAIL STDERR_MATCH "<stdin>: empty input" NO_FILE o.tracks)
+tpkit_tool_test(tp-sample.negative-seed
+  COMMAND "tp-sample - --seed -1 -o o.tracks < /dev/null"
+  EXPECT_FAIL STDERR_MATCH "--seed: must be a non-negative integer, got '-1'" NO_FILE o.tracks)

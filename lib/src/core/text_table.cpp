@@ -208,7 +208,9 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
     t.rows.push_back(std::move(row));
     t.row_line.push_back(lineno);
   }
-  if (in.bad()) throw InputError(t.source, lineno, "read error");
+  if (in.bad()) throw InputError(t.source, lineno, std::string("read error: ") + std::strerror(errno));
+  // nothing at all (a closed or empty pipe, an empty file) is no table: a header with no records is
+  if (first_content) throw InputError(t.source, 0, "empty input: no header and no records");
   if (opt.columnar && t.columns.empty() && opt.default_columns) t.columns = opt.default_columns(0);
   return t;
 }

@@ -250,6 +250,15 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
           },
           "", "finite"));
     }
+    // unsigned options (seeds, counts) do not wrap a negative value around
+    for (CLI::Option* opt : app.get_options()) {
+      if (opt->get_type_name() != "UINT") continue;
+      opt->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            return v.find('-') != std::string::npos ? "must be a non-negative integer, got '" + v + "'" : std::string();
+          },
+          "", "unsigned"));
+    }
     try {
       app.parse(argc, argv);
     } catch (const CLI::CallForHelp&) {
