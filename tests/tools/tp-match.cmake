@@ -77,3 +77,7 @@ tpkit_tool_test(tp-match.inf-nodata
 tpkit_tool_test(tp-match.every-pair-all-or-nothing
   COMMAND "tp-synth --out s --size 256 --seed 4 --relief 20 --points 10 >/dev/null 2>&1 && mkdir -p pairs/pair-2-3.matches && tp-match s/view1.tif s/view2.tif s/view3.tif -q -o pairs @SEMI@ rc=$? @SEMI@ ls pairs @SEMI@ test ! -e pairs/pair-1-2.matches && test -z \"$(ls pairs | grep tmp)\" && exit $rc"
   EXPECT_FAIL STDERR_MATCH "pair-2-3.matches" NO_FILE pairs/pair-1-2.matches)
+# a compressed TIFF cut short is a read error, not an image with fewer keypoints
+tpkit_tool_test(tp-match.truncated-zip-tiff
+  COMMAND "tp-synth --out s --size 512 --relief 10 --points 10 >/dev/null 2>&1 && head -c $(( $(stat -c %s s/view1.tif) / 2 )) s/view1.tif > half.tif && tp-match half.tif s/view2.tif -o out.matches"
+  EXPECT_FAIL STDERR_MATCH "^tp-match: half.tif: read error: [^\n]+\n$" NO_FILE out.matches)

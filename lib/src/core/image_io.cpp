@@ -23,6 +23,14 @@ using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
 namespace {
+// The reader's first error, or the global one.
+std::string decode_error(ImageInput& in) {
+  std::string e = in.geterror();
+  if (e.empty()) e = OIIO::geterror();
+  if (e.empty()) e = "the decoder failed (truncated or corrupt file?)";
+  return e.substr(0, e.find('\n'));  // the first of the decoder's complaints
+}
+
 std::unique_ptr<ImageInput> open_input(const std::string& path) {
   note_input(path);
   auto in = ImageInput::open(path);
@@ -103,9 +111,11 @@ Raster read_region(const std::string& path, int band, long x0, long y0, long w, 
     long ax = (xa / tw) * tw, ay = (ya / th) * th;
     long bx = std::min<long>(s.width, ((xb + tw - 1) / tw) * tw), by = std::min<long>(s.height, ((yb + th - 1) / th) * th);
     std::vector<unsigned char> buf(static_cast<size_t>(bx - ax) * (by - ay) * bpp);
+    // a decoder error (a truncated or corrupt compressed tile) is an error even when the call succeeds
     if (!in->read_tiles(0, 0, static_cast<int>(ax), static_cast<int>(bx), static_cast<int>(ay), static_cast<int>(by), 0, 1,
-                        band, band + 1, native, buf.data()))
-      throw InputError(path, 0, "read error: " + in->geterror());
+                        band, band + 1, native, buf.data()) ||
+        in->has_error())
+      throw InputError(path, 0, "read error: " + decode_error(*in));
     for (long yy = ya; yy < yb; ++yy)
       to_float(buf.data() + (static_cast<size_t>(yy - ay) * (bx - ax) + (xa - ax)) * bpp, r.width,
                r.data.data() + static_cast<size_t>(yy - ya) * r.width);
@@ -116,8 +126,9 @@ Raster read_region(const std::string& path, int band, long x0, long y0, long w, 
     for (long y = ya; y < yb; y += block) {
       long ye = std::min(yb, y + block);
       if (!in->read_scanlines(0, 0, static_cast<int>(y), static_cast<int>(ye), 0, band, band + 1, native,
-                              rows.data()))
-        throw InputError(path, 0, "read error: " + in->geterror());
+                              rows.data()) ||
+          in->has_error())
+        throw InputError(path, 0, "read error: " + decode_error(*in));
       for (long yy = y; yy < ye; ++yy)
         to_float(rows.data() + (static_cast<size_t>(yy - y) * s.width + xa) * bpp, r.width,
                  r.data.data() + static_cast<size_t>(yy - ya) * r.width);
