@@ -78,3 +78,13 @@ tpkit_tool_test(trifocal-fit.two-outputs-one-path
 tpkit_tool_test(trifocal-fit.output-onto-input
   COMMAND "${_synth} && cp syn/truth.tracks t.tracks && trifocal-fit t.tracks --cameras ./t.tracks -o fit.trifocal @SEMI@ rc=$? @SEMI@ cmp t.tracks syn/truth.tracks && exit $rc"
   EXPECT_FAIL STDERR_MATCH "--cameras ./t.tracks: is also an input of this run" NO_FILE fit.trifocal)
+# tracks far from the origin against their spread: the affine methods fit them, the projective ones
+# (dlt, three-f) refuse instead of returning a tensor 1e6 px off
+set(_offset "awk '/^# columns/ { print \"# columns: track x1 y1 x2 y2 x3 y3\" @SEMI@ next } /^#/ { print @SEMI@ next } { printf \"%s\", $1 @SEMI@ for (i = 2 @SEMI@ i <= 7 @SEMI@ i++) printf \" %.6f\", $i + 1e12 @SEMI@ print \"\" }' syn/truth.tracks > big.tracks")
+foreach(m dlt three-f)
+  tpkit_tool_test(trifocal-fit.${m}-offset-refused
+    COMMAND "${_synth} && ${_offset} && trifocal-fit -m ${m} big.tracks -o t.trifocal"
+    EXPECT_FAIL STDERR_MATCH "method ${m}: the view 1 points lie up to 1000000000[0-9.]+ px from the origin" NO_FILE t.trifocal)
+endforeach()
+tpkit_tool_test(trifocal-fit.affine-dlt-offset-fitted
+  COMMAND "${_synth} && ${_offset} && trifocal-fit -m affine-dlt big.tracks -o t.trifocal 2>&1 | grep -o 'rmse [0-9.e-]*' | awk '{ exit !($2 < 0.001) }'")
