@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
         app.add_option("--images", o->images, "images of the output, in column order (first = reference)");
         app.add_option("--min-views", o->min_views, "fewest views of a track (default: 3, or 2 with two images)");
         app.add_option("--same-position", o->same, "keypoints of one image closer than this are one point, pixels")
-            ->check(CLI::NonNegativeNumber);
+            ->check(tpkit::NonNegative);
         app.add_option("-o,--output", o->out, "output tracks file (- = stdout)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {

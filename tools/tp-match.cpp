@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
             ->required()
             ->expected(2, 1 << 16);
         app.add_option("-o,--output", o->out, "output matches file (- = stdout); with more than two images, a folder");
-        app.add_option("--band", o->band, "band, from 1")->check(CLI::PositiveNumber);
+        app.add_option("--band", o->band, "band, from 1")->check(tpkit::Positive);
         app.add_option("--nodata", o->nodata, "nodata grey level (default: the GDAL_NODATA tag)");
         app.add_option("--mask1", o->mask1, "mask image of IMG1 (0 = invalid)");
         app.add_option("--mask2", o->mask2, "mask image of IMG2 (0 = invalid)");
@@ -45,9 +45,9 @@ int main(int argc, char** argv) {
         app.add_option("--cache", o->p.cache_dir, "keypoint cache folder: each image is detected once");
         app.add_option("--tile", o->p.sift.tile, "detection tile size, pixels")->check(CLI::Range(256L, 1L << 20));
         app.add_option("--overlap", o->p.sift.overlap, "detection tile overlap, pixels")->check(CLI::Range(16L, 4096L));
-        app.add_option("--max-per-tile", o->p.sift.max_per_tile, "strongest keypoints kept per tile (0 = all)")->check(CLI::NonNegativeNumber);
-        app.add_option("--contrast", o->p.sift.contrast, "SIFT contrast threshold")->check(CLI::PositiveNumber);
-        app.add_option("--edge", o->p.sift.edge, "SIFT edge threshold")->check(CLI::PositiveNumber);
+        app.add_option("--max-per-tile", o->p.sift.max_per_tile, "strongest keypoints kept per tile (0 = all)")->check(tpkit::NonNegative);
+        app.add_option("--contrast", o->p.sift.contrast, "SIFT contrast threshold")->check(tpkit::Positive);
+        app.add_option("--edge", o->p.sift.edge, "SIFT edge threshold")->check(tpkit::Positive);
         app.add_option("--stretch", [o](CLI::results_t r) {
           o->p.sift.stretch_lo = std::stod(r.at(0));
           o->p.sift.stretch_hi = std::stod(r.at(1));
@@ -55,26 +55,26 @@ int main(int argc, char** argv) {
         }, "low and high percentiles of the 8-bit rendering")->expected(2);
         app.add_option("--ratio", o->p.desc.ratio, "nearest-neighbour ratio test")->check(CLI::Range(0.1, 1.0));
         app.add_flag("--no-mutual", o->no_mutual, "skip the mutual nearest-neighbour check");
-        app.add_option("--exact-below", o->p.desc.exact_below, "exact search when both sets are smaller")->check(CLI::NonNegativeNumber);
-        app.add_option("--checks", o->p.desc.flann_checks, "leaves visited by the approximate search")->check(CLI::PositiveNumber);
+        app.add_option("--exact-below", o->p.desc.exact_below, "exact search when both sets are smaller")->check(tpkit::NonNegative);
+        app.add_option("--checks", o->p.desc.flann_checks, "leaves visited by the approximate search")->check(tpkit::Positive);
         app.add_flag("--global", o->global, "search every descriptor pair instead of the epipolar band");
-        app.add_option("--epipolar-band", o->p.guide.band, "guided search: pixels across the epipolar line")->check(CLI::PositiveNumber);
+        app.add_option("--epipolar-band", o->p.guide.band, "guided search: pixels across the epipolar line")->check(tpkit::Positive);
         app.add_option("--parallax-margin", o->p.guide.parallax_margin, "guided search: pixels added to each parallax range")
-            ->check(CLI::NonNegativeNumber);
+            ->check(tpkit::NonNegative);
         app.add_option("--ratio-region", o->p.guide.ratio_margin, "guided search: the ratio test's region is this much wider, pixels")
-            ->check(CLI::NonNegativeNumber);
-        app.add_option("--threshold", o->p.ransac_threshold, "RANSAC inlier distance, pixels")->check(CLI::PositiveNumber);
-        app.add_option("--iterations", o->p.ransac_iterations, "RANSAC iterations at most")->check(CLI::PositiveNumber);
+            ->check(tpkit::NonNegative);
+        app.add_option("--threshold", o->p.ransac_threshold, "RANSAC inlier distance, pixels")->check(tpkit::Positive);
+        app.add_option("--iterations", o->p.ransac_iterations, "RANSAC iterations at most")->check(tpkit::Positive);
         app.add_option("--seed", o->p.seed, "RANSAC seed");
-        app.add_option("--min-inliers", o->p.min_inliers, "fewer verified matches = no overlap")->check(CLI::PositiveNumber);
-        app.add_option("--grid", o->p.grid, "grid cells per side for even spread (0 = off)")->check(CLI::NonNegativeNumber);
-        app.add_option("--per-cell", o->p.per_cell, "matches kept per grid cell")->check(CLI::PositiveNumber);
+        app.add_option("--min-inliers", o->p.min_inliers, "fewer verified matches = no overlap")->check(tpkit::Positive);
+        app.add_option("--grid", o->p.grid, "grid cells per side for even spread (0 = off)")->check(tpkit::NonNegative);
+        app.add_option("--per-cell", o->p.per_cell, "matches kept per grid cell")->check(tpkit::Positive);
         app.add_flag("--no-refine", o->no_refine, "keep raw SIFT positions");
         app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd)")->check(CLI::Range(5, 101));
-        app.add_option("--max-shift", o->p.lsm.max_shift, "drop points refined farther from SIFT, pixels")->check(CLI::PositiveNumber);
+        app.add_option("--max-shift", o->p.lsm.max_shift, "drop points refined farther from SIFT, pixels")->check(tpkit::Positive);
         app.add_option("--min-corr", o->p.lsm.min_corr, "drop points with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
         app.add_option("--taper", o->p.lsm.taper, "Gaussian weight of the LSM window, sigma in pixels (0 = flat)")
-            ->check(CLI::NonNegativeNumber);
+            ->check(tpkit::NonNegative);
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
         app.add_flag("--quadratic", o->p.lsm.quadratic, "LSM: after the affine fit, bend the map along the epipolar lines (steep terrain)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");

@@ -39,11 +39,11 @@ int main(int argc, char** argv) {
       [](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<Opts>();
         app.add_option("input", o->input, "table file (tracks, matches, points) or - for stdin");
-        app.add_option("-n,--count", o->n, "records to draw (default: all)")->check(CLI::NonNegativeNumber);
+        app.add_option("-n,--count", o->n, "records to draw (default: all)")->check(tpkit::NonNegative);
         app.add_option("--seed", o->seed, "random seed");
         app.add_flag("--spread", o->spread, "draw spread evenly over the image");
         app.add_option("--box", o->box, "keep records inside X0 Y0 X1 Y1 (pixels of --view)")->expected(4);
-        app.add_option("--view", o->view, "view whose position --box and --spread use")->check(CLI::PositiveNumber);
+        app.add_option("--view", o->view, "view whose position --box and --spread use")->check(tpkit::Positive);
         app.add_option("--rest", o->rest, "write the records not drawn here (held-out check set)");
         app.add_option("--kind", o->kind, "kind of headerless input: tracks, matches or points");
         app.add_option("-o,--output", o->output, "output file (default: stdout)");

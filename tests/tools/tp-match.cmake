@@ -81,3 +81,6 @@ tpkit_tool_test(tp-match.every-pair-all-or-nothing
 tpkit_tool_test(tp-match.truncated-zip-tiff
   COMMAND "tp-synth --out s --size 512 --relief 10 --points 10 >/dev/null 2>&1 && head -c $(( $(stat -c %s s/view1.tif) / 2 )) s/view1.tif > half.tif && tp-match half.tif s/view2.tif -o out.matches"
   EXPECT_FAIL STDERR_MATCH "^tp-match: half.tif: read error: [^\n]+\n$" NO_FILE out.matches)
+tpkit_tool_test(tp-match.range-message-short
+  COMMAND "tp-match a.tif b.tif --iterations -1 -o out.matches"
+  EXPECT_FAIL STDERR_MATCH "^tp-match: --iterations: must be > 0, got '-1'\n" NO_FILE out.matches)

@@ -15,6 +15,11 @@
 
 namespace tpkit {
 
+// Option checks with short messages ("must be > 0, got '-1'"); CLI11's own PositiveNumber and
+// NonNegativeNumber print the largest double in full.
+extern const CLI::Validator Positive;
+extern const CLI::Validator NonNegative;
+
 // Called with the app to declare options; returns the body to run once the command line is parsed.
 using ToolSetup = std::function<std::function<int()>(CLI::App&)>;
 

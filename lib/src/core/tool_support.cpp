@@ -82,6 +82,23 @@ std::string unquote(const std::string& s) {
 }
 }  // namespace
 
+namespace {
+CLI::Validator number_check(bool allow_zero) {
+  return CLI::Validator(
+      [allow_zero](std::string& v) -> std::string {
+        char* end = nullptr;
+        const double d = std::strtod(v.c_str(), &end);
+        if (end == v.c_str() || *end != '\0') return "not a number: '" + v + "'";
+        if (allow_zero ? !(d >= 0) : !(d > 0)) return std::string(allow_zero ? "must be >= 0" : "must be > 0") + ", got '" + v + "'";
+        return std::string();
+      },
+      allow_zero ? "NONNEGATIVE" : "POSITIVE");
+}
+}  // namespace
+
+const CLI::Validator Positive = number_check(false);
+const CLI::Validator NonNegative = number_check(true);
+
 const std::string& tool_name() { return g_tool; }
 
 std::string written_by() { return g_tool + ' ' + version_full(); }
