@@ -105,6 +105,9 @@ int main(int argc, char** argv) {
           auto report = [&](const std::string& what, const tpkit::PairMatchStats& st) {
             if (!st.overlap)
               tpkit::warn("no verified matches between " + what + " (do the images overlap?): writing a file with zero records");
+            if (st.no_parallax)
+              tpkit::warn(what + " have no parallax (the same image, or views without a base): matches verified by a "
+                          "2-D affine map; they carry no 3-D information");
             if (o->quiet) return;
             std::cerr << "tp-match: " << (n > 2 ? what + ": " : std::string()) << "keypoints " << st.keypoints1
                       << (st.cached1 ? " (cached)" : "") << " / " << st.keypoints2 << (st.cached2 ? " (cached)" : "")

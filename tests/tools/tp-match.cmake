@@ -84,3 +84,8 @@ tpkit_tool_test(tp-match.truncated-zip-tiff
 tpkit_tool_test(tp-match.range-message-short
   COMMAND "tp-match a.tif b.tif --iterations -1 -o out.matches"
   EXPECT_FAIL STDERR_MATCH "^tp-match: --iterations: must be > 0, got '-1'\n" NO_FILE out.matches)
+# the same image twice has no parallax, which the affine F cannot verify: a 2-D affine map does, the
+# file says so, and the refined positions sit on the keypoints
+tpkit_tool_test(tp-match.same-image-twice
+  COMMAND "tp-synth --out s --size 384 --seed 4 --relief 10 --points 10 >/dev/null 2>&1 && tp-match s/view1.tif s/view1.tif -q -o same.m && grep -q '^# verified: [0-9]* (no parallax: 2-D affine map RANSAC' same.m && awk '!/^#/ { n++ @SEMI@ d = ($2 - $5) ^ 2 + ($3 - $6) ^ 2 @SEMI@ if (d > 1e-4) bad++ } END { print n, \"matches\" @SEMI@ exit !(n > 1000 && bad == 0) }' same.m"
+  STDOUT_MATCH "^[0-9]+ matches" STDERR_MATCH "have no parallax")

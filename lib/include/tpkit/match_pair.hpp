@@ -51,6 +51,7 @@ struct PairMatchStats {
   GuidedMatchResult guide;                     // its figures (matches moved out)
   double seconds[4] = {0, 0, 0, 0};             // wall time of detection, matching, verification, refinement
   long dropped[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // by LsmStatus
+  bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
   bool overlap = true;                         // false: too few verified matches, zero records
 };
 

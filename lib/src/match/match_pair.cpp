@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <opencv2/calib3d.hpp>
 
 #include "tpkit/affine_fundamental.hpp"
 #include "tpkit/error.hpp"
@@ -97,8 +98,31 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   if (rr.ok && rr.inliers >= o.min_inliers)
     for (size_t i = 0; i < put.size(); ++i)
       if (rr.inlier[i]) ver.push_back(i);
+  // 3b. zero parallax: views that are identical or nearly so (the same image twice, or no base) map
+  // onto each other by a plane affinity, and every affine F that contains it fits them, so the F RANSAC
+  // finds no model. Verify such a pair by the 2-D affine map instead (OpenCV's RANSAC), and say so.
+  if (ver.empty() && put.size() >= 3) {
+    std::vector<cv::Point2f> p1(put.size()), p2(put.size());
+    for (size_t i = 0; i < put.size(); ++i) p1[i] = K1.kp[put[i].i1].pt, p2[i] = K2.kp[put[i].i2].pt;
+    std::vector<uchar> in;
+    const cv::Mat A = cv::estimateAffine2D(p1, p2, in, cv::RANSAC, o.ransac_threshold,
+                                           static_cast<size_t>(std::max(1, o.ransac_iterations)), 0.999, 10);
+    const long n_in = static_cast<long>(std::count(in.begin(), in.end(), uchar(1)));
+    if (!A.empty() && n_in >= o.min_inliers) {
+      double ss = 0;
+      for (size_t i = 0; i < put.size(); ++i)
+        if (in[i]) {
+          ver.push_back(i);
+          const double ex = A.at<double>(0, 0) * p1[i].x + A.at<double>(0, 1) * p1[i].y + A.at<double>(0, 2) - p2[i].x;
+          const double ey = A.at<double>(1, 0) * p1[i].x + A.at<double>(1, 1) * p1[i].y + A.at<double>(1, 2) - p2[i].y;
+          ss += ex * ex + ey * ey;
+        }
+      st.no_parallax = true;
+      st.ransac_rms = std::sqrt(ss / static_cast<double>(ver.size()));
+    }
+  }
   st.verified = static_cast<long>(ver.size());
-  st.ransac_rms = rr.ok ? rr.rms : 0;
+  if (!st.no_parallax) st.ransac_rms = rr.ok ? rr.rms : 0;
   if (ver.empty()) st.overlap = false;
 
   // 4. grid thinning
@@ -241,7 +265,8 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   }
   meta_set(M.meta, "putative", std::to_string(st.putative) + " (ratio " + format_number(o.desc.ratio) +
                                    (o.desc.mutual ? ", mutual" : "") + "; " + search + ")");
-  meta_set(M.meta, "verified", std::to_string(st.verified) + " (affine F RANSAC, threshold " + format_number(o.ransac_threshold) +
+  meta_set(M.meta, "verified", std::to_string(st.verified) + (st.no_parallax ? " (no parallax: 2-D affine map RANSAC" : " (affine F RANSAC") +
+                                   ", threshold " + format_number(o.ransac_threshold) +
                                    " px, seed " + std::to_string(o.seed) + ", inlier rms " + format_number(std::round(st.ransac_rms * 1e4) / 1e4) + " px)");
   if (o.grid > 0) meta_set(M.meta, "grid", std::to_string(o.grid) + "x" + std::to_string(o.grid) + ", " + std::to_string(o.per_cell) + " per cell: " + std::to_string(st.gridded));
   if (o.refine)
