@@ -60,9 +60,10 @@ endif()
 # OpenCV's pool is sized once, never while tpkit's threads are inside it: the every-pair mode and the
 # tiled detector, many runs under a competing load on every core, each run bounded by a timeout, so
 # that a hang fails here instead of stalling the suite.
+# (before: 5 of 60 such runs died with SIGSEGV inside OpenCV, and the suite once hung here)
 tpkit_tool_test(tp-match.threads-stress
-  COMMAND "tp-synth --out s --size 640 --seed 4 --relief 30 --points 10 && for k in $(seq $(nproc)) @SEMI@ do (end=$((SECONDS + 240)) @SEMI@ while [ $SECONDS -lt $end ] @SEMI@ do : @SEMI@ done) & done @SEMI@ trap 'kill $(jobs -p) 2>/dev/null' EXIT @SEMI@ for i in $(seq 12) @SEMI@ do timeout 60 tp-match s/view1.tif s/view2.tif s/view3.tif -q --tile 256 --overlap 32 --threads $((1 + i % 3)) -o p$i || { echo \"run $i: exit $?\" @SEMI@ exit 1 @SEMI@ } @SEMI@ cmp p$i/pair-1-3.matches p1/pair-1-3.matches || exit 1 @SEMI@ done @SEMI@ echo stress-ok"
-  STDOUT_MATCH "stress-ok" TIMEOUT 900)
+  COMMAND "tp-synth --out s --size 384 --seed 4 --relief 30 --points 10 && for k in $(seq $(nproc)) @SEMI@ do (end=$((SECONDS + 300)) @SEMI@ while [ $SECONDS -lt $end ] @SEMI@ do : @SEMI@ done) & done @SEMI@ trap 'kill $(jobs -p) 2>/dev/null' EXIT @SEMI@ for i in $(seq 40) @SEMI@ do timeout 60 tp-match s/view1.tif s/view2.tif s/view3.tif -q --tile 256 --overlap 32 --threads $((2 + i % 3)) -o p$i || { echo \"run $i: exit $?\" @SEMI@ exit 1 @SEMI@ } @SEMI@ cmp p$i/pair-1-3.matches p1/pair-1-3.matches || exit 1 @SEMI@ done @SEMI@ echo stress-ok"
+  STDOUT_MATCH "stress-ok" TIMEOUT 900 LABELS slow)
 tpkit_tool_test(tp-match.threads-out-of-range
   COMMAND "tp-match a.tif b.tif --threads 70000 -o out.matches"
   EXPECT_FAIL STDERR_MATCH "--threads" NO_FILE out.matches)
