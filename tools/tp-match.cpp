@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
             return 0;
           }
           // every pair: each image detected once, the first pairs matched while the last images are detected
-          std::filesystem::create_directories(o->out);
+          tpkit::create_output_dir(o->out);  // removed again if the run fails
           double detect_s = 0;
           tpkit::match_every_pair(
               src, o->p,

@@ -39,7 +39,7 @@ tpkit_tool_test(tp-synth.missing-out
   EXPECT_FAIL STDERR_MATCH "^tp-synth: .*--out")
 tpkit_tool_test(tp-synth.out-is-a-file
   COMMAND "echo x > out && tp-synth --out out --size 64 --relief 5 --points 5"
-  EXPECT_FAIL STDERR_MATCH "^tp-synth: out: cannot create directory")
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: out: cannot create the folder")
 tpkit_tool_test(tp-synth.size-that-cannot-finish
   COMMAND "timeout 10 tp-synth --out out --size 100000"
   EXPECT_FAIL STDERR_MATCH "^tp-synth: --size must be between 16 and 40000" NO_FILE out)

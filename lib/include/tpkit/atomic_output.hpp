@@ -64,6 +64,9 @@ void claim_output(const std::string& path, const std::string& option = "");
 void check_outputs(const std::vector<std::pair<std::string, std::string>>& option_and_path,
                    const std::vector<std::string>& inputs);
 void remove_on_commit(const std::string& path);
+// Creates an output folder (and its missing parents); those it created are removed again, when empty,
+// if the run fails. Throws InputError when it cannot.
+void create_output_dir(const std::string& path);
 void commit_outputs();
 void abort_outputs();
 

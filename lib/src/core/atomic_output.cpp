@@ -71,6 +71,7 @@ struct Transaction {
   std::vector<Claim> claimed;
   std::vector<std::string> inputs;                           // normalized
   std::vector<std::string> stale;
+  std::vector<fs::path> made_dirs;  // created for this run, innermost last
 };
 Transaction& tx() {
   static Transaction t;
@@ -150,6 +151,7 @@ void begin_outputs() {
   t.claimed.clear();
   t.inputs.clear();
   t.stale.clear();
+  t.made_dirs.clear();
 }
 
 void note_input(const std::string& path) {
@@ -206,6 +208,20 @@ void check_outputs(const std::vector<std::pair<std::string, std::string>>& optio
   }
 }
 
+void create_output_dir(const std::string& path) {
+  std::vector<fs::path> missing;
+  std::error_code ec;
+  for (fs::path p = fs::absolute(path, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    missing.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  fs::create_directories(path, ec);
+  if (ec || !fs::is_directory(path)) throw InputError(path, 0, "cannot create the folder: " + (ec ? ec.message() : "not a folder"));
+  std::lock_guard<std::mutex> lock(tx().m);
+  if (tx().active)
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) tx().made_dirs.push_back(*it);
+}
+
 void remove_on_commit(const std::string& path) {
   std::lock_guard<std::mutex> lock(tx().m);
   if (tx().active) tx().stale.push_back(path);
@@ -219,6 +235,7 @@ void commit_outputs() {
     std::lock_guard<std::mutex> lock(tx().m);
     pending.swap(tx().pending);
     stale.swap(tx().stale);
+    tx().made_dirs.clear();
     tx().active = false;
     tx().claimed.clear();
     tx().inputs.clear();
@@ -260,9 +277,11 @@ void commit_outputs() {
 
 void abort_outputs() {
   std::vector<Pending> pending;
+  std::vector<fs::path> dirs;
   {
     std::lock_guard<std::mutex> lock(tx().m);
     pending.swap(tx().pending);
+    dirs.swap(tx().made_dirs);
     tx().active = false;
     tx().claimed.clear();
     tx().inputs.clear();
@@ -270,6 +289,8 @@ void abort_outputs() {
   }
   for (const auto& p : pending)
     if (!p.to_stdout) discard_temp(p.tmp);
+  std::error_code ec;
+  for (auto it = dirs.rbegin(); it != dirs.rend(); ++it) fs::remove(*it, ec);  // only if empty
 }
 
 void install_output_signal_cleanup() {

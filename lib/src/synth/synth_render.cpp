@@ -96,12 +96,9 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
 
 void write_synth_scene(const SynthScene& scene, const std::string& dir, const SynthWriteOptions& opt) {
   const SynthParams& p = scene.params();
-  namespace fs = std::filesystem;
   // Truth first: it is quick and may fail (too few visible points) before anything is written.
   const SynthTruth truth = synth_truth_points(scene, p.points);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) throw InputError(dir, 0, "cannot create directory: " + ec.message());
+  create_output_dir(dir);  // removed again if the run fails
 
   Meta meta;
   meta_set(meta, "generator", "tp-synth");
