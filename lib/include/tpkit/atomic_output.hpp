@@ -1,7 +1,7 @@
 // Output that never leaves a half-written file, and a run whose outputs commit together.
 //
-// AtomicOutput writes to a temporary file in the target's folder (or, for "-", to a buffer for stdout)
-// and hands it over on commit(). Outside a transaction the temporary file replaces the target at once.
+// AtomicOutput writes to a temporary file in the target's folder (or, for "-" and for an existing
+// device or FIFO such as /dev/null, to a buffer written there at commit) and hands it over on commit(). Outside a transaction the temporary file replaces the target at once.
 // Inside one (run_tool opens one around every tool's body) the hand-over waits: commit_outputs() renames
 // every finished temporary onto its target when the tool has succeeded, abort_outputs() removes them
 // all when it has failed, so a failed run leaves no output at all, not some of them. A target claimed
@@ -36,7 +36,8 @@ class AtomicOutput {
   std::string tmp_;
   std::ofstream file_;
   std::ostringstream buffer_;  // stdout
-  bool to_stdout_ = false;
+  bool to_stdout_ = false;  // buffered and written at commit: to stdout, or (direct_) in place
+  bool direct_ = false;     // the target is an existing device or FIFO (/dev/null): no rename onto it
   bool transactional_ = true;
   bool committed_ = false;
 };

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <random>
@@ -57,8 +58,25 @@ extern "C" void remove_temps_on_signal(int sig) {
 
 struct Pending {
   std::string tmp, target, text;
-  bool to_stdout = false;
+  bool to_stdout = false;  // text for stdout, or (direct) for a device or FIFO named by target
+  bool direct = false;
 };
+
+// An existing target that is not a regular file (a device such as /dev/null, a FIFO, /dev/stdout):
+// written in place, since renaming a temporary file onto it would replace the device node.
+bool is_special(const std::string& path) {
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  return !ec && fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st);
+}
+
+void write_direct(const std::string& target, const std::string& text) {
+  std::ofstream f(target, std::ios::out | std::ios::binary);
+  if (!f) throw InputError(target, 0, "cannot open for writing: " + std::string(std::strerror(errno)));
+  f << text;
+  f.flush();
+  if (!f) throw InputError(target, 0, "write error: " + std::string(std::strerror(errno)));
+}
 
 struct Transaction {
   std::mutex m;
@@ -95,6 +113,15 @@ bool same_file(const std::string& a, const std::string& b) {
 std::string errno_text() { return std::strerror(errno); }
 
 void rename_now(const std::string& tmp, const std::string& target) {
+  if (is_special(target)) {  // never replace a device node: copy the finished file into it
+    std::ifstream in(tmp, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    std::remove(tmp.c_str());
+    unregister_temp(tmp);
+    write_direct(target, text.str());
+    return;
+  }
   if (std::rename(tmp.c_str(), target.c_str()) != 0) {
     const std::string why = errno_text();
     std::remove(tmp.c_str());
@@ -270,7 +297,10 @@ void commit_outputs() {
     if (!rewritten) std::remove(s.c_str());
   }
   for (const auto& p : pending)
-    if (p.to_stdout) std::cout << p.text;
+    if (p.to_stdout) {
+      if (p.direct) write_direct(p.target, p.text);
+      else std::cout << p.text;
+    }
   std::cout.flush();
   if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
 }
@@ -299,8 +329,9 @@ void install_output_signal_cleanup() {
 
 AtomicOutput::AtomicOutput(const std::string& path, bool transactional) : path_(path), transactional_(transactional) {
   if (transactional_) claim_output(path);
-  if (path == "-") {
-    to_stdout_ = true;
+  if (path == "-" || is_special(path)) {
+    to_stdout_ = true;  // buffered, written at commit: to stdout, or in place to a device or FIFO
+    direct_ = path != "-";
     return;
   }
   tmp_ = claim_temp(path);
@@ -327,15 +358,16 @@ void AtomicOutput::commit() {
     {
       std::lock_guard<std::mutex> lock(tx().m);
       if (transactional_ && tx().active) {
-        tx().pending.push_back({"", "-", buffer_.str(), true});
+        tx().pending.push_back({"", direct_ ? path_ : "-", buffer_.str(), true, direct_});
         committed_ = true;
         return;
       }
     }
+    committed_ = true;
+    if (direct_) return write_direct(path_, buffer_.str());
     std::cout << buffer_.str();
     std::cout.flush();
     if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
-    committed_ = true;
     return;
   }
   file_.flush();
