@@ -14,6 +14,11 @@
 //       Then the robust figures: 1000 tracks, 30% gross outliers (one view of a track moved to a
 //       random place in the image), --ransac 1.5: share of true inliers kept, and the RMSE on the true
 //       inliers relative to the fit without outliers.
+//   bench_trifocal --coplanar [--trials N] [--sigma S] [--size PX] [--cross DEG] [--spread DEG]
+//       single-pass geometry: random affine triplets whose viewing directions have one cross-track angle
+//       DEG (default 0) give or take --spread DEG (default 0: the three directions coplanar); every
+//       method at n = 100 and 1000 (N trials, default 100): median transfer RMSE on 1000 noise-free check
+//       tracks and its ratio to ml's.
 //   bench_trifocal --real TRACKS [--seed S] [--trials N]
 //       the paper's table on real tracks: for n = 10, 100, 1000 (capped by the file) and every method,
 //       N random subsets (default 20, seed S): fit on n tracks, RMSE on those fit tracks and on all the
@@ -33,6 +38,7 @@
 #include "tpkit/formats.hpp"
 #include "tpkit/reproj_eval.hpp"
 #include "tpkit/trifocal_fit.hpp"
+#include "tpkit/trifocal_three_f.hpp"
 #include "tpkit/trifocal_transfer.hpp"
 
 using namespace tpkit;
@@ -43,11 +49,47 @@ struct Data {
   Eigen::MatrixXd fit, truth_fit, check;
 };
 
-Data make_data(std::uint64_t seed, int n, double sigma, double size, int n_check) {
+// A random satellite-like affine triplet whose three viewing directions (towards the satellite)
+// d_v ~ (tan c_v, tan a_v, 1) have along-track angles a_v as AffineScene's (-0.35..0.35 rad) and
+// cross-track angles c_v = cross + spread * U(-1, 1) (radians): spread 0 puts the three directions in one
+// plane (a single-pass tri-stereo acquisition, where the three camera centres at infinity are
+// collinear). Each camera: the orthographic view along d_v, rolled about it by up to 0.2 rad, with
+// anisotropic pixel scaling, scaled and shifted so that the patch fills the image as in AffineScene.
+AffineScene coplanar_scene(std::uint64_t seed, double size, double cross, double spread) {
   AffineSceneOptions o;
   o.seed = seed;
   o.image_size = size;
-  const AffineScene s = AffineScene::random(o);
+  AffineScene s = AffineScene::random(o);  // points() and the options; the cameras are replaced
+  std::mt19937_64 rng(seed * 7 + 5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const double G = s.ground_extent;
+  for (int v = 0; v < 3; ++v) {
+    const double along = (v - 1) * o.max_view_angle * (0.7 + 0.3 * std::fabs(U(rng)));
+    const double c = cross + spread * U(rng), roll = 0.2 * U(rng);
+    const Eigen::Vector3d d = Eigen::Vector3d(std::tan(c), std::tan(along), 1).normalized();
+    const Eigen::Vector3d ex = (Eigen::Vector3d::UnitX() - d * d.x()).normalized(), ey = d.cross(ex);
+    Eigen::Matrix<double, 2, 3> M;
+    M.row(0) = (std::cos(roll) * ex + std::sin(roll) * ey).transpose();
+    M.row(1) = (-std::sin(roll) * ex + std::cos(roll) * ey).transpose();
+    Eigen::Matrix2d K;
+    K << 1.0 + 0.05 * U(rng), 0.03 * U(rng), 0, 1.0 + 0.05 * U(rng);
+    M = K * M;
+    const double zr = o.relief * G;
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector2d p = M * Eigen::Vector3d((k & 1) * G, ((k >> 1) & 1) * G, ((k >> 2) & 1) * zr);
+      xmin = std::min(xmin, p(0));
+      xmax = std::max(xmax, p(0));
+      ymin = std::min(ymin, p(1));
+      ymax = std::max(ymax, p(1));
+    }
+    const double scale = 0.96 * size / std::max(xmax - xmin, ymax - ymin);
+    s.P[v] = affine_camera(scale * M, Eigen::Vector2d(0.02 * size - scale * xmin, 0.02 * size - scale * ymin));
+  }
+  return s;
+}
+
+Data make_data_in(const AffineScene& s, std::uint64_t seed, int n, double sigma, int n_check) {
   Data d;
   d.truth_fit = s.project(s.points(n, seed * 1000 + 1));
   d.check = s.project(s.points(n_check, seed * 1000 + 2));
@@ -57,6 +99,13 @@ Data make_data(std::uint64_t seed, int n, double sigma, double size, int n_check
   for (Eigen::Index r = 0; r < d.fit.rows(); ++r)
     for (int c = 0; c < 6; ++c) d.fit(r, c) += N(rng);
   return d;
+}
+
+Data make_data(std::uint64_t seed, int n, double sigma, double size, int n_check) {
+  AffineSceneOptions o;
+  o.seed = seed;
+  o.image_size = size;
+  return make_data_in(AffineScene::random(o), seed, n, sigma, n_check);
 }
 
 // one view of `share` of the tracks moved to a uniformly random place of the image
@@ -180,6 +229,74 @@ int accuracy(int argc, char** argv) {
   return 0;
 }
 
+// Single-pass geometry: the methods on coplanar_scene triplets (cross-track angle --cross DEG, default
+// 0, spread --spread DEG, default 0: coplanar directions), n = 100 and 1000, median transfer RMSE on
+// 1000 noise-free check tracks and its ratio to ml's.
+int coplanar_table(int argc, char** argv) {
+  constexpr double kDeg = 3.14159265358979323846 / 180;
+  const int trials = arg_value(argc, argv, "--trials") ? std::atoi(arg_value(argc, argv, "--trials")) : 100;
+  const double sigma = arg_value(argc, argv, "--sigma") ? std::atof(arg_value(argc, argv, "--sigma")) : 0.5;
+  const double size = arg_value(argc, argv, "--size") ? std::atof(arg_value(argc, argv, "--size")) : 1000;
+  const double cross = arg_value(argc, argv, "--cross") ? std::atof(arg_value(argc, argv, "--cross")) : 0;
+  const double spread = arg_value(argc, argv, "--spread") ? std::atof(arg_value(argc, argv, "--spread")) : 0;
+  std::printf("# coplanar table: viewing directions with cross-track %g deg +- %g deg (0: coplanar), sigma %.3g px,"
+              " %d trials, %g px images, 1000 noise-free check tracks\n", cross, spread, sigma, trials, size);
+  std::printf("# transfer = median 2-D RMSE of x3 transferred from x1, x2 (px); ratio = transfer / ml's\n");
+  std::printf("%-10s %5s %12s %8s %6s\n", "method", "n", "transfer", "ratio", "fails");
+  const std::vector<int> ns = {100, 1000};
+  std::vector<std::vector<double>> med(all_trifocal_methods().size(), std::vector<double>(ns.size(), NAN));
+  for (size_t q = 0; q < ns.size(); ++q) {
+    std::vector<std::vector<double>> tr(all_trifocal_methods().size());
+    std::vector<int> fails(all_trifocal_methods().size(), 0);
+    for (int t = 1; t <= trials; ++t) {
+      const auto seed = static_cast<std::uint64_t>(t);
+      const Data d = make_data_in(coplanar_scene(seed, size, cross * kDeg, spread * kDeg), seed, ns[q], sigma, 1000);
+      for (size_t mi = 0; mi < all_trifocal_methods().size(); ++mi) try {
+          tr[mi].push_back(transfer_rmse(fit_trifocal(all_trifocal_methods()[mi], d.fit), d.check));
+        } catch (const std::exception&) {
+          ++fails[mi];
+        }
+    }
+    for (size_t mi = 0; mi < all_trifocal_methods().size(); ++mi) med[mi][q] = median(tr[mi]);
+    const size_t ml_index = static_cast<size_t>(std::find(all_trifocal_methods().begin(), all_trifocal_methods().end(), TrifocalMethod::Ml) - all_trifocal_methods().begin());
+    const double ml = med[ml_index][q];
+    for (size_t mi = 0; mi < all_trifocal_methods().size(); ++mi)
+      std::printf("%-10s %5d %12.4f %8.3f %6d\n", trifocal_method_name(all_trifocal_methods()[mi]).c_str(), ns[q],
+                  med[mi][q], med[mi][q] / ml, fails[mi]);
+    std::fflush(stdout);
+  }
+  // three-f against ml by the epipolar angle of the adjusted F (trifocal_three_f.hpp), trial by trial,
+  // over a spread of geometries: what kThreeFMinAngleDeg refuses and what it keeps
+  std::printf("# three-f / ml transfer ratio by the epipolar angle (deg) of three-f's adjusted F, cross-track %g deg\n"
+              "# +- 0 .. 10 deg spread, %d trials per spread and n\n", cross, trials);
+  std::printf("%5s %14s %7s %14s %14s\n", "n", "angle", "trials", "median ratio", "90% ratio");
+  const double edges[] = {0, 0.1, 0.3, 0.5, 1, 3, 90};
+  for (int n : ns) {
+    std::vector<std::vector<double>> bins(6);
+    for (double sp : {0.0, 0.3, 1.0, 3.0, 10.0})
+      for (int t = 1; t <= trials; ++t) {
+        const auto seed = static_cast<std::uint64_t>(t);
+        const Data d = make_data_in(coplanar_scene(seed, size, cross * kDeg, sp * kDeg), seed, n, sigma, 1000);
+        try {
+          ThreeFReport rep;
+          const double r3 = transfer_rmse(trifocal_three_f(d.fit, 0, &rep), d.check);
+          const double rm = transfer_rmse(fit_trifocal(TrifocalMethod::Ml, d.fit), d.check);
+          for (int b = 0; b < 6; ++b)
+            if (rep.epipolar_angle_deg >= edges[b] && rep.epipolar_angle_deg < edges[b + 1]) bins[b].push_back(r3 / rm);
+        } catch (const std::exception&) {
+        }
+      }
+    for (int b = 0; b < 6; ++b) {
+      std::vector<double> v = bins[b];
+      std::sort(v.begin(), v.end());
+      const double p90 = v.empty() ? NAN : v[static_cast<size_t>(0.9 * (v.size() - 1))];
+      std::printf("%5d %6.1f .. %-5.1f %7zu %14.3f %14.3f\n", n, edges[b], edges[b + 1], v.size(), median(v), p90);
+    }
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int real_table(int argc, char** argv) {
   const char* path = arg_value(argc, argv, "--real");
   const std::uint64_t seed = arg_value(argc, argv, "--seed") ? std::strtoull(arg_value(argc, argv, "--seed"), nullptr, 10) : 1;
@@ -276,6 +393,7 @@ BENCHMARK(BM_ReprojEval)->Arg(1000)->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
   if (has_flag(argc, argv, "--accuracy")) return accuracy(argc, argv);
+  if (has_flag(argc, argv, "--coplanar")) return coplanar_table(argc, argv);
   if (arg_value(argc, argv, "--real")) return real_table(argc, argv);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

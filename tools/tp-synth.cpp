@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     std::string out;
     tpkit::SynthParams p;
     int threads = 0;
+    std::string cross_track;
   };
   return tpkit::run_tool(
       "tp-synth", argc, argv,
@@ -29,7 +30,9 @@ int main(int argc, char** argv) {
         app.add_option("--noise", o->p.noise, "sensor noise sigma (DN, 12-bit range)");
         app.add_option("--supersample", o->p.supersample, "n x n samples per pixel");
         app.add_option("--threads", o->threads, "rendering threads (0: all cores)");
+        app.add_option("--cross-track", o->cross_track, "cross-track angle(s) of the views, DEG or DEG,DEG,DEG");
         return [o]() {
+          if (!o->cross_track.empty()) o->p.cross_track = tpkit::parse_cross_track(o->cross_track);
           tpkit::check_params(o->p);
           if (o->threads < 0 || o->threads > tpkit::kMaxThreads)
             throw tpkit::UsageError("--threads must be between 0 and " + std::to_string(tpkit::kMaxThreads));

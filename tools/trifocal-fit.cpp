@@ -8,6 +8,7 @@
 #include "tpkit/formats.hpp"
 #include "tpkit/reproj_eval.hpp"
 #include "tpkit/tool_support.hpp"
+#include "tpkit/trifocal_three_f.hpp"
 #include "tpkit/trifocal_fit.hpp"
 
 extern const char* const tpkit_man_page;
@@ -82,6 +83,15 @@ int main(int argc, char** argv) {
           const ReprojectionFrame frame = reprojection_frame(out.T, fit_xy);
           const ReprojectionStats st = evaluate_reprojection(frame, fit_xy).stats;
           meta_set(out.meta, "method", trifocal_method_name(m));
+          if (m == TrifocalMethod::ThreeF) {
+            // near-coplanar viewing directions: three-f is marked (see trifocal_three_f.hpp)
+            const double angle = three_f_epipolar_angle(three_fundamental_linear(fit_xy), fit_xy);
+            meta_set(out.meta, "epipolar_angle_deg", num(std::round(angle * 1e4) / 1e4));
+            if (angle < kThreeFWarnAngleDeg)
+              warn("three-f: the epipolar lines of two views meet in the third at " + num(std::round(angle * 1e3) / 1e3) +
+                   " deg (viewing directions nearly in one plane): the three fundamental matrices determine the third "
+                   "camera poorly and the transfer error is inflated; -m ml is the better fit here");
+          }
           meta_set(out.meta, "tracks", std::to_string(tracks.size()));
           meta_set(out.meta, "fit_tracks", std::to_string(fit_xy.rows()));
           meta_set(out.meta, "rmse_px", num(st.rmse));

@@ -51,3 +51,14 @@ tpkit_tool_test(tp-synth.no-stale-truth
 tpkit_tool_test(tp-synth.interrupted-leaves-old-scene
   COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 && cp -r s old && (tp-synth --out s --size 3000 --relief 10 --points 20 --seed 9 & pid=$! @SEMI@ sleep 2 @SEMI@ kill -TERM $pid @SEMI@ wait $pid @SEMI@ echo killed $?) && ls s && test -z \"$(ls s | grep tmp)\" && diff -r old s && echo untouched"
   STDOUT_MATCH "killed 143.*untouched")
+
+# --cross-track: one angle puts the three viewing directions in one plane (det of the three ray directions,
+# the cross products of each camera's first two rows, ~ 0); the angle is kept in scene.params
+tpkit_tool_test(tp-synth.cross-track-coplanar
+  COMMAND "tp-synth --out s --size 160 --points 20 --supersample 1 --cross-track 0 >/dev/null 2>&1 && grep -q '^cross_track = 0$' s/scene.params && awk '!/^#/ && NF==4 {r[k++]=$0} END{for(v=0;v<3;v++){split(r[3*v],a);split(r[3*v+1],b); d[v,1]=a[2]*b[3]-a[3]*b[2]; d[v,2]=a[3]*b[1]-a[1]*b[3]; d[v,3]=a[1]*b[2]-a[2]*b[1]; n=sqrt(d[v,1]^2+d[v,2]^2+d[v,3]^2); for(c=1;c<=3;c++) d[v,c]/=n} det=d[0,1]*(d[1,2]*d[2,3]-d[1,3]*d[2,2])-d[0,2]*(d[1,1]*d[2,3]-d[1,3]*d[2,1])+d[0,3]*(d[1,1]*d[2,2]-d[1,2]*d[2,1]); print \"det\", det; exit !(det<1e-12 && det>-1e-12)}' s/truth.cameras"
+  STDOUT_MATCH "det ")
+tpkit_tool_test(tp-synth.cross-track-default-has-no-key
+  COMMAND "tp-synth --out s --size 160 --points 20 --supersample 1 >/dev/null 2>&1 && ! grep -q cross_track s/scene.params && echo none"
+  STDOUT_MATCH "none")
+tpkit_tool_test(tp-synth.cross-track-bad
+  COMMAND "tp-synth --out s --size 64 --cross-track 1,2" EXPECT_FAIL STDERR_MATCH "one angle or three" NO_FILE s/scene.params)

@@ -88,3 +88,16 @@ foreach(m dlt three-f)
 endforeach()
 tpkit_tool_test(trifocal-fit.affine-dlt-offset-fitted
   COMMAND "${_synth} && ${_offset} && trifocal-fit -m affine-dlt big.tracks -o t.trifocal 2>&1 | grep -o 'rmse [0-9.e-]*' | awk '{ exit !($2 < 0.001) }'")
+# three-f on coplanar viewing directions (a single-pass acquisition): refused with its figure; the
+# epipolar angle is in the header of every three-f fit
+tpkit_tool_test(trifocal-fit.three-f-coplanar-refused
+  COMMAND "tp-synth --out s0 --size 160 --points 300 --seed 3 --supersample 1 --cross-track 0 >/dev/null 2>&1 && trifocal-fit -m three-f s0/truth.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "three-f: the epipolar lines of two views meet in the third at [0-9.e-]+ deg, below 0.05 deg: the camera centres are \\(nearly\\) collinear" NO_FILE t.trifocal)
+tpkit_tool_test(trifocal-fit.three-f-angle-in-header
+  COMMAND "tp-synth --out s0 --size 160 --points 300 --seed 3 --supersample 1 --cross-track 0,3,0 >/dev/null 2>&1 && trifocal-fit -m three-f s0/truth.tracks -o t.trifocal"
+  CHECK_FILE t.trifocal FILE_MATCH "# epipolar_angle_deg: [0-9.]+\n")
+# an output on a device (-o /dev/null, a FIFO) is written in place: renaming a temporary file onto it
+# would replace the device node (as root, /dev/null became a regular file)
+tpkit_tool_test(trifocal-fit.output-to-a-fifo
+  COMMAND "${_synth} && mkfifo f && (cat f > got &) && trifocal-fit syn/truth.tracks --cameras cams -o f && sleep 0.5 && test -p f && grep -q '^# tpkit trifocal 1' got && test -s cams && echo fifo-ok"
+  STDOUT_MATCH "fifo-ok")

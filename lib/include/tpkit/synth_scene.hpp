@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace tpkit {
 
@@ -27,7 +28,15 @@ struct SynthParams {
   long points = 2000;            // truth tracks to write
   double noise = 2.0;            // sensor noise sigma, DN (12-bit range)
   long supersample = 4;          // rendering: n x n samples per pixel (box pixel response)
+  // Cross-track angles of the views, degrees (satellite east of the scene > 0). Empty: seeded, one
+  // angle of 2..3 deg for all views give or take 0.3 deg per view (the default). One value: every view
+  // exactly that angle, so the three viewing directions (tan c, tan a_v, 1) lie in one plane, as in a
+  // single-pass tri-stereo acquisition. Three values: views 1, 2, 3.
+  std::vector<double> cross_track;
 };
+
+// "DEG" or "DEG,DEG,DEG" (each finite, |DEG| <= 30) -> SynthParams::cross_track; UsageError otherwise.
+std::vector<double> parse_cross_track(const std::string&);
 
 // Throws UsageError naming the bad parameter (size < 16, relief < 0, gsd <= 0, unknown camera, ...).
 void check_params(const SynthParams&);

@@ -36,6 +36,27 @@ struct ThreeFundamental {
 // Step 1 alone (normalized 8-point per pair); exposed for tests.
 ThreeFundamental three_fundamental_linear(const Eigen::MatrixXd& xy);
 
-TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy);
+// The smallest angle, in degrees (0..90), at which the epipolar lines of two views' points meet in the
+// third view, at the views' centroids (c: homogeneous points, one per view, in the F's frame). It is 0
+// when the three camera centres are collinear — for affine (satellite) cameras, when the three viewing
+// directions lie in one plane, as in a single-pass tri-stereo acquisition — and then the three F
+// determine neither the tensor nor a point's transfer (H&Z 15.4); near 0 the transfer error of three-f
+// grows as 1/sin of it.
+double three_f_epipolar_angle(const Eigen::Matrix3d& F12, const Eigen::Matrix3d& F13, const Eigen::Matrix3d& F23,
+                              const Eigen::Vector3d c[3]);
+double three_f_epipolar_angle(const ThreeFundamental& f, const Eigen::MatrixXd& xy);
+
+struct ThreeFReport {
+  double epipolar_angle_deg = 0;  // three_f_epipolar_angle of the adjusted F
+};
+// Refused (NumericalError) when the adjusted F's epipolar angle is below min_angle_deg (0: never).
+// Below kThreeFMinAngleDeg the centres are collinear to rounding (exact coplanar data gives ~1e-6 deg)
+// and three-f is refused; below kThreeFWarnAngleDeg trifocal-fit warns: on noisy data the angle itself
+// is uncertain there (coplanar geometry with 0.5 px noise measures 0.003 to 1.6 deg) and three-f's
+// transfer error is 1.6 to 2.2 times ml's at 1000 tracks (bench_trifocal --coplanar).
+constexpr double kThreeFMinAngleDeg = 0.05;
+constexpr double kThreeFWarnAngleDeg = 2.0;
+TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy, double min_angle_deg = kThreeFMinAngleDeg,
+                                ThreeFReport* report = nullptr);
 
 }  // namespace tpkit

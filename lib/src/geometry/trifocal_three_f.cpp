@@ -1,7 +1,10 @@
 #include "tpkit/trifocal_three_f.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "tpkit/error.hpp"
 
@@ -11,6 +14,12 @@ namespace {
 
 
 const int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+
+std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
 
 // 8-point on normalized coordinates of views a, b: x_a^T F x_b = 0.
 Eigen::Matrix3d eight_point(const Eigen::MatrixXd& xn, int a, int b) {
@@ -91,6 +100,25 @@ Eigen::Vector3d right_null(const Eigen::Matrix3d& F) {
 
 }  // namespace
 
+double three_f_epipolar_angle(const Eigen::Matrix3d& F12, const Eigen::Matrix3d& F13, const Eigen::Matrix3d& F23,
+                              const Eigen::Vector3d c[3]) {
+  // in view v, the epipolar lines of the other two views' points c (homogeneous lines, normals first)
+  auto angle = [](const Eigen::Vector3d& l, const Eigen::Vector3d& m) {
+    const Eigen::Vector2d u = l.head<2>().normalized(), w = m.head<2>().normalized();
+    return std::asin(std::min(1.0, std::fabs(u.x() * w.y() - u.y() * w.x()))) * 180 / 3.14159265358979323846;
+  };
+  const double a1 = angle(F12 * c[1], F13 * c[2]);                          // view 1: x1^T F12 x2 = 0
+  const double a2 = angle(F12.transpose() * c[0], F23 * c[2]);              // view 2
+  const double a3 = angle(F13.transpose() * c[0], F23.transpose() * c[1]);  // view 3
+  return std::min({a1, a2, a3});
+}
+
+double three_f_epipolar_angle(const ThreeFundamental& f, const Eigen::MatrixXd& xy) {
+  Eigen::Vector3d c[3];
+  for (int v = 0; v < 3; ++v) c[v] << xy.col(2 * v).mean(), xy.col(2 * v + 1).mean(), 1;
+  return three_f_epipolar_angle(f.F12, f.F13, f.F23, c);
+}
+
 ThreeFundamental three_fundamental_linear(const Eigen::MatrixXd& xy) {
   if (xy.rows() < kThreeFMinTracks) throw InputError("three-f needs at least 8 tracks");
   const auto H = isotropic_normalization(xy, false);
@@ -104,7 +132,7 @@ ThreeFundamental three_fundamental_linear(const Eigen::MatrixXd& xy) {
   return {F[0], F[1], F[2]};
 }
 
-TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
+TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy, double min_angle_deg, ThreeFReport* report) {
   if (xy.rows() < kThreeFMinTracks) throw InputError("three-f needs at least 8 tracks");
   const auto H = isotropic_normalization(xy, true);  // common scale: weights in pixels
   const Eigen::MatrixXd xn = apply_normalization(xy, H);
@@ -208,8 +236,20 @@ TrifocalTensor trifocal_three_f(const Eigen::MatrixXd& xy) {
       if (dp.norm() < 1e-10) break;  // only rounding left to gain
     }
   }
-  // 3. tensor from the adjusted geometry
+  // 3. tensor from the adjusted geometry, unless the centres are (nearly) collinear
   const Eigen::Matrix3d F12 = F_of(p, 0), F13 = F_of(p, 1), F23 = F_of(p, 2);
+  {
+    const Eigen::Vector3d origin(0, 0, 1);  // the centroid of every view in the normalized frame
+    const Eigen::Vector3d c[3] = {origin, origin, origin};
+    const double angle = three_f_epipolar_angle(F12, F13, F23, c);
+    if (report) report->epipolar_angle_deg = angle;
+    if (min_angle_deg > 0 && !(angle >= min_angle_deg))
+      throw NumericalError("three-f: the epipolar lines of two views meet in the third at " + short_number(angle) +
+                           " deg, below " + short_number(min_angle_deg) +
+                           " deg: the camera centres are (nearly) collinear (viewing directions in one plane, as in a "
+                           "single-pass acquisition), where three fundamental matrices do not determine the third "
+                           "camera; use ml or affine-dlt");
+  }
   const Eigen::Matrix3d F21 = F12.transpose(), F31 = F13.transpose(), F32 = F23.transpose();
   const Eigen::Vector3d e21 = right_null(F12), e31 = right_null(F13);
   Camera P1 = Camera::Zero(), P2, P3_0 = Camera::Zero();

@@ -110,6 +110,11 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
   meta_set(meta, "points", std::to_string(p.points));
   meta_set(meta, "noise", format_number(p.noise));
   meta_set(meta, "supersample", std::to_string(p.supersample));
+  if (!p.cross_track.empty()) {  // given by --cross-track (else seeded, and no line, as before)
+    std::string ct;
+    for (double c : p.cross_track) ct += (ct.empty() ? "" : ",") + format_number(c);
+    meta_set(meta, "cross_track_deg", ct);
+  }
   meta_set(meta, "scene", "ground square [0, " + format_number(scene.scene_size()) +
                               "] m x [0, same] m; X east, Y north, Z up (m)");
 

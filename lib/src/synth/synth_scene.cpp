@@ -23,6 +23,7 @@ namespace tpkit {
 namespace {
 constexpr double kDeg = 3.14159265358979323846 / 180;
 constexpr double kAltitude = 700e3;  // satellite altitude above the scene centre (m)
+constexpr double kMaxCrossTrack = 30;  // degrees: |--cross-track| beyond this is refused
 // Version of the scene model (terrain, texture, cameras, rendering) written to scene.params: bump it when
 // the same parameters would give another scene, so that load() refuses files of another version.
 constexpr int kSynthModel = 1;
@@ -49,7 +50,45 @@ void check_params(const SynthParams& p) {
   if (p.points < 0) throw UsageError("--points must be >= 0");
   if (!(p.noise >= 0) || !std::isfinite(p.noise)) throw UsageError("--noise must be >= 0 DN");
   if (p.supersample < 1 || p.supersample > 16) throw UsageError("--supersample must be between 1 and 16");
+  if (p.cross_track.size() != 0 && p.cross_track.size() != 1 && p.cross_track.size() != 3)
+    throw UsageError("--cross-track takes one angle or three, got " + std::to_string(p.cross_track.size()));
+  for (double c : p.cross_track)
+    if (!(std::fabs(c) <= kMaxCrossTrack))
+      throw UsageError("--cross-track angles must be between -30 and 30 degrees, got " + format_number(c));
 }
+
+std::vector<double> parse_cross_track(const std::string& s) {
+  std::vector<double> out;
+  size_t b = 0;
+  while (true) {
+    const size_t e = s.find(',', b);
+    const std::string item = s.substr(b, e == std::string::npos ? std::string::npos : e - b);
+    size_t used = 0;
+    double v = NAN;
+    try {
+      v = std::stod(item, &used);
+    } catch (...) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(v))
+      throw UsageError("--cross-track: not an angle in degrees: '" + item + "' (DEG or DEG,DEG,DEG)");
+    out.push_back(v);
+    if (e == std::string::npos) break;
+    b = e + 1;
+  }
+  SynthParams p;
+  p.cross_track = out;
+  check_params(p);
+  return out;
+}
+
+namespace {
+std::string cross_track_text(const std::vector<double>& c) {
+  std::string s;
+  for (size_t i = 0; i < c.size(); ++i) s += (i ? "," : "") + format_number(c[i]);
+  return s;
+}
+}  // namespace
 
 void save_params(const std::string& path, const SynthParams& p) {
   std::ostringstream os;
@@ -62,8 +101,9 @@ void save_params(const std::string& path, const SynthParams& p) {
      << "camera = " << p.camera << "\n"
      << "points = " << p.points << "\n"
      << "noise = " << format_number(p.noise) << "\n"
-     << "supersample = " << p.supersample << "\n"
-     << "model = " << kSynthModel << "\n";
+     << "supersample = " << p.supersample << "\n";
+  if (!p.cross_track.empty()) os << "cross_track = " << cross_track_text(p.cross_track) << "\n";  // default: no key
+  os << "model = " << kSynthModel << "\n";
   write_file_atomic(path, os.str());
 }
 
@@ -128,6 +168,12 @@ SynthParams load_params(const std::string& path) {
     } else if (key == "supersample") {
       integer(i);
       p.supersample = static_cast<long>(i);
+    } else if (key == "cross_track") {
+      try {
+        p.cross_track = parse_cross_track(val);
+      } catch (const UsageError& e) {
+        throw InputError(path, n, std::string("cross_track: ") + e.what());
+      }
     } else if (key == "model") {
       integer(i);
       if (i != kSynthModel)
@@ -159,12 +205,14 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
   const uint64_t gs = synth::hash(params.seed, 0x6e0);
   auto u = [&](int k) { return synth::uniform(gs, k); };
   // Three-line geometry: along-track +22 / 0 / -22 deg (forward, nadir, backward) with small seeded
-  // deviations, the same cross-track pointing (2..3 deg) give or take 0.3 deg, small rolls.
+  // deviations, the same cross-track pointing (2..3 deg) give or take 0.3 deg, small rolls; or the
+  // cross-track angles of params.cross_track (one for all views: coplanar viewing directions).
   const double cross = (2.0 + 1.0 * u(1)) * kDeg;
+  const std::vector<double>& ct = params.cross_track;
   double along[kViews], crossv[kViews], roll[kViews];
   for (int v = 0; v < kViews; ++v) {
     along[v] = ((v == 0 ? 22.0 : v == 2 ? -22.0 : 0.0) + 0.5 * (2 * u(10 + v) - 1)) * kDeg;
-    crossv[v] = cross + 0.3 * (2 * u(20 + v) - 1) * kDeg;
+    crossv[v] = ct.empty() ? cross + 0.3 * (2 * u(20 + v) - 1) * kDeg : ct[ct.size() == 3 ? v : 0] * kDeg;
     roll[v] = 0.4 * (2 * u(30 + v) - 1) * kDeg;
     m.gain[v] = 3000 + 600 * u(40 + v);
     m.offset[v] = 60 + 200 * u(50 + v);
