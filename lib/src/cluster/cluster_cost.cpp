@@ -64,6 +64,16 @@ ClusterCost::ClusterCost(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B, C
   if (!(opt.truncate >= 0)) throw UsageError("truncate must be >= 0");
   cap_ = std::max(diag(A_), diag(B_));
   trees_ = std::make_unique<Trees>(A_, B_);
+  // The trees' point order (leaf by leaf): neighbours in space are neighbours in it.
+  order_a_.assign(trees_->ta.vAcc.begin(), trees_->ta.vAcc.end());
+  order_b_.assign(trees_->tb.vAcc.begin(), trees_->tb.vAcc.end());
+  // Their coordinates in that order, x y interleaved (whole-cluster queries read them in sequence).
+  auto copy = [](const Eigen::MatrixX2d& P, const std::vector<int>& order, std::vector<double>& xy) {
+    xy.resize(2 * order.size());
+    for (size_t k = 0; k < order.size(); ++k) xy[2 * k] = P(order[k], 0), xy[2 * k + 1] = P(order[k], 1);
+  };
+  copy(A_, order_a_, xy_a_);
+  copy(B_, order_b_, xy_b_);
 }
 
 ClusterCost::~ClusterCost() = default;
@@ -104,30 +114,35 @@ double ClusterCost::cost(const Eigen::Matrix3d& H, const CostOptions& opt, const
   Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
   if (!H.allFinite() || !lu.isInvertible()) return std::numeric_limits<double>::infinity();
   Eigen::Matrix3d Hi = lu.inverse();
-  std::vector<double> d;
-  double q[2], d2;
-  auto one = [&](const Eigen::Matrix3d& M, const Eigen::MatrixX2d& P, Eigen::Index i, bool fwd) {
-    if (map_point(M, P(i, 0), P(i, 1), q)) {
-      if (fwd)
-        nearest_b(q, &d2);
-      else
-        nearest_a(q, &d2);
-      d.push_back(std::min(std::sqrt(d2), cap_ * 10));
-    } else {
-      d.push_back(cap_ * 10);
-    }
+  // Distances are stored at their point's index whatever the order of the queries, so the sums below
+  // are those of the index order; the queries of whole clusters go in the KD-tree order (see order_a()).
+  auto dist = [&](const Eigen::Matrix3d& M, double x, double y, bool fwd) {
+    double q[2], d2;
+    if (!map_point(M, x, y, q)) return cap_ * 10;
+    if (fwd)
+      nearest_b(q, &d2);
+    else
+      nearest_a(q, &d2);
+    return std::min(std::sqrt(d2), cap_ * 10);
   };
+  std::vector<double> d;
   d.reserve(static_cast<size_t>(std::max(A_.rows(), B_.rows())));
-  if (sub_a)
-    for (int i : *sub_a) one(H, A_, i, true);
-  else
-    for (Eigen::Index i = 0; i < A_.rows(); ++i) one(H, A_, i, true);
+  if (sub_a) {
+    for (int i : *sub_a) d.push_back(dist(H, A_(i, 0), A_(i, 1), true));
+  } else {
+    d.resize(static_cast<size_t>(A_.rows()));
+    for (size_t k = 0; k < order_a_.size(); ++k)
+      d[static_cast<size_t>(order_a_[k])] = dist(H, xy_a_[2 * k], xy_a_[2 * k + 1], true);
+  }
   double c = robust_mean(d, opt);
   d.clear();
-  if (sub_b)
-    for (int j : *sub_b) one(Hi, B_, j, false);
-  else
-    for (Eigen::Index j = 0; j < B_.rows(); ++j) one(Hi, B_, j, false);
+  if (sub_b) {
+    for (int j : *sub_b) d.push_back(dist(Hi, B_(j, 0), B_(j, 1), false));
+  } else {
+    d.resize(static_cast<size_t>(B_.rows()));
+    for (size_t k = 0; k < order_b_.size(); ++k)
+      d[static_cast<size_t>(order_b_[k])] = dist(Hi, xy_b_[2 * k], xy_b_[2 * k + 1], false);
+  }
   return c + robust_mean(d, opt);
 }
 
@@ -149,18 +164,29 @@ std::vector<NnPair> ClusterCost::pairs(const Eigen::Matrix3d& H) const {
   Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
   if (!H.allFinite() || !lu.isInvertible()) return out;
   Eigen::Matrix3d Hi = lu.inverse();
-  double q[2], d2;
   out.reserve(static_cast<size_t>(A_.rows() + B_.rows()));
-  for (Eigen::Index i = 0; i < A_.rows(); ++i)
-    if (map_point(H, A_(i, 0), A_(i, 1), q)) {
-      int j = nearest_b(q, &d2);
-      out.push_back({static_cast<int>(i), j, std::sqrt(d2), true});
-    }
-  for (Eigen::Index j = 0; j < B_.rows(); ++j)
-    if (map_point(Hi, B_(j, 0), B_(j, 1), q)) {
-      int i = nearest_a(q, &d2);
-      out.push_back({i, static_cast<int>(j), std::sqrt(d2), false});
-    }
+  // Queries in the KD-tree order (cache-friendly), results kept by index and written in index order.
+  std::vector<int> nn;
+  std::vector<double> dd;
+  auto side = [&](const Eigen::Matrix3d& M, const Eigen::MatrixX2d& P, const std::vector<int>& order, bool fwd) {
+    nn.assign(static_cast<size_t>(P.rows()), -1);
+    dd.resize(static_cast<size_t>(P.rows()));
+    double q[2], d2;
+    for (int i : order)
+      if (map_point(M, P(i, 0), P(i, 1), q)) {
+        nn[static_cast<size_t>(i)] = fwd ? nearest_b(q, &d2) : nearest_a(q, &d2);
+        dd[static_cast<size_t>(i)] = std::sqrt(d2);
+      }
+    for (size_t i = 0; i < nn.size(); ++i)
+      if (nn[i] >= 0) {
+        if (fwd)
+          out.push_back({static_cast<int>(i), nn[i], dd[i], true});
+        else
+          out.push_back({nn[i], static_cast<int>(i), dd[i], false});
+      }
+  };
+  side(H, A_, order_a_, true);
+  side(Hi, B_, order_b_, false);
   return out;
 }
 

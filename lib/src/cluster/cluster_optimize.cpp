@@ -146,24 +146,59 @@ Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& 
       Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
       if (!lu.isInvertible()) break;
       Eigen::Matrix3d Hi = lu.inverse();
+      // The region tests go in index order; the queries of a large region in the KD-tree order (cache-
+      // friendly: see ClusterCost::order_a), those of a small one in index order (they are close anyway).
+      // Either way each pair is kept at its index and written in index order.
       double q[2], d2;
-      for (Eigen::Index i = 0; i < A.rows(); ++i) {
-        if ((A.row(i).transpose() - region->center).squaredNorm() > r2) continue;
+      std::vector<int> nn(static_cast<size_t>(std::max(A.rows(), B.rows())), -1);
+      std::vector<double> dd(nn.size());
+      std::vector<char> in(nn.size(), 0);
+      size_t k = 0;
+      for (Eigen::Index i = 0; i < A.rows(); ++i)
+        if (!((A.row(i).transpose() - region->center).squaredNorm() > r2)) in[static_cast<size_t>(i)] = 1, ++k;
+      auto forward = [&](int i) {
         Eigen::Vector3d m = H * Eigen::Vector3d(A(i, 0), A(i, 1), 1.0);
         q[0] = m(0) / m(2), q[1] = m(1) / m(2);
-        if (!std::isfinite(q[0]) || !std::isfinite(q[1])) continue;
-        int j = cost.nearest_b(q, &d2);
-        pairs.push_back({static_cast<int>(i), j, std::sqrt(d2), true});
+        if (!std::isfinite(q[0]) || !std::isfinite(q[1])) return;
+        nn[static_cast<size_t>(i)] = cost.nearest_b(q, &d2);
+        dd[static_cast<size_t>(i)] = std::sqrt(d2);
+      };
+      if (8 * k > static_cast<size_t>(A.rows())) {
+        for (int i : cost.order_a())
+          if (in[static_cast<size_t>(i)]) forward(i);
+      } else {
+        for (Eigen::Index i = 0; i < A.rows(); ++i)
+          if (in[static_cast<size_t>(i)]) forward(static_cast<int>(i));
       }
+      for (Eigen::Index i = 0; i < A.rows(); ++i)
+        if (nn[static_cast<size_t>(i)] >= 0) pairs.push_back({static_cast<int>(i), nn[static_cast<size_t>(i)], dd[static_cast<size_t>(i)], true});
+      std::fill(nn.begin(), nn.end(), -1);
+      std::fill(in.begin(), in.end(), 0);
+      std::vector<double> qb(static_cast<size_t>(2 * B.rows()));
+      k = 0;
       for (Eigen::Index j = 0; j < B.rows(); ++j) {
         Eigen::Vector3d m = Hi * Eigen::Vector3d(B(j, 0), B(j, 1), 1.0);
         q[0] = m(0) / m(2), q[1] = m(1) / m(2);
         if (!std::isfinite(q[0]) || !std::isfinite(q[1])) continue;
         if ((Eigen::Vector2d(q[0], q[1]) - region->center).squaredNorm() > r2 * 1.5) continue;
-        int i = cost.nearest_a(q, &d2);
-        if ((A.row(i).transpose() - region->center).squaredNorm() > r2) continue;
-        pairs.push_back({i, static_cast<int>(j), std::sqrt(d2), false});
+        in[static_cast<size_t>(j)] = 1, ++k;
+        qb[static_cast<size_t>(2 * j)] = q[0], qb[static_cast<size_t>(2 * j + 1)] = q[1];
       }
+      auto backward = [&](int j) {
+        int i = cost.nearest_a(&qb[static_cast<size_t>(2 * j)], &d2);
+        if ((A.row(i).transpose() - region->center).squaredNorm() > r2) return;
+        nn[static_cast<size_t>(j)] = i;
+        dd[static_cast<size_t>(j)] = std::sqrt(d2);
+      };
+      if (8 * k > static_cast<size_t>(B.rows())) {
+        for (int j : cost.order_b())
+          if (in[static_cast<size_t>(j)]) backward(j);
+      } else {
+        for (Eigen::Index j = 0; j < B.rows(); ++j)
+          if (in[static_cast<size_t>(j)]) backward(static_cast<int>(j));
+      }
+      for (Eigen::Index j = 0; j < B.rows(); ++j)
+        if (nn[static_cast<size_t>(j)] >= 0) pairs.push_back({nn[static_cast<size_t>(j)], static_cast<int>(j), dd[static_cast<size_t>(j)], false});
     } else {
       pairs = cost.pairs(H);
     }

@@ -2,9 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <filesystem>
-#include <numeric>
+#include <set>
 #include <unordered_map>
 
 #include "tpkit/error.hpp"
@@ -90,10 +89,22 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
 
   // nodes and links
   std::vector<Node> nodes;
-  std::unordered_map<long long, size_t> node_of_key;  // per image: separate maps
-  std::vector<std::unordered_map<long long, size_t>> node_of(imgs.size());
   UnionFind uf;
   std::vector<Link> links;
+  std::vector<std::unordered_map<long long, size_t>> node_of(imgs.size());  // per image: id -> node
+  {
+    std::vector<size_t> records(imgs.size(), 0);
+    size_t total = 0;
+    for (const auto& m : files) {
+      records[static_cast<size_t>(image_index(m.image1, false))] += m.size();
+      records[static_cast<size_t>(image_index(m.image2, false))] += m.size();
+      total += m.size();
+    }
+    for (size_t i = 0; i < imgs.size(); ++i) node_of[i].reserve(records[i]);
+    nodes.reserve(2 * total);
+    links.reserve(total);
+    uf.p.reserve(2 * total);
+  }
   auto node = [&](int img, long long id, double x, double y) {
     auto it = node_of[img].find(id);
     if (it != node_of[img].end()) return it->second;
@@ -115,34 +126,102 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
       uf.unite(u, v);
     }
   }
-  // same-position keypoints of one image are one point
+  // same-position keypoints of one image are one point: every pair (p, q) of one image with
+  // |x_q - x_p| <= same_position and |y_q - y_p| <= same_position is joined. A sweep in x order with the
+  // window of the points within same_position in x, searched by y: O(n log n + pairs found) per image
+  // (the plain window scan was O(n * points in a same_position-wide strip), quadratic on a grid).
+  std::vector<std::vector<size_t>> by_image(imgs.size());
+  for (size_t n = 0; n < nodes.size(); ++n) by_image[static_cast<size_t>(nodes[n].image)].push_back(n);
+  const double sp = o.same_position;
+  auto join = [&](size_t p, size_t q) {
+    if (uf.find(p) != uf.find(q)) {
+      uf.unite(p, q);
+      ++st.merged_duplicates;
+    }
+  };
   for (size_t img = 0; img < imgs.size(); ++img) {
-    std::vector<size_t> ns;
-    for (const auto& kv : node_of[img]) ns.push_back(kv.second);
+    std::vector<size_t>& ns = by_image[img];
     std::sort(ns.begin(), ns.end(), [&](size_t p, size_t q) {
       if (nodes[p].x != nodes[q].x) return nodes[p].x < nodes[q].x;
       if (nodes[p].y != nodes[q].y) return nodes[p].y < nodes[q].y;
       return p < q;
     });
-    for (size_t i = 0; i < ns.size(); ++i)
-      for (size_t j = i + 1; j < ns.size() && nodes[ns[j]].x - nodes[ns[i]].x <= o.same_position; ++j)
-        if (std::abs(nodes[ns[j]].y - nodes[ns[i]].y) <= o.same_position && uf.find(ns[i]) != uf.find(ns[j])) {
-          uf.unite(ns[i], ns[j]);
-          ++st.merged_duplicates;
+    // Keypoints at exactly the same position: joined to the first of them, which stands for them all
+    // below (the test depends on the coordinates only).
+    std::vector<size_t> rep;
+    rep.reserve(ns.size());
+    for (size_t i = 0; i < ns.size(); ++i) {
+      if (!rep.empty() && nodes[ns[i]].x == nodes[rep.back()].x && nodes[ns[i]].y == nodes[rep.back()].y)
+        join(rep.back(), ns[i]);
+      else
+        rep.push_back(ns[i]);
+    }
+    // For the j-th point (x order) the points before it with x_j - x_i <= sp form a suffix [lo, j) of
+    // the order (the rounded difference is monotonic); those with |y_j - y_i| <= sp an interval in y.
+    // Small windows are scanned; large ones (many points in one same_position-wide strip, e.g. a grid)
+    // are kept in a set ordered by y (entered above 2T points, left below T: amortized O(log n)).
+    constexpr size_t T = 32;
+    std::set<std::pair<double, size_t>> act;  // (y, index into rep) of the window, in set mode
+    bool use_set = false;
+    size_t lo = 0;
+    for (size_t j = 0; j < rep.size(); ++j) {
+      const Node& nj = nodes[rep[j]];
+      while (nj.x - nodes[rep[lo]].x > sp) {
+        if (use_set) act.erase({nodes[rep[lo]].y, lo});
+        ++lo;
+      }
+      const size_t w = j - lo;
+      if (use_set && w < T) {
+        act.clear();
+        use_set = false;
+      } else if (!use_set && w > 2 * T) {
+        for (size_t i = lo; i < j; ++i) act.emplace(nodes[rep[i]].y, i);
+        use_set = true;
+      }
+      if (!use_set) {
+        for (size_t i = lo; i < j; ++i)
+          if (std::abs(nj.y - nodes[rep[i]].y) <= sp) join(rep[i], rep[j]);
+      } else {
+        auto it = act.lower_bound({nj.y, 0});
+        for (auto u = it; u != act.end() && u->first - nj.y <= sp; ++u) join(rep[u->second], rep[j]);
+        for (auto d = it; d != act.begin();) {
+          --d;
+          if (nj.y - d->first > sp) break;
+          join(rep[d->second], rep[j]);
         }
+        act.emplace(nj.y, j);
+      }
+    }
   }
-  // components
-  std::vector<std::vector<size_t>> adj(nodes.size());
-  for (size_t l = 0; l < links.size(); ++l) {
-    adj[links[l].u].push_back(l);
-    adj[links[l].v].push_back(l);
+  by_image.clear();
+  by_image.shrink_to_fit();
+  // links of each node, in link order (compressed rows)
+  std::vector<size_t> adj_at(nodes.size() + 1, 0), adj;
+  for (const Link& L : links) ++adj_at[L.u + 1], ++adj_at[L.v + 1];
+  for (size_t n = 0; n < nodes.size(); ++n) adj_at[n + 1] += adj_at[n];
+  adj.resize(adj_at[nodes.size()]);
+  {
+    std::vector<size_t> fill(adj_at.begin(), adj_at.end() - 1);
+    for (size_t l = 0; l < links.size(); ++l) {
+      adj[fill[links[l].u]++] = l;
+      adj[fill[links[l].v]++] = l;
+    }
   }
-  std::unordered_map<size_t, std::vector<size_t>> comp;
-  for (size_t n = 0; n < nodes.size(); ++n) comp[uf.find(n)].push_back(n);
-  st.components = static_cast<long>(comp.size());
-  // image order rank (output images first)
-  std::vector<int> rank(imgs.size());
-  std::iota(rank.begin(), rank.end(), 0);
+  // components: nodes grouped by root (compressed rows; the output order does not depend on the
+  // order of the components, see the sort below)
+  std::vector<size_t> root(nodes.size()), comp_at(nodes.size() + 1, 0), comp_nodes(nodes.size());
+  for (size_t n = 0; n < nodes.size(); ++n) {
+    root[n] = uf.find(n);
+    ++comp_at[root[n] + 1];
+  }
+  for (size_t n = 0; n < nodes.size(); ++n) {
+    if (comp_at[n + 1] > 0) ++st.components;
+    comp_at[n + 1] += comp_at[n];
+  }
+  {
+    std::vector<size_t> fill(comp_at.begin(), comp_at.end() - 1);
+    for (size_t n = 0; n < nodes.size(); ++n) comp_nodes[fill[root[n]]++] = n;
+  }
 
   struct Out {
     long long ref_id;
@@ -152,16 +231,30 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
   auto same = [&](size_t p, size_t q) {
     return std::abs(nodes[p].x - nodes[q].x) <= o.same_position && std::abs(nodes[p].y - nodes[q].y) <= o.same_position;
   };
-  for (auto& kv : comp) {
-    auto& ns = kv.second;
-    std::sort(ns.begin(), ns.end(), [&](size_t p, size_t q) {
-      if (nodes[p].image != nodes[q].image) return nodes[p].image < nodes[q].image;
-      return nodes[p].id < nodes[q].id;
+  // per-component scratch: reset per component (O(images)) or marked by the component's stamp
+  std::vector<char> present(imgs.size()), conflict(imgs.size()), have(imgs.size());
+  std::vector<size_t> first(imgs.size());
+  std::vector<Eigen::Vector2d> view(imgs.size());
+  std::vector<Eigen::Vector2d> pos(nodes.size());
+  std::vector<size_t> reached(nodes.size(), 0);  // stamp of the component whose search reached the node
+  std::vector<size_t> q;
+  q.reserve(64);
+  size_t stamp = 0;
+  for (size_t rt = 0; rt < nodes.size(); ++rt) {
+    if (comp_at[rt + 1] == comp_at[rt]) continue;
+    ++stamp;
+    auto nb = comp_nodes.begin() + static_cast<std::ptrdiff_t>(comp_at[rt]);
+    auto ne = comp_nodes.begin() + static_cast<std::ptrdiff_t>(comp_at[rt + 1]);
+    std::sort(nb, ne, [&](size_t p, size_t r) {
+      if (nodes[p].image != nodes[r].image) return nodes[p].image < nodes[r].image;
+      return nodes[p].id < nodes[r].id;
     });
     // per image: conflicting (two different positions)?
-    std::vector<char> present(imgs.size(), 0), conflict(imgs.size(), 0);
-    std::vector<size_t> first(imgs.size(), 0);
-    for (size_t n : ns) {
+    std::fill(present.begin(), present.end(), 0);
+    std::fill(conflict.begin(), conflict.end(), 0);
+    std::fill(first.begin(), first.end(), 0);
+    for (auto it = nb; it != ne; ++it) {
+      size_t n = *it;
       int im = nodes[n].image;
       if (!present[im]) {
         present[im] = 1;
@@ -183,32 +276,32 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
     for (size_t im = 0; im < imgs.size(); ++im)
       if (conflict[im]) ++st.views_dropped_conflicts;
     // breadth first from the reference keypoint(s)
-    std::unordered_map<size_t, Eigen::Vector2d> pos;
-    std::deque<size_t> q;
-    for (size_t n : ns)
-      if (nodes[n].image == ref) {
-        pos[n] = {nodes[n].x, nodes[n].y};
-        q.push_back(n);
+    q.clear();
+    for (auto it = nb; it != ne; ++it)
+      if (nodes[*it].image == ref) {
+        pos[*it] = {nodes[*it].x, nodes[*it].y};
+        reached[*it] = stamp;
+        q.push_back(*it);
       }
-    std::vector<char> have(imgs.size(), 0);
-    std::vector<Eigen::Vector2d> view(imgs.size());
+    std::fill(have.begin(), have.end(), 0);
+    std::fill(view.begin(), view.end(), Eigen::Vector2d::Zero());
     have[ref] = 1;
     view[ref] = {nodes[first[ref]].x, nodes[first[ref]].y};
-    while (!q.empty()) {
-      size_t n = q.front();
-      q.pop_front();
+    for (size_t head = 0; head < q.size(); ++head) {
+      size_t n = q[head];
       const Eigen::Vector2d pn = pos[n];
-      for (size_t l : adj[n]) {
-        const Link& L = links[l];
+      for (size_t a = adj_at[n]; a < adj_at[n + 1]; ++a) {
+        const Link& L = links[adj[a]];
         size_t m = L.u == n ? L.v : L.u;
         int im = nodes[m].image;
-        if (conflict[im] || pos.count(m)) continue;
+        if (conflict[im] || reached[m] == stamp) continue;
         Eigen::Vector2d pm;
         if (L.u == n)  // forward: refined position in image 2, moved by n's offset from its keypoint
           pm = Eigen::Vector2d(L.x2, L.y2) + (pn - Eigen::Vector2d(nodes[n].x, nodes[n].y));
         else  // reversed: L.x2 is n's refined position relative to m's keypoint
           pm = Eigen::Vector2d(nodes[m].x, nodes[m].y) - (Eigen::Vector2d(L.x2, L.y2) - pn);
         pos[m] = pm;
+        reached[m] = stamp;
         q.push_back(m);
         if (!have[im]) {
           have[im] = 1;
@@ -222,12 +315,15 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
     if (views < K || views < o.min_views) continue;
     Out t;
     t.ref_id = nodes[first[ref]].id;
+    t.xy.reserve(static_cast<size_t>(2 * K));
     for (int im = 0; im < K; ++im) {
       t.xy.push_back(view[im].x());
       t.xy.push_back(view[im].y());
     }
     out.push_back(std::move(t));
   }
+  // Written tracks hold every output image, so their reference is image 0 and their reference ids
+  // (keypoint ids of image 0, one node each) are distinct: the order is total.
   std::sort(out.begin(), out.end(), [](const Out& a, const Out& b) { return a.ref_id < b.ref_id; });
   Tracks T;
   T.images.assign(imgs.begin(), imgs.begin() + K);
