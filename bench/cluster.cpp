@@ -2,7 +2,7 @@
 // setup (Navy et al. 2005, section 6), robustness to extra/missing points, the correspondence-free
 // search, and time against the cluster size. Prints plain tables on stdout.
 //
-//   bench_cluster [--trials N] [--section paper|robust|scratch|scale|all] [--max-n N]
+//   bench_cluster [--trials N] [--section paper|robust|scratch|verdict|scale|all] [--max-n N]
 //
 // Clusters: A = n points uniform in [0, 512]^2 pixels (image 1), B = h(A) (+ noise), h = eq. 4 as the
 // section 4 model gives it (physical_homography.hpp). Success: final cost <= 0.25 px and h within
@@ -21,6 +21,7 @@
 #include "tpkit/cluster_optimize.hpp"
 #include "tpkit/cluster_search.hpp"
 #include "tpkit/cluster_synth.hpp"
+#include "tpkit/cluster_verdict.hpp"
 #include "tpkit/physical_homography.hpp"
 
 using namespace tpkit;
@@ -83,6 +84,57 @@ void run_case(const char* label, int trials, const ClusterSynthOptions& base, co
   std::fflush(stdout);
 }
 
+// The verdict (cluster_verdict.hpp) on related pairs (B = h(A) + noise, extra/missing points, found from
+// scratch): accepted and right (h within 0.5 px over A's extent), accepted and wrong (the worst case),
+// rejected; and on unrelated pairs (A and B independent uniform clusters of n points): false accepts.
+void verdict_case(const char* label, int trials, const ClusterSynthOptions& base, CostOptions co) {
+  int right = 0, wrong = 0, rejected = 0;
+  Eigen::Matrix3d truth = physical_homography(paper_physical_params());
+  for (int t = 0; t < trials; ++t) {
+    ClusterSynthOptions so = base;
+    so.seed = 5000 + static_cast<uint64_t>(t);
+    ClusterPair cp = synth_cluster_pair(truth, so);
+    ClusterCost cost(cp.A, cp.B, co);
+    OptimizeOptions o;
+    o.param = Parameterization::Math;
+    o.seed = static_cast<uint64_t>(t + 1);
+    OptimizeResult r = optimize_clusters(cost, OptimizeStart{}, o);
+    VerdictOptions vo;
+    vo.hypotheses = std::max(1L, r.evaluations);
+    const Verdict v = judge_homography(cost, r.H, vo);
+    const bool h_ok = homography_max_difference(r.H, truth, extent_grid(cp.A)) <= 0.5;
+    if (!v.accepted) ++rejected;
+    else if (h_ok) ++right;
+    else ++wrong;
+  }
+  std::printf("%-52s %4d trials: accepted right %5.1f%%, accepted WRONG %5.1f%%, rejected %5.1f%%\n", label, trials,
+              100.0 * right / trials, 100.0 * wrong / trials, 100.0 * rejected / trials);
+  std::fflush(stdout);
+}
+
+void unrelated_case(int n, int trials) {
+  int accepted = 0;
+  for (int t = 0; t < trials; ++t) {
+    ClusterSynthOptions sa;
+    sa.n = n;
+    sa.seed = 9000 + static_cast<uint64_t>(t);
+    ClusterSynthOptions sb = sa;
+    sb.seed = 19000 + static_cast<uint64_t>(t);
+    const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+    ClusterCost cost(synth_cluster_pair(I, sa).A, synth_cluster_pair(I, sb).A);
+    OptimizeOptions o;
+    o.param = Parameterization::Math;
+    o.seed = static_cast<uint64_t>(t + 1);
+    OptimizeResult r = optimize_clusters(cost, OptimizeStart{}, o);
+    VerdictOptions vo;
+    vo.hypotheses = std::max(1L, r.evaluations);
+    accepted += judge_homography(cost, r.H, vo).accepted;
+  }
+  std::printf("unrelated uniform clusters, n = %-5d               %4d trials: false accepts %d (%.2f%%)\n", n, trials, accepted,
+              100.0 * accepted / trials);
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -94,7 +146,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--section") && i + 1 < argc) section = argv[++i];
     else if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|scale|all] [--max-n N]\n");
+      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|scale|all] [--max-n N]\n");
       return 2;
     }
   }
@@ -146,6 +198,19 @@ int main(int argc, char** argv) {
     run_case("scratch, eq. 4, noise 0.1 px, --trim 0.1", trials, sc, o, {0.1, 0}, false);
     sc.extra = 0.2, sc.missing = 0.3;
     run_case("scratch, + 20% extra / 30% missing, --trim 0.45", trials, sc, o, {0.45, 0}, false);
+  }
+  if (all || section == "verdict") {
+    std::printf("== verdict: related pairs found from scratch, and unrelated pairs (false accepts)\n");
+    ClusterSynthOptions v = paper;
+    v.noise = 0.1;
+    verdict_case("eq. 4, n=100, noise 0.1 px", trials, v, {});
+    v.extra = 0.2, v.missing = 0.3;
+    verdict_case("eq. 4, n=100, 20% extra, 30% missing, --trim 0.45", trials, v, {0.45, 0});
+    v.n = 20, v.extra = 0, v.missing = 0;
+    verdict_case("eq. 4, n=20, noise 0.1 px", trials, v, {});
+    v.n = 6;
+    verdict_case("eq. 4, n=6 (cannot be verified)", trials, v, {});
+    for (int n : {10, 50, 200, 1000}) unrelated_case(n, trials);
   }
   if (all || section == "scale") {
     std::printf("== time against n (default optimizer, physical, paper start, noise 0.1 px; and from scratch)\n");

@@ -8,6 +8,7 @@
 #include "tpkit/cluster_init.hpp"
 #include "tpkit/cluster_optimize.hpp"
 #include "tpkit/cluster_scan.hpp"
+#include "tpkit/cluster_verdict.hpp"
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
@@ -24,6 +25,7 @@ struct Opts {
   bool free_intrinsics = false, reflection = false;
   std::vector<double> range;
   int steps = 101;
+  bool keep_rejected = false;
 };
 
 std::string num(double v) { return tpkit::format_number(v); }
@@ -52,6 +54,7 @@ int main(int argc, char** argv) {
     app.add_option("--range", o->range, "LO HI of the scan")->expected(2);
     app.add_option("--steps", o->steps, "values of the scan");
     app.add_option("--plot", o->plot, "SVG figure of the scan, or of the clusters before and after");
+    app.add_flag("--keep-rejected", o->keep_rejected, "write the outputs of a rejected answer too (marked; exit 3)");
     return [o]() {
       check_outputs({{"-o", o->out}, {"--pairs", o->pairs}, {"--plot", o->plot}}, {o->a, o->b, o->init});
       if (!o->scan.empty() && o->range.size() != 2) throw UsageError("--scan needs --range LO HI");
@@ -118,6 +121,31 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "cluster-homog: %s\n", msg.str().c_str());
       if (!r.reached_target) warn("the cost did not reach the target of " + num(o->target) + " px");
 
+      // the verdict (not for a scan, which is a diagnostic of the cost): accepted only when far more
+      // points match than chance gives (cluster_verdict.hpp); never depends on --trim or --truncate
+      Verdict verdict;
+      if (o->scan.empty()) {
+        VerdictOptions vo;
+        vo.hypotheses = std::max(1L, r.evaluations);
+        verdict = judge_homography(cost, r.H, vo);
+        m.emplace_back("verdict", verdict.accepted ? "accepted" : "rejected");
+        if (!verdict.degenerate.empty()) m.emplace_back("degenerate", verdict.degenerate);
+        m.emplace_back("verdict_log10_odds", std::isfinite(verdict.log10_odds) ? num(std::round(verdict.log10_odds * 100) / 100) : "-inf");
+        m.emplace_back("inliers", std::to_string(verdict.inliers) + " of " + std::to_string(verdict.candidates) +
+                                      " points of cluster1 mapped into cluster2, mutual nearest neighbours within " +
+                                      num(std::round(verdict.radius_px * 1e4) / 1e4) + " px (chance: " +
+                                      num(std::round(verdict.expected * 100) / 100) + ")");
+        std::fprintf(stderr, "cluster-homog: verdict: %s (%s)\n", verdict.accepted ? "accepted" : "rejected",
+                     verdict.degenerate.empty()
+                         ? (std::to_string(verdict.inliers) + " of " + std::to_string(verdict.candidates) +
+                            " points matched within " + num(std::round(verdict.radius_px * 1e3) / 1e3) + " px, chance " +
+                            num(std::round(verdict.expected * 10) / 10) + "; log10 odds " +
+                            num(std::round(verdict.log10_odds * 10) / 10))
+                               .c_str()
+                         : ("degenerate: " + verdict.degenerate).c_str());
+        if (!verdict.accepted && !o->keep_rejected) return kExitNoAnswer;  // nothing written
+      }
+
       if (!o->scan.empty()) {
         PhysicalParams* phys = r.has_physical ? &r.physical : nullptr;
         PhysicalParams from_init = start.physical;
@@ -137,7 +165,7 @@ int main(int argc, char** argv) {
         save_homography(o->out, h);
       }
       if (!o->pairs.empty()) save_pairs(o->pairs, cost, mutual_pairs(cost, r.H), h.images, m);
-      return 0;
+      return o->scan.empty() && !verdict.accepted ? kExitNoAnswer : 0;  // --keep-rejected: written, marked
     };
   }, tpkit_man_page);
 }

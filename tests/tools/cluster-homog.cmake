@@ -64,3 +64,18 @@ tpkit_tool_test(cluster-homog.scan-unknown-parameter-before-search
 tpkit_tool_test(cluster-homog.pairs-onto-input
   COMMAND "cp $SRC/share/tpkit/cluster-a.points a.points && cluster-homog a.points $SRC/share/tpkit/cluster-b.points --pairs a.points -o h.homography @SEMI@ rc=$? @SEMI@ cmp a.points $SRC/share/tpkit/cluster-a.points && exit $rc"
   EXPECT_FAIL STDERR_MATCH "--pairs a.points: is also an input of this run" NO_FILE h.homography)
+# the verdict: the shipped pairs are accepted with their inlier counts; an unrelated pair is rejected
+# with exit 3 and no file, or written marked with --keep-rejected; the verdict ignores --truncate
+tpkit_tool_test(cluster-homog.verdict-accepted
+  COMMAND "cluster-homog ${_s}/cluster-extra-a.points ${_s}/cluster-extra-b.points -o h.homography"
+  CHECK_FILE h.homography FILE_MATCH "# verdict: accepted\n.*# verdict_log10_odds: [0-9]+.*\n# inliers: [0-9]+ of [0-9]+ points")
+set(_unrelated "awk 'BEGIN { srand(3) @SEMI@ print \"# tpkit points 1\" @SEMI@ print \"# columns: x y\" @SEMI@ for (i = 0 @SEMI@ i < 100 @SEMI@ i++) print 512 * rand(), 512 * rand() }' > r.points")
+tpkit_tool_test(cluster-homog.verdict-rejected
+  COMMAND "${_unrelated} && cluster-homog ${_s}/cluster-a.points r.points --pairs p.pairs -o h.homography @SEMI@ rc=$? @SEMI@ test ! -e p.pairs && exit $rc"
+  EXPECT_FAIL STDERR_MATCH "cluster-homog: verdict: rejected" NO_FILE h.homography)
+tpkit_tool_test(cluster-homog.verdict-rejected-exit-3
+  COMMAND "${_unrelated} && cluster-homog ${_s}/cluster-a.points r.points --truncate 0.01 --target 1000 -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 3" NO_FILE h.homography)
+tpkit_tool_test(cluster-homog.verdict-keep-rejected
+  COMMAND "${_unrelated} && cluster-homog ${_s}/cluster-a.points r.points --keep-rejected -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 3" CHECK_FILE h.homography FILE_MATCH "# verdict: rejected\n")

@@ -20,6 +20,10 @@ namespace tpkit {
 extern const CLI::Validator Positive;
 extern const CLI::Validator NonNegative;
 
+// Exit code of a run that finished but has no answer it can stand behind (cluster-homog's rejected
+// verdict): its outputs, if it wrote any (marked as such), are committed like those of a success.
+constexpr int kExitNoAnswer = 3;
+
 // Called with the app to declare options; returns the body to run once the command line is parsed.
 using ToolSetup = std::function<std::function<int()>(CLI::App&)>;
 

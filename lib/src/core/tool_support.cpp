@@ -303,7 +303,7 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
       ~Abort() { abort_outputs(); }  // no-op after commit_outputs()
     } abort_unless_committed;
     const int rc = body();
-    if (rc == 0) commit_outputs();
+    if (rc == 0 || rc == kExitNoAnswer) commit_outputs();
     return rc;
   } catch (const UsageError& e) {
     std::cerr << tool << ": " << e.what() << "\n";
