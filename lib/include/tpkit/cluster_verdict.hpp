@@ -20,6 +20,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "tpkit/cluster_cost.hpp"
 
@@ -43,7 +44,16 @@ struct Verdict {
 constexpr double kMinAreaRatio = 1e-3;
 
 // "" when H is a usable map between the clusters, else the reason (line at infinity across a cluster,
-// a cluster collapsed).
+// a cluster collapsed). MapCheck keeps the clusters' hulls for many maps (the search's hypotheses).
+class MapCheck {
+ public:
+  MapCheck(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B);
+  std::string operator()(const Eigen::Matrix3d& H) const;
+
+ private:
+  std::vector<Eigen::Vector2d> hull_a_, hull_b_;
+  double area_a_ = 0, area_b_ = 0;
+};
 std::string degeneracy(const Eigen::Matrix3d& H, const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B);
 
 Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, const VerdictOptions& opt = {});

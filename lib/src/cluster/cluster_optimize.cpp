@@ -12,6 +12,7 @@
 
 #include "tpkit/cluster_search.hpp"
 #include "tpkit/cluster_synth.hpp"
+#include "tpkit/cluster_verdict.hpp"
 #include "tpkit/error.hpp"
 
 namespace tpkit {
@@ -339,6 +340,9 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
     long budget = std::min<long>(opt.max_iterations, 3000), used = 0;
     Eigen::VectorXd xs = x;
     double cs = have_start ? quick(xs) : 0;
+    // Candidates that tear a cluster apart or collapse it are not answers (cluster_verdict.hpp).
+    const MapCheck map_check(cost.a(), cost.b());
+    auto usable = [&](const Eigen::Matrix3d& H) { return map_check(H).empty(); };
     // One round of (1+1)-ES from the current point, followed by the local refinement.
     auto es_round = [&](int round) {
       double s = 1.0;
@@ -363,7 +367,7 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
       res.local_rounds += rounds;
       double cr = cost(Hr);
       ++evals;
-      if (cr < best) {
+      if (cr < best && usable(Hr)) {
         best = cr, bestH = Hr, bestx = xs;
         res.method = "global+local";
       }
@@ -391,7 +395,7 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
         res.local_rounds += rounds;
         double cr = cost(Hr);
         ++evals;
-        if (cr < best) {
+        if (cr < best && usable(Hr)) {  // a degenerate map is no candidate, however low its cost
           best = cr, bestH = Hr;
           res.method = "search+local";
         }

@@ -88,22 +88,27 @@ double log_binomial_tail(int n, int k, double p) {
 }
 }  // namespace
 
-std::string degeneracy(const Eigen::Matrix3d& H, const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B) {
+MapCheck::MapCheck(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B)
+    : hull_a_(hull(A)), hull_b_(hull(B)), area_a_(area(hull_a_)), area_b_(area(hull_b_)) {}
+
+std::string MapCheck::operator()(const Eigen::Matrix3d& H) const {
   if (!H.allFinite() || std::fabs(H.determinant()) < 1e-300) return "singular homography";
-  const std::vector<Pt> ha = hull(A), hb = hull(B);
   std::vector<Pt> ha_mapped, hb_mapped;
-  // the line at infinity crosses the hull iff it separates two of its vertices
-  if (!carry(H, ha, ha_mapped)) return "its line at infinity crosses cluster A";
-  if (!carry(H.inverse(), hb, hb_mapped)) return "the line at infinity of its inverse crosses cluster B";
-  const double a_area = area(ha), b_area = area(hb);
-  if (!(a_area > 0) || !(b_area > 0)) return "a cluster has no area";
+  // the line at infinity crosses a hull iff it separates two of its vertices
+  if (!carry(H, hull_a_, ha_mapped)) return "its line at infinity crosses cluster A";
+  if (!carry(H.inverse(), hull_b_, hb_mapped)) return "the line at infinity of its inverse crosses cluster B";
+  if (!(area_a_ > 0) || !(area_b_ > 0)) return "a cluster has no area";
   // h(hull A) is the hull of the mapped vertices (on one side of its line at infinity a homography keeps
   // convexity); a mapped area far below both clusters' shows a cluster collapsed onto a few points
   const double fa = area(hull(ha_mapped)), fb = area(hull(hb_mapped));
-  const double floor = kMinAreaRatio * std::min(a_area, b_area);
+  const double floor = kMinAreaRatio * std::min(area_a_, area_b_);
   if (!(fa >= floor)) return "it collapses cluster A (mapped area " + std::to_string(fa) + " px^2)";
   if (!(fb >= floor)) return "its inverse collapses cluster B (mapped area " + std::to_string(fb) + " px^2)";
   return "";
+}
+
+std::string degeneracy(const Eigen::Matrix3d& H, const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B) {
+  return MapCheck(A, B)(H);
 }
 
 Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, const VerdictOptions& opt) {
