@@ -2,7 +2,7 @@
 // setup (Navy et al. 2005, section 6), robustness to extra/missing points, the correspondence-free
 // search, and time against the cluster size. Prints plain tables on stdout.
 //
-//   bench_cluster [--trials N] [--section paper|robust|scratch|verdict|scale|all] [--max-n N]
+//   bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|scale|all] [--max-n N]
 //
 // Clusters: A = n points uniform in [0, 512]^2 pixels (image 1), B = h(A) (+ noise), h = eq. 4 as the
 // section 4 model gives it (physical_homography.hpp). Success: final cost <= 0.25 px and h within
@@ -12,8 +12,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -112,6 +114,68 @@ void verdict_case(const char* label, int trials, const ClusterSynthOptions& base
   std::fflush(stdout);
 }
 
+// Star-field-like families (issue 15): B = h(A) with h a similarity of any rotation and scale
+// 0.3..3, then anisotropy up to `aniso` (x scale / y scale), projective terms up to `proj` (h31, h32 in
+// units of 1 / extent), noise 0.1 px; a fraction `unmatched` of each cluster's points without a partner.
+// Found from scratch (default optimizer, math). Success: accepted, and h within 0.5 px RMS of the truth
+// over A's 5 x 5 extent grid.
+void family_case(const char* label, int n, double aniso, double proj, double unmatched, int trials) {
+  int ok = 0, wrong = 0, rejected = 0;
+  double secs = 0;
+  std::vector<double> rms_all;
+  std::mt19937_64 rng(4242 + static_cast<uint64_t>(n));
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int t = 0; t < trials; ++t) {
+    const double ext = 512, th = 2 * 3.14159265358979323846 * U(rng), sc = 0.3 * std::pow(10.0, U(rng));
+    const double an = 1 + (aniso - 1) * U(rng);
+    Eigen::Matrix3d S = Eigen::Matrix3d::Identity(), R = Eigen::Matrix3d::Identity(), P = Eigen::Matrix3d::Identity(),
+                    C = Eigen::Matrix3d::Identity(), D = Eigen::Matrix3d::Identity();
+    C(0, 2) = C(1, 2) = -ext / 2;  // about A's centre, then into B's frame at (1000, 1000)
+    D(0, 2) = D(1, 2) = 1000;
+    R << std::cos(th), -std::sin(th), 0, std::sin(th), std::cos(th), 0, 0, 0, 1;
+    S(0, 0) = sc * std::sqrt(an), S(1, 1) = sc / std::sqrt(an);
+    P(2, 0) = proj * (2 * U(rng) - 1) / ext, P(2, 1) = proj * (2 * U(rng) - 1) / ext;
+    const Eigen::Matrix3d H = D * P * R * S * C;
+    ClusterSynthOptions so;
+    so.n = n, so.extent = ext, so.noise = 0.1, so.seed = 70000 + static_cast<uint64_t>(t);
+    so.extra = unmatched, so.missing = unmatched;
+    ClusterPair cp = synth_cluster_pair(H, so);
+    ClusterCost cost(cp.A, cp.B);
+    OptimizeOptions o;
+    o.param = Parameterization::Math;
+    o.seed = static_cast<uint64_t>(t + 1);
+    const auto t0 = std::chrono::steady_clock::now();
+    OptimizeResult r;
+    bool accepted = false;
+    try {
+      r = optimize_clusters(cost, OptimizeStart{}, o);
+      VerdictOptions vo;
+      vo.hypotheses = std::max(1L, r.evaluations);
+      accepted = judge_homography(cost, r.H, vo).accepted;
+    } catch (const std::exception&) {
+    }
+    secs += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // RMS over the grid, in image 2 pixels
+    const Eigen::MatrixX2d g = extent_grid(cp.A);
+    double ss = 0;
+    for (Eigen::Index i = 0; i < g.rows(); ++i) {
+      const Eigen::Vector3d a = r.H * Eigen::Vector3d(g(i, 0), g(i, 1), 1), b = cp.truth * Eigen::Vector3d(g(i, 0), g(i, 1), 1);
+      ss += (a.head<2>() / a.z() - b.head<2>() / b.z()).squaredNorm();
+    }
+    const double rms = std::sqrt(ss / static_cast<double>(g.rows()));
+    rms_all.push_back(rms);
+    const bool h_ok = rms <= 0.5;
+    if (!accepted) ++rejected;
+    else if (h_ok) ++ok;
+    else ++wrong;
+  }
+  std::sort(rms_all.begin(), rms_all.end());
+  std::printf("%-58s %4d trials: success %5.1f%%, accepted WRONG %4.1f%%, rejected %5.1f%%, median h error %.3g px, %.2f s each\n",
+              label, trials, 100.0 * ok / trials, 100.0 * wrong / trials, 100.0 * rejected / trials,
+              rms_all[rms_all.size() / 2], secs / trials);
+  std::fflush(stdout);
+}
+
 void unrelated_case(int n, int trials) {
   int accepted = 0;
   for (int t = 0; t < trials; ++t) {
@@ -146,7 +210,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--section") && i + 1 < argc) section = argv[++i];
     else if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|scale|all] [--max-n N]\n");
+      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|scale|all] [--max-n N]\n");
       return 2;
     }
   }
@@ -211,6 +275,17 @@ int main(int argc, char** argv) {
     v.n = 6;
     verdict_case("eq. 4, n=6 (cannot be verified)", trials, v, {});
     for (int n : {10, 50, 200, 1000}) unrelated_case(n, trials);
+  }
+  if (section == "families") {
+    std::printf("== star-field families from scratch: any rotation, scale 0.3..3, noise 0.1 px (goal >= 97%% success)\n");
+    family_case("n=100 similarity", 100, 1, 0, 0, trials);
+    family_case("n=100 anisotropy up to 2", 100, 2, 0, 0, trials);
+    family_case("n=100 anisotropy 2, projective 0.1", 100, 2, 0.1, 0, trials);
+    family_case("n=100 similarity, 20% unmatched each side", 100, 1, 0, 0.2, trials);
+    family_case("n=100 anisotropy 2, projective 0.1, 50% unmatched", 100, 2, 0.1, 0.5, trials);
+    family_case("n=50 similarity, 20% unmatched", 50, 1, 0, 0.2, trials);
+    family_case("n=1000 anisotropy 2, 20% unmatched", 1000, 2, 0, 0.2, trials);
+    family_case("n=5000 similarity, 20% unmatched", 5000, 1, 0, 0.2, std::max(1, trials / 10));
   }
   if (all || section == "scale") {
     std::printf("== time against n (default optimizer, physical, paper start, noise 0.1 px; and from scratch)\n");

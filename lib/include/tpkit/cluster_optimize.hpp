@@ -75,6 +75,11 @@ struct RefineRegion {
   Eigen::Vector2d center;
   double radius;
 };
+// Least squares of the geometric error on the mutual nearest-neighbour pairs within 3 robust sigmas of
+// their distances, repeated until that set stops changing: the precise map on partly overlapping
+// clusters, where unmatched points keep the cost high and refine_on_pairs stops early. The default
+// optimizer applies it when the target is not reached.
+Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H, int max_rounds = 10);
 Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H, int max_rounds = 30,
                                 int* rounds = nullptr, const RefineRegion* region = nullptr);
 // Region-growing refinement from a local hypothesis: refine_on_pairs on the region, doubling its radius

@@ -125,6 +125,61 @@ struct PairResidual {
 
 }  // namespace
 
+Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds) {
+  const Eigen::MatrixX2d &A = cost.a(), &B = cost.b();
+  const Eigen::Matrix3d TA = normalizing_transform(A), TB = normalizing_transform(B), TBi = TB.inverse();
+  const double kB = TB(0, 0);
+  Eigen::Matrix3d H = H0;
+  std::vector<long long> prev;
+  for (int round = 0; round < max_rounds; ++round) {
+    // mutual nearest neighbours under H, forward distances
+    std::vector<int> fwd(static_cast<size_t>(A.rows()), -1), bwd(static_cast<size_t>(B.rows()), -1);
+    std::vector<double> dist(static_cast<size_t>(A.rows()), 0);
+    for (const NnPair& p : cost.pairs(H)) {
+      if (p.forward) fwd[static_cast<size_t>(p.ia)] = p.ib, dist[static_cast<size_t>(p.ia)] = p.d;
+      else bwd[static_cast<size_t>(p.ib)] = p.ia;
+    }
+    std::vector<int> mutual;
+    std::vector<double> d;
+    for (size_t i = 0; i < fwd.size(); ++i)
+      if (fwd[i] >= 0 && bwd[static_cast<size_t>(fwd[i])] == static_cast<int>(i)) mutual.push_back(static_cast<int>(i)), d.push_back(dist[i]);
+    if (mutual.size() < 8) break;
+    // inliers: within 3 robust sigmas of the mutual distances (the unmatched points' pairs lie far out)
+    std::vector<double> ds = d;
+    std::nth_element(ds.begin(), ds.begin() + ds.size() / 2, ds.end());
+    const double gate = std::max(3 * 1.4826 * ds[ds.size() / 2], 1e-3);
+    std::vector<long long> key;
+    for (size_t k = 0; k < mutual.size(); ++k)
+      if (d[k] <= gate) key.push_back(static_cast<long long>(mutual[k]) * (B.rows() + 1) + fwd[static_cast<size_t>(mutual[k])]);
+    if (key.size() < 8 || key == prev) break;
+    prev = key;
+    Eigen::Matrix3d Hn = TB * H * TA.inverse();
+    if (!(std::abs(Hn(2, 2)) > 1e-12)) break;
+    Hn /= Hn(2, 2);
+    double h[8] = {Hn(0, 0), Hn(0, 1), Hn(0, 2), Hn(1, 0), Hn(1, 1), Hn(1, 2), Hn(2, 0), Hn(2, 1)};
+    ceres::Problem problem;
+    for (long long kk : key) {
+      const Eigen::Index i = static_cast<Eigen::Index>(kk / (B.rows() + 1)), j = static_cast<Eigen::Index>(kk % (B.rows() + 1));
+      const double ax = TA(0, 0) * A(i, 0) + TA(0, 2), ay = TA(1, 1) * A(i, 1) + TA(1, 2);
+      const double bx = TB(0, 0) * B(j, 0) + TB(0, 2), by = TB(1, 1) * B(j, 1) + TB(1, 2);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 8>(new PairResidual{ax, ay, bx, by, 1.0 / kB}),
+                               nullptr, h);
+    }
+    ceres::Solver::Options o;
+    o.linear_solver_type = ceres::DENSE_QR;
+    o.max_num_iterations = 25;
+    o.num_threads = 1;
+    o.logging_type = ceres::SILENT;
+    ceres::Solver::Summary sum;
+    ceres::Solve(o, &problem, &sum);
+    Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
+    const Eigen::Matrix3d Hp = normalized_homography(TBi * Hn * TA);
+    if (!Hp.allFinite()) break;
+    H = Hp;
+  }
+  return H;
+}
+
 Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds, int* rounds,
                                 const RefineRegion* region) {
   const Eigen::MatrixX2d &A = cost.a(), &B = cost.b();
@@ -405,6 +460,12 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
     for (int round = (dense && opt.search_fallback) ? 0 : 1; have_start && round < 6 && used < budget && best > opt.target; ++round) es_round(round);
     if (res.method.empty()) res.method = have_start ? "global+local" : "search+local";
     if (!std::isfinite(best)) throw NumericalError("no homography found: every hypothesis failed");
+    // Partial overlap: the untrimmed cost stays high whatever h, so the refinement above (which keeps a
+    // step only when the cost drops) can stop short of the precise map; polish on the matched points.
+    if (best > opt.target) {
+      const Eigen::Matrix3d Hp = polish_on_mutual_pairs(cost, bestH);
+      if (usable(Hp)) bestH = Hp, best = cost(Hp), ++evals;
+    }
     res.iterations = used + res.local_rounds;
   } else {
     res.method = "none";
