@@ -49,44 +49,11 @@ struct Data {
   Eigen::MatrixXd fit, truth_fit, check;
 };
 
-// A random satellite-like affine triplet whose three viewing directions (towards the satellite)
-// d_v ~ (tan c_v, tan a_v, 1) have along-track angles a_v as AffineScene's (-0.35..0.35 rad) and
-// cross-track angles c_v = cross + spread * U(-1, 1) (radians): spread 0 puts the three directions in one
-// plane (a single-pass tri-stereo acquisition, where the three camera centres at infinity are
-// collinear). Each camera: the orthographic view along d_v, rolled about it by up to 0.2 rad, with
-// anisotropic pixel scaling, scaled and shifted so that the patch fills the image as in AffineScene.
-AffineScene coplanar_scene(std::uint64_t seed, double size, double cross, double spread) {
+AffineScene single_pass_scene(std::uint64_t seed, double size, double cross, double spread) {
   AffineSceneOptions o;
   o.seed = seed;
   o.image_size = size;
-  AffineScene s = AffineScene::random(o);  // points() and the options; the cameras are replaced
-  std::mt19937_64 rng(seed * 7 + 5);
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  const double G = s.ground_extent;
-  for (int v = 0; v < 3; ++v) {
-    const double along = (v - 1) * o.max_view_angle * (0.7 + 0.3 * std::fabs(U(rng)));
-    const double c = cross + spread * U(rng), roll = 0.2 * U(rng);
-    const Eigen::Vector3d d = Eigen::Vector3d(std::tan(c), std::tan(along), 1).normalized();
-    const Eigen::Vector3d ex = (Eigen::Vector3d::UnitX() - d * d.x()).normalized(), ey = d.cross(ex);
-    Eigen::Matrix<double, 2, 3> M;
-    M.row(0) = (std::cos(roll) * ex + std::sin(roll) * ey).transpose();
-    M.row(1) = (-std::sin(roll) * ex + std::cos(roll) * ey).transpose();
-    Eigen::Matrix2d K;
-    K << 1.0 + 0.05 * U(rng), 0.03 * U(rng), 0, 1.0 + 0.05 * U(rng);
-    M = K * M;
-    const double zr = o.relief * G;
-    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (int k = 0; k < 8; ++k) {
-      const Eigen::Vector2d p = M * Eigen::Vector3d((k & 1) * G, ((k >> 1) & 1) * G, ((k >> 2) & 1) * zr);
-      xmin = std::min(xmin, p(0));
-      xmax = std::max(xmax, p(0));
-      ymin = std::min(ymin, p(1));
-      ymax = std::max(ymax, p(1));
-    }
-    const double scale = 0.96 * size / std::max(xmax - xmin, ymax - ymin);
-    s.P[v] = affine_camera(scale * M, Eigen::Vector2d(0.02 * size - scale * xmin, 0.02 * size - scale * ymin));
-  }
-  return s;
+  return AffineScene::single_pass(o, cross, spread);
 }
 
 Data make_data_in(const AffineScene& s, std::uint64_t seed, int n, double sigma, int n_check) {
@@ -250,7 +217,7 @@ int coplanar_table(int argc, char** argv) {
     std::vector<int> fails(all_trifocal_methods().size(), 0);
     for (int t = 1; t <= trials; ++t) {
       const auto seed = static_cast<std::uint64_t>(t);
-      const Data d = make_data_in(coplanar_scene(seed, size, cross * kDeg, spread * kDeg), seed, ns[q], sigma, 1000);
+      const Data d = make_data_in(single_pass_scene(seed, size, cross * kDeg, spread * kDeg), seed, ns[q], sigma, 1000);
       for (size_t mi = 0; mi < all_trifocal_methods().size(); ++mi) try {
           tr[mi].push_back(transfer_rmse(fit_trifocal(all_trifocal_methods()[mi], d.fit), d.check));
         } catch (const std::exception&) {
@@ -276,7 +243,7 @@ int coplanar_table(int argc, char** argv) {
     for (double sp : {0.0, 0.3, 1.0, 3.0, 10.0})
       for (int t = 1; t <= trials; ++t) {
         const auto seed = static_cast<std::uint64_t>(t);
-        const Data d = make_data_in(coplanar_scene(seed, size, cross * kDeg, sp * kDeg), seed, n, sigma, 1000);
+        const Data d = make_data_in(single_pass_scene(seed, size, cross * kDeg, sp * kDeg), seed, n, sigma, 1000);
         try {
           ThreeFReport rep;
           const double r3 = transfer_rmse(trifocal_three_f(d.fit, 0, &rep), d.check);

@@ -34,6 +34,12 @@ struct AffineScene {
   double ground_extent = 1000;  // the patch is [0, ground_extent]^2 in X, Y
 
   static AffineScene random(const AffineSceneOptions& opt);
+  // The same terrain with single-pass-like cameras: viewing directions (towards the satellite)
+  // d_v ~ (tan c_v, tan a_v, 1), along-track a_v of -, 0, + (0.7..1) max_view_angle, cross-track
+  // c_v = cross + spread U(-1, 1) (radians): spread 0 puts the three directions in one plane (the
+  // camera centres at infinity collinear). Each camera: the orthographic view along d_v rolled by up
+  // to 0.2 rad, anisotropic pixel scaling up to 5 %, scaled and shifted to fill the image.
+  static AffineScene single_pass(const AffineSceneOptions& opt, double cross, double spread);
   // n random terrain points (smooth random relief of height range relief * ground_extent), n x 3.
   Eigen::MatrixXd points(int n, std::uint64_t seed) const;
   // Exact projections, n x 6 (x1 y1 x2 y2 x3 y3).

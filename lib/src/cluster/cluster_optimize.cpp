@@ -123,6 +123,17 @@ struct PairResidual {
   }
 };
 
+// The pair fits' solve: Levenberg-Marquardt, dense QR (8 unknowns), 25 iterations, one thread, silent.
+void solve_pairs(ceres::Problem& problem) {
+  ceres::Solver::Options o;
+  o.linear_solver_type = ceres::DENSE_QR;
+  o.max_num_iterations = 25;
+  o.num_threads = 1;
+  o.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+}
+
 }  // namespace
 
 Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds) {
@@ -165,13 +176,7 @@ Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Mat
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 8>(new PairResidual{ax, ay, bx, by, 1.0 / kB}),
                                nullptr, h);
     }
-    ceres::Solver::Options o;
-    o.linear_solver_type = ceres::DENSE_QR;
-    o.max_num_iterations = 25;
-    o.num_threads = 1;
-    o.logging_type = ceres::SILENT;
-    ceres::Solver::Summary sum;
-    ceres::Solve(o, &problem, &sum);
+    solve_pairs(problem);
     Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
     const Eigen::Matrix3d Hp = normalized_homography(TBi * Hn * TA);
     if (!Hp.allFinite()) break;
@@ -284,13 +289,7 @@ Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& 
           new PairResidual{An(p.ia, 0), An(p.ia, 1), Bn(p.ib, 0), Bn(p.ib, 1), 1.0 / kB});
       problem.AddResidualBlock(f, &loss, h);
     }
-    ceres::Solver::Options o;
-    o.linear_solver_type = ceres::DENSE_QR;
-    o.max_num_iterations = 25;
-    o.num_threads = 1;
-    o.logging_type = ceres::SILENT;
-    ceres::Solver::Summary s;
-    ceres::Solve(o, &problem, &s);
+    solve_pairs(problem);
     Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
     H = normalized_homography(TBi * Hn * TA);
     if (!H.allFinite()) break;

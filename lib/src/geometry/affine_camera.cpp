@@ -1,6 +1,7 @@
 #include "tpkit/affine_camera.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -102,5 +103,40 @@ Eigen::MatrixXd AffineScene::project(const Eigen::MatrixXd& X) const {
 }
 
 TrifocalTensor AffineScene::trifocal() const { return trifocal_from_cameras(P[0], P[1], P[2]); }
+
+
+AffineScene AffineScene::single_pass(const AffineSceneOptions& opt, double cross, double spread) {
+  const AffineSceneOptions& o = opt;
+  const std::uint64_t seed = o.seed;
+  const double size = o.image_size;
+  AffineScene s = AffineScene::random(o);  // points() and the options; the cameras are replaced
+  std::mt19937_64 rng(seed * 7 + 5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const double G = s.ground_extent;
+  for (int v = 0; v < 3; ++v) {
+    const double along = (v - 1) * o.max_view_angle * (0.7 + 0.3 * std::fabs(U(rng)));
+    const double c = cross + spread * U(rng), roll = 0.2 * U(rng);
+    const Eigen::Vector3d d = Eigen::Vector3d(std::tan(c), std::tan(along), 1).normalized();
+    const Eigen::Vector3d ex = (Eigen::Vector3d::UnitX() - d * d.x()).normalized(), ey = d.cross(ex);
+    Eigen::Matrix<double, 2, 3> M;
+    M.row(0) = (std::cos(roll) * ex + std::sin(roll) * ey).transpose();
+    M.row(1) = (-std::sin(roll) * ex + std::cos(roll) * ey).transpose();
+    Eigen::Matrix2d K;
+    K << 1.0 + 0.05 * U(rng), 0.03 * U(rng), 0, 1.0 + 0.05 * U(rng);
+    M = K * M;
+    const double zr = o.relief * G;
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector2d p = M * Eigen::Vector3d((k & 1) * G, ((k >> 1) & 1) * G, ((k >> 2) & 1) * zr);
+      xmin = std::min(xmin, p(0));
+      xmax = std::max(xmax, p(0));
+      ymin = std::min(ymin, p(1));
+      ymax = std::max(ymax, p(1));
+    }
+    const double scale = 0.96 * size / std::max(xmax - xmin, ymax - ymin);
+    s.P[v] = affine_camera(scale * M, Eigen::Vector2d(0.02 * size - scale * xmin, 0.02 * size - scale * ymin));
+  }
+  return s;
+}
 
 }  // namespace tpkit
