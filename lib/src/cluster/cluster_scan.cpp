@@ -122,9 +122,7 @@ void plot_clusters(const std::string& path, const Eigen::MatrixX2d& A, const Eig
     return std::string(b);
   };
   for (int k = 0; k < 2; ++k) {
-    SvgPlot::PanelSpec ps{70.0 + k * 480, 60, 400, 400, xmin - mx, xmax + mx, ymin - my, ymax + my};
-    ps.y_down = true;
-    ps.equal_aspect = true;
+    SvgPlot::PanelSpec ps{70.0 + k * 480, 60, 400, 400, xmin - mx, xmax + mx, ymin - my, ymax + my, /*y_down=*/true, /*equal_aspect=*/true, "", "", ""};
     ps.title = (k == 0 ? "start, cost " + fmt(cost_before) : "result, cost " + fmt(cost_after));
     ps.xlabel = "x (px)";
     ps.ylabel = "y (px)";
