@@ -243,6 +243,33 @@ std::string undocumented_options(const CLI::App& app, const std::string& page) {
   }
   return missing;
 }
+
+// Checks added to every option of a number type, whatever the tool declared: floating-point options
+// take finite numbers only (NaN passes every `x < limit` check and would be written into headers; Inf is
+// never a meaningful size, threshold or level); unsigned ones (seeds, counts) refuse a negative value,
+// which CLI11 would wrap around.
+void guard_number_options(CLI::App& app) {
+  for (CLI::Option* opt : app.get_options()) {
+    if (opt->get_type_name().find("FLOAT") == std::string::npos) continue;
+    opt->check(CLI::Validator(
+        [](std::string& v) -> std::string {
+          char* end = nullptr;
+          const double d = std::strtod(v.c_str(), &end);
+          if (end != v.c_str() && !std::isfinite(d)) return "must be a finite number, got '" + v + "'";
+          return std::string();
+        },
+        "", "finite"));
+  }
+  for (CLI::Option* opt : app.get_options()) {
+    if (opt->get_type_name() != "UINT") continue;
+    opt->check(CLI::Validator(
+        [](std::string& v) -> std::string {
+          return v.find('-') != std::string::npos ? "must be a non-negative integer, got '" + v + "'" : std::string();
+        },
+        "", "unsigned"));
+  }
+}
+
 }  // namespace
 
 int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& setup, const char* man_page) {
@@ -254,28 +281,7 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
     app.set_help_flag("-h,--help", "print the manual page and exit");
     app.set_version_flag("--version", tool + " (tpkit) " + version_full(), "print the version and exit");
     auto body = setup(app);
-    // Every floating-point option takes finite numbers only: NaN passes every `x < limit` check and
-    // would be written into headers; Inf is never a meaningful size, threshold or level.
-    for (CLI::Option* opt : app.get_options()) {
-      if (opt->get_type_name().find("FLOAT") == std::string::npos) continue;
-      opt->check(CLI::Validator(
-          [](std::string& v) -> std::string {
-            char* end = nullptr;
-            const double d = std::strtod(v.c_str(), &end);
-            if (end != v.c_str() && !std::isfinite(d)) return "must be a finite number, got '" + v + "'";
-            return std::string();
-          },
-          "", "finite"));
-    }
-    // unsigned options (seeds, counts) do not wrap a negative value around
-    for (CLI::Option* opt : app.get_options()) {
-      if (opt->get_type_name() != "UINT") continue;
-      opt->check(CLI::Validator(
-          [](std::string& v) -> std::string {
-            return v.find('-') != std::string::npos ? "must be a non-negative integer, got '" + v + "'" : std::string();
-          },
-          "", "unsigned"));
-    }
+    guard_number_options(app);
     try {
       app.parse(argc, argv);
     } catch (const CLI::CallForHelp&) {
