@@ -75,6 +75,14 @@ class ClusterCost {
   std::vector<double> xy_a_, xy_b_;  // coordinates in order_a_ / order_b_, x y interleaved
 };
 
+// The mutual nearest neighbours under H: A_ia's nearest in B is B_ib and B_ib's nearest in A (under
+// H^-1) is A_ia; d is the forward distance in image-2 pixels. Sorted by ia.
+struct MutualPair {
+  int ia, ib;
+  double d;
+};
+std::vector<MutualPair> mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H);
+
 // Throws InputError(source, 0, reason) unless the cluster can define a homography: at least 4 points,
 // all finite, not all on one line (spread across the principal axis above 1e-6 of the spread along it).
 void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source);

@@ -47,11 +47,6 @@ void plot_clusters(const std::string& path, const Eigen::MatrixX2d& A, const Eig
                    const Eigen::Matrix3d& H_before, double cost_before, const Eigen::Matrix3d& H_after,
                    double cost_after);
 
-struct MutualPair {
-  int ia, ib;
-  double d;
-};
-std::vector<MutualPair> mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H);
 void save_pairs(const std::string& path, const ClusterCost& cost, const std::vector<MutualPair>& pairs,
                 const std::vector<ImageRef>& images, const Meta& meta);
 

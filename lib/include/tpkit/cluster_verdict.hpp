@@ -49,6 +49,8 @@ class MapCheck {
  public:
   MapCheck(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B);
   std::string operator()(const Eigen::Matrix3d& H) const;
+  const std::vector<Eigen::Vector2d>& hull_b() const { return hull_b_; }  // counter-clockwise
+  double area_b() const { return area_b_; }
 
  private:
   std::vector<Eigen::Vector2d> hull_a_, hull_b_;

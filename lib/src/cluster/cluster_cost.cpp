@@ -221,4 +221,21 @@ double homography_max_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d
   return worst;
 }
 
+std::vector<MutualPair> mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H) {
+  auto pairs = cost.pairs(H);
+  std::vector<int> fwd(static_cast<size_t>(cost.a().rows()), -1), bwd(static_cast<size_t>(cost.b().rows()), -1);
+  std::vector<double> dist(static_cast<size_t>(cost.a().rows()), 0);
+  for (const auto& p : pairs) {
+    if (p.forward)
+      fwd[static_cast<size_t>(p.ia)] = p.ib, dist[static_cast<size_t>(p.ia)] = p.d;
+    else
+      bwd[static_cast<size_t>(p.ib)] = p.ia;
+  }
+  std::vector<MutualPair> out;
+  for (size_t i = 0; i < fwd.size(); ++i)
+    if (fwd[i] >= 0 && bwd[static_cast<size_t>(fwd[i])] == static_cast<int>(i))
+      out.push_back({static_cast<int>(i), fwd[i], dist[i]});
+  return out;
+}
+
 }  // namespace tpkit

@@ -143,25 +143,16 @@ Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Mat
   Eigen::Matrix3d H = H0;
   std::vector<long long> prev;
   for (int round = 0; round < max_rounds; ++round) {
-    // mutual nearest neighbours under H, forward distances
-    std::vector<int> fwd(static_cast<size_t>(A.rows()), -1), bwd(static_cast<size_t>(B.rows()), -1);
-    std::vector<double> dist(static_cast<size_t>(A.rows()), 0);
-    for (const NnPair& p : cost.pairs(H)) {
-      if (p.forward) fwd[static_cast<size_t>(p.ia)] = p.ib, dist[static_cast<size_t>(p.ia)] = p.d;
-      else bwd[static_cast<size_t>(p.ib)] = p.ia;
-    }
-    std::vector<int> mutual;
-    std::vector<double> d;
-    for (size_t i = 0; i < fwd.size(); ++i)
-      if (fwd[i] >= 0 && bwd[static_cast<size_t>(fwd[i])] == static_cast<int>(i)) mutual.push_back(static_cast<int>(i)), d.push_back(dist[i]);
+    const std::vector<MutualPair> mutual = mutual_pairs(cost, H);
     if (mutual.size() < 8) break;
     // inliers: within 3 robust sigmas of the mutual distances (the unmatched points' pairs lie far out)
-    std::vector<double> ds = d;
+    std::vector<double> ds;
+    for (const MutualPair& mp : mutual) ds.push_back(mp.d);
     std::nth_element(ds.begin(), ds.begin() + ds.size() / 2, ds.end());
     const double gate = std::max(3 * 1.4826 * ds[ds.size() / 2], 1e-3);
     std::vector<long long> key;
-    for (size_t k = 0; k < mutual.size(); ++k)
-      if (d[k] <= gate) key.push_back(static_cast<long long>(mutual[k]) * (B.rows() + 1) + fwd[static_cast<size_t>(mutual[k])]);
+    for (const MutualPair& mp : mutual)
+      if (mp.d <= gate) key.push_back(static_cast<long long>(mp.ia) * (B.rows() + 1) + mp.ib);
     if (key.size() < 8 || key == prev) break;
     prev = key;
     Eigen::Matrix3d Hn = TB * H * TA.inverse();

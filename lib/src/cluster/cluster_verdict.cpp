@@ -114,13 +114,14 @@ std::string degeneracy(const Eigen::Matrix3d& H, const Eigen::MatrixX2d& A, cons
 Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, const VerdictOptions& opt) {
   Verdict v;
   const Eigen::MatrixX2d &A = cost.a(), &B = cost.b();
-  v.degenerate = degeneracy(H, A, B);
+  const MapCheck check(A, B);
+  v.degenerate = check(H);
   if (!v.degenerate.empty()) {
     v.log10_odds = -std::numeric_limits<double>::infinity();
     return v;
   }
-  const std::vector<Pt> hb = hull(B);
-  const double b_area = area(hb), m = static_cast<double>(B.rows());
+  const std::vector<Pt>& hb = check.hull_b();
+  const double b_area = check.area_b(), m = static_cast<double>(B.rows());
   const double spacing = std::sqrt(b_area / m);
   // candidates: points of A that land inside hull B
   std::vector<char> cand(static_cast<size_t>(A.rows()), 0);
@@ -129,22 +130,13 @@ Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, cons
     cand[static_cast<size_t>(i)] = inside(hb, Pt(q.x() / q.z(), q.y() / q.z()));
   }
   const int n = static_cast<int>(std::count(cand.begin(), cand.end(), 1));
-  // mutual nearest neighbours (forward distance in image 2 pixels)
-  std::vector<int> fwd(static_cast<size_t>(A.rows()), -1), bwd(static_cast<size_t>(B.rows()), -1);
-  std::vector<double> d(static_cast<size_t>(A.rows()), 0);
-  for (const NnPair& p : cost.pairs(H)) {
-    if (p.forward) fwd[static_cast<size_t>(p.ia)] = p.ib, d[static_cast<size_t>(p.ia)] = p.d;
-    else bwd[static_cast<size_t>(p.ib)] = p.ia;
-  }
+  const std::vector<MutualPair> mutual = mutual_pairs(cost, H);
   const double radii[4] = {spacing / 32, spacing / 16, spacing / 8, spacing / 4};
   const double tests = 4.0 * static_cast<double>(std::max(1L, opt.hypotheses));
   v.log10_odds = -std::numeric_limits<double>::infinity();
   for (double r : radii) {
     int k = 0;
-    for (Eigen::Index i = 0; i < A.rows(); ++i)
-      if (cand[static_cast<size_t>(i)] && fwd[static_cast<size_t>(i)] >= 0 &&
-          bwd[static_cast<size_t>(fwd[static_cast<size_t>(i)])] == static_cast<int>(i) && d[static_cast<size_t>(i)] <= r)
-        ++k;
+    for (const MutualPair& mp : mutual) k += cand[static_cast<size_t>(mp.ia)] && mp.d <= r;
     const double p = -std::expm1(-3.14159265358979323846 * r * r * m / b_area);
     const double log10_tail = log_binomial_tail(n - 4, k - 4, p) / std::log(10.0);
     const double odds = -(std::log10(tests) + log10_tail);

@@ -2,14 +2,11 @@
 
 #include <OpenImageIO/imageio.h>
 #include <tiffio.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <random>
 
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
