@@ -24,6 +24,7 @@ if(NOT GeographicLib_FOUND)
   set_target_properties(GeographicLib::GeographicLib PROPERTIES
     IMPORTED_LOCATION ${GEOGRAPHICLIB_LIBRARY} INTERFACE_INCLUDE_DIRECTORIES ${GEOGRAPHICLIB_INCLUDE_DIR})
 endif()
+find_package(SQLite3 REQUIRED)
 find_package(Threads REQUIRED)
 if(TPKIT_TESTS)
   find_package(GTest REQUIRED)

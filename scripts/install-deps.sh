@@ -9,12 +9,15 @@ set -euo pipefail
 packages=(
   g++ cmake make pkg-config
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libtiff-dev libgeographiclib-dev
-  libcli11-dev libceres-dev libnanoflann-dev
+  libcli11-dev libceres-dev libnanoflann-dev libsqlite3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 if [ "${1:-}" = "--test" ]; then
   # the sanitizer build and the fuzzers of the test suite use clang and its runtimes
   packages+=(clang libclang-rt-14-dev)
+  # real consumers and engines the tests drive: COLMAP's importer (tp-convert), a single-node Slurm
+  # and GNU parallel (tp-plan's job files)
+  packages+=(colmap slurm-wlm munge parallel)
 fi
 missing=()
 for p in "${packages[@]}"; do
