@@ -50,6 +50,7 @@ cleanup() {
     umount -R "$root/work/shared" 2>/dev/null || umount -lR "$root/work/shared" 2>/dev/null || true
     umount -R "$root/var/cache/apt/archives" 2>/dev/null || umount -lR "$root/var/cache/apt/archives" 2>/dev/null || true
     umount -R "$root/dev" 2>/dev/null || umount -lR "$root/dev" 2>/dev/null || true
+    umount -R "$root/sys" 2>/dev/null || umount -lR "$root/sys" 2>/dev/null || true
     umount -R "$root/proc" 2>/dev/null || umount -lR "$root/proc" 2>/dev/null || true
     if findmnt -rn -o TARGET | grep -q "^$root"; then
       say "left $root in place: still mounted: $(findmnt -rn -o TARGET | grep "^$root" | tr '\n' ' ')"
@@ -92,6 +93,10 @@ for f in /etc/apt/apt.conf.d/*; do
   grep -qE 'Check-Valid-Until|Check-Date|Acquire::(http|https)::Proxy' "$f" 2>/dev/null && cp "$f" "$root/etc/apt/apt.conf.d/"
 done
 
+# /etc/hosts as Debian's installer writes it (mmdebstrap writes none, and without it "localhost" does
+# not resolve: the single-node Slurm of the tests needs it)
+printf '127.0.0.1\tlocalhost\n127.0.1.1\t%s\n::1\tlocalhost ip6-localhost ip6-loopback\n' "$(hostname)" > "$root/etc/hosts"
+
 # /proc, and a /dev of its own with the usual nodes (not the host's /dev, which a stray rm would reach)
 mount -t proc proc "$root/proc"
 mount -t tmpfs -o mode=755,nosuid tmpfs "$root/dev"
@@ -108,6 +113,14 @@ ln -s /proc/self/fd "$root/dev/fd"
 ln -s /proc/self/fd/0 "$root/dev/stdin"
 ln -s /proc/self/fd/1 "$root/dev/stdout"
 ln -s /proc/self/fd/2 "$root/dev/stderr"
+
+# /sys as a machine has it, read-only: a sysfs of its own and the host's cgroup hierarchies bound one by
+# one, each read-only (slurmd, which the tests start, needs the cgroup filesystem to initialize)
+mount -t sysfs -o ro,nosuid,nodev,noexec sysfs "$root/sys"
+while read -r m; do
+  [ -d "$root$m" ] || continue
+  mount --bind "$m" "$root$m" && mount -o remount,bind,ro "$root$m"
+done < <(findmnt -rn -o TARGET | grep -E '^/sys/fs/cgroup(/|$)' | sort)
 
 if [ "${TPKIT_FRESH_APT_CACHE:-1}" != 0 ]; then
   mkdir -p "$cache/archives/partial"
