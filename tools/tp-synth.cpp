@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
     tpkit::SynthParams p;
     int threads = 0;
     std::string cross_track;
+    std::string origin;
+    std::vector<std::string> rpc_bias;
   };
   return tpkit::run_tool(
       "tp-synth", argc, argv,
@@ -31,6 +33,8 @@ int main(int argc, char** argv) {
         app.add_option("--supersample", o->p.supersample, "n x n samples per pixel");
         app.add_option("--threads", o->threads, "rendering threads (0: all cores)");
         app.add_option("--cross-track", o->cross_track, "cross-track angle(s) of the views, DEG or DEG,DEG,DEG");
+        app.add_option("--origin", o->origin, "LAT,LON,H of the scene centre (degrees, degrees, m above the WGS84 ellipsoid)");
+        app.add_option("--rpc-bias", o->rpc_bias, "VIEW:dx,dy[,dxy,dyy[,dxx,dyx]]: bias injected into a view's RPC (px, px/px)");
         return [o]() {
           if (!o->cross_track.empty()) o->p.cross_track = tpkit::parse_cross_track(o->cross_track);
           tpkit::check_params(o->p);
@@ -39,6 +43,12 @@ int main(int argc, char** argv) {
           const tpkit::SynthScene scene(o->p);
           tpkit::SynthWriteOptions w;
           w.threads = o->threads;
+          if (!o->origin.empty()) w.origin = tpkit::parse_geo_origin(o->origin, "--origin");
+          for (const auto& b : o->rpc_bias) {
+            auto vb = tpkit::parse_view_bias(b);
+            if (!w.rpc_bias.emplace(vb.first, vb.second).second)
+              throw tpkit::UsageError("--rpc-bias: view " + std::to_string(vb.first + 1) + " given twice");
+          }
           tpkit::write_synth_scene(scene, o->out, w);
           std::cerr << "tp-synth: wrote " << o->out << ": 3 views " << o->p.size << "x" << o->p.size << " ("
                     << o->p.camera << "), scene square " << scene.scene_size() << " m, relief " << o->p.relief

@@ -3,7 +3,7 @@ tpkit_tool_test(tp-synth.small-run
   COMMAND "tp-synth --out out --size 256 --relief 20 --points 100 --seed 3 --threads 2 && for f in view1.tif view2.tif view3.tif truth.tracks truth.cameras truth.trifocal scene.params @SEMI@ do test -s out/$f || echo MISSING $f @SEMI@ done && echo records $(grep -vc '^#' out/truth.tracks)"
   STDOUT_MATCH "^records 100\n$"
   CHECK_FILE out/truth.tracks
-  FILE_MATCH "^# tpkit tracks 1\n# written-by: tp-synth [0-9]+\\.[0-9]+\\.[0-9]+[^\n]*\n# image1: view1.tif 256 256\n# image2: view2.tif 256 256\n# image3: view3.tif 256 256\n.*# seed: 3\n.*# relief: 20\n.*# columns: track x1 y1 x2 y2 x3 y3 X Y Z\n1 [0-9]")
+  FILE_MATCH "^# tpkit tracks 1\n# written-by: tp-synth [0-9]+\\.[0-9]+\\.[0-9]+[^\n]*\n# image1: view1.tif 256 256\n# image2: view2.tif 256 256\n# image3: view3.tif 256 256\n.*# seed: 3\n.*# relief: 20\n.*# columns: track x1 y1 x2 y2 x3 y3 X Y Z lon lat h\n1 [0-9]")
 tpkit_tool_test(tp-synth.cameras-file
   COMMAND "tp-synth --out out --size 128 --relief 10 --points 20"
   CHECK_FILE out/truth.cameras
@@ -62,3 +62,16 @@ tpkit_tool_test(tp-synth.cross-track-default-has-no-key
   STDOUT_MATCH "none")
 tpkit_tool_test(tp-synth.cross-track-bad
   COMMAND "tp-synth --out s --size 64 --cross-track 1,2" EXPECT_FAIL STDERR_MATCH "one angle or three" NO_FILE s/scene.params)
+# RPCs: each view's fitted RPC00B (tag 50844 and viewN_rpc.txt) within 0.01 px of its camera, truth.bias,
+# truth.dem.tif; bad --origin / --rpc-bias refused.
+tpkit_tool_test(tp-synth.rpc-files
+  COMMAND "tp-synth --out out --size 256 --relief 20 --points 30 --origin -33.9,18.4,50 --rpc-bias 3:1.5,-2,0.001,0 && for f in view1_rpc.txt view2_rpc.txt view3_rpc.txt truth.bias truth.dem.tif @SEMI@ do test -s out/$f || echo MISSING $f @SEMI@ done && cmp <(grep -v '^#' out/truth.bias | tail -1) <(echo '3 1.5 0 0.001 -2 0 0') && echo same"
+  STDOUT_MATCH "^same\n$"
+  CHECK_FILE out/truth.tracks
+  FILE_MATCH "# origin: -33.9,18.4,50 .*# rpc_fit_view1_px: rms [0-9.e-]+, max ([0-9]\\.[0-9]+e-[0-9]+|0\\.00[0-9]*)\n")
+tpkit_tool_test(tp-synth.bad-origin
+  COMMAND "tp-synth --out out --origin 43.3,5.4"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --origin: expected LAT,LON,H" NO_FILE out)
+tpkit_tool_test(tp-synth.bad-rpc-bias
+  COMMAND "tp-synth --out out --rpc-bias 4:1,2"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --rpc-bias: the view must be 1, 2 or 3" NO_FILE out)

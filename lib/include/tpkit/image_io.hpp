@@ -1,5 +1,5 @@
 // Image reading and writing through OpenImageIO (every format it reads: TIFF/GeoTIFF, PNG, ...), and
-// the RPC camera model of GeoTIFF tag 50844 through libtiff (the one thing OIIO does not expose).
+// the raw RPC tag 50844 of a GeoTIFF through libtiff (the one thing OIIO does not expose).
 // Pixel convention: x = column, y = row, (0, 0) the centre of the top-left pixel. Regions are given in
 // whole pixels [x0, x0 + w) x [y0, y0 + h) and are read without loading the rest of the image.
 #pragma once
@@ -47,6 +47,8 @@ class TiffWriterU16 {
   ~TiffWriterU16();
   // Rows y0 .. y0 + rows - 1, each `width` samples; strips must come in order.
   void write_rows(long y0, long rows, const uint16_t* data);
+  // Sets GeoTIFF tag 50844 (see RpcTagValues below) in the file written at close().
+  void set_rpc_tag(const std::array<double, 92>& values);
   void close();
 
  private:
@@ -58,22 +60,30 @@ class TiffWriterU16 {
 void write_image_u8(const std::string& path, long width, long height, const std::vector<uint8_t>& data);
 void write_image_u16(const std::string& path, long width, long height, const std::vector<uint16_t>& data);
 
-// Rational polynomial camera (RPC00B), from GeoTIFF tag 50844 (92 doubles).
-struct Rpc {
-  double err_bias = 0, err_rand = 0;
-  double line_off = 0, samp_off = 0, lat_off = 0, lon_off = 0, height_off = 0;
-  double line_scale = 1, samp_scale = 1, lat_scale = 1, lon_scale = 1, height_scale = 1;
-  std::array<double, 20> line_num{}, line_den{}, samp_num{}, samp_den{};
-  // Ground (longitude, latitude in degrees, height in metres above the ellipsoid) to image (x, y) in
-  // tpkit pixels. RPC00B line/sample are taken with (0, 0) at the centre of the top-left pixel, as in
-  // the data this project uses; conversion to other conventions happens here only.
-  std::array<double, 2> project(double lon, double lat, double h) const;
-  // Inverse at a given height: the (longitude, latitude) in degrees whose projection is pixel (x, y),
-  // by Gauss-Newton on project(); throws NumericalError when it does not converge.
-  std::array<double, 2> localize(double x, double y, double h) const;
-};
+// GeoTIFF tag 50844 (RPCCoefficientTag): the 92 doubles of an RPC00B model as stored (ERR_BIAS, ERR_RAND,
+// LINE_OFF, SAMP_OFF, LAT_OFF, LONG_OFF, HEIGHT_OFF, LINE_SCALE, SAMP_SCALE, LAT_SCALE, LONG_SCALE,
+// HEIGHT_SCALE, then 20 each of LINE_NUM, LINE_DEN, SAMP_NUM, SAMP_DEN). The model itself, and what it
+// means, is the rpc component's (rpc_model.hpp, rpc_io.hpp); here only the raw tag is read and written.
+using RpcTagValues = std::array<double, 92>;
+// Nothing when the tag is absent. Throws InputError for a file that is not a TIFF or a tag of another length.
+std::optional<RpcTagValues> read_rpc_tag(const std::string& path);
+// Writes a copy of the TIFF `src` (pixels and every other tag kept) with tag 50844 set, atomically.
+void copy_tiff_with_rpc_tag(const std::string& src, const std::string& dst, const RpcTagValues& values);
 
-// The RPC of a TIFF file, or nothing when the tag is absent. Throws InputError for a malformed tag.
-std::optional<Rpc> read_rpc(const std::string& path);
+// A height grid on geographic coordinates (a DEM): single band, heights in metres; sample (i, j) (column i,
+// row j) stands at lon = lon0 + i * dlon, lat = lat0 - j * dlat (degrees WGS84, dlon, dlat > 0; the sample
+// is the value at that point, GeoTIFF PixelIsPoint). NaN = no data.
+struct GeoGrid {
+  long width = 0, height = 0;
+  double lon0 = 0, lat0 = 0, dlon = 1, dlat = 1;
+  std::vector<float> data;  // row-major
+};
+// Writes a float32 GeoTIFF (EPSG:4326, PixelIsPoint: ModelPixelScale, ModelTiepoint and GeoKeyDirectory
+// through libtiff), atomically.
+void write_geotiff_grid(const std::string& path, const GeoGrid& grid);
+// Reads a single-band GeoTIFF with OIIO, its georeferencing from the GeoTIFF tags OIIO exposes
+// (geotiff:ModelPixelScale, geotiff:ModelTiePoint; geographic WGS84 only, PixelIsArea converted to sample
+// centres). InputError for a file without them or in another coordinate system.
+GeoGrid read_geotiff_grid(const std::string& path);
 
 }  // namespace tpkit

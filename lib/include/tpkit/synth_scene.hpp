@@ -12,10 +12,13 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "tpkit/synth_rpc.hpp"
 
 namespace tpkit {
 
@@ -114,9 +117,14 @@ std::array<Eigen::Matrix3d, 3> trifocal_from_cameras(const Eigen::Matrix<double,
 struct SynthWriteOptions {
   int threads = 0;        // 0: all cores
   long strip_rows = 32;   // rows per rendered strip
+  // RPCs (synth_rpc.hpp): each view's RPC00B (biased by rpc_bias[view] where given) goes into the view's
+  // tag 50844 and viewN_rpc.txt; truth.tracks gets lon lat h columns, truth.bias the injected biases.
+  bool rpc = true;
+  SynthGeoOrigin origin;
+  std::map<int, ImageBias> rpc_bias;  // view (0-based) -> bias
 };
 // Writes view1..3.tif, truth.tracks, truth.cameras, truth.trifocal (affine only) and scene.params into
-// dir (created if needed), each atomically.
+// dir (created if needed), each atomically; with rpc also view1..3_rpc.txt and truth.bias.
 void write_synth_scene(const SynthScene&, const std::string& dir, const SynthWriteOptions& = {});
 
 }  // namespace tpkit

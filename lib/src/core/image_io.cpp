@@ -7,6 +7,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
+#include <map>
+#include <mutex>
 
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
@@ -20,6 +23,13 @@ using OIIO::ImageSpec;
 using OIIO::TypeDesc;
 
 namespace {
+// Rows [ya, yb) of a single-sample, strip-stored TIFF through libtiff, strip by strip: `row(data, y)`
+// gets each row (all columns, native samples). False when the file is not such a TIFF (the caller
+// reads it through OIIO). OIIO's scanline reader decodes a compressed strip file from its first row
+// at every open, so that reading row y costs y rows; TIFFReadEncodedStrip decodes only the strips asked for.
+bool read_tiff_strip_rows(const std::string& path, long width, long ya, long yb, size_t bytes_per_sample,
+                          const std::function<void(const unsigned char*, long)>& row);
+
 // The reader's first error, or the global one.
 std::string decode_error(ImageInput& in) {
   std::string e = in.geterror();
@@ -102,6 +112,13 @@ Raster read_region(const std::string& path, int band, long x0, long y0, long w, 
       }
     }
   };
+  if (s.tile_width == 0 && s.nchannels == 1 &&
+      read_tiff_strip_rows(path, s.width, ya, yb, bpp, [&](const unsigned char* row, long y) {
+        to_float(row + static_cast<size_t>(xa) * bpp, static_cast<size_t>(r.width), r.data.data() + static_cast<size_t>(y - ya) * r.width);
+      })) {
+    in->close();
+    return r;
+  }
   if (s.tile_width > 0) {
     // tiled files: read the tile-aligned cover of the region, keep the region
     const long tw = s.tile_width, th = std::max(1, s.tile_height);
@@ -145,7 +162,77 @@ struct TiffWriterU16::Impl {
   long width = 0, height = 0, next_row = 0;
   std::unique_ptr<ImageOutput> out;
   bool closed = false;
+  std::optional<std::array<double, 92>> rpc_tag;
 };
+
+namespace {
+// libtiff does not define tag 50844 itself: it is registered (as GDAL does) by a tag extender, so that it
+// can be written into a file that lacks it and is read with a 32-bit count.
+TIFFExtendProc parent_extender = nullptr;
+void rpc_tag_extender(TIFF* tif) {
+  static const TIFFFieldInfo info[] = {{TIFFTAG_RPCCOEFFICIENT, TIFF_VARIABLE2, TIFF_VARIABLE2, TIFF_DOUBLE, FIELD_CUSTOM,
+                                        1, 1, const_cast<char*>("RPCCoefficientTag")}};
+  TIFFMergeFieldInfo(tif, info, 1);
+  static const TIFFFieldInfo geo[] = {
+      {33550, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelPixelScaleTag")},
+      {33922, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelTiepointTag")},
+      {34735, -1, -1, TIFF_SHORT, FIELD_CUSTOM, 1, 1, const_cast<char*>("GeoKeyDirectoryTag")}};
+  for (const auto& g : geo)
+    if (!TIFFFindField(tif, g.field_tag, TIFF_ANY)) TIFFMergeFieldInfo(tif, &g, 1);
+  if (parent_extender) parent_extender(tif);
+}
+void register_rpc_tag() {
+  static std::once_flag once;
+  std::call_once(once, [] { parent_extender = TIFFSetTagExtender(rpc_tag_extender); });
+  TIFFSetWarningHandler(nullptr);
+  TIFFSetErrorHandler(nullptr);
+}
+
+// Sets tag 50844 in an existing TIFF file in place (libtiff: OIIO does not write it).
+bool read_tiff_strip_rows(const std::string& path, long width, long ya, long yb, size_t bytes_per_sample,
+                          const std::function<void(const unsigned char*, long)>& row) {
+  register_rpc_tag();  // silences libtiff's warnings on GeoTIFF tags
+  TIFF* tif = TIFFOpen(path.c_str(), "r");
+  if (!tif) return false;
+  uint16_t spp = 1, bits = 0, planar = PLANARCONFIG_CONTIG;
+  uint32_t w = 0, rps = 0;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLESPERPIXEL, &spp);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bits);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_PLANARCONFIG, &planar);
+  TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, &w);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_ROWSPERSTRIP, &rps);
+  if (TIFFIsTiled(tif) || spp != 1 || bits != bytes_per_sample * 8 || static_cast<long>(w) != width || rps == 0) {
+    TIFFClose(tif);
+    return false;
+  }
+  std::vector<unsigned char> buf(static_cast<size_t>(TIFFStripSize(tif)));
+  const size_t row_bytes = static_cast<size_t>(width) * bytes_per_sample;
+  for (long strip = ya / static_cast<long>(rps); strip * static_cast<long>(rps) < yb; ++strip) {
+    const tmsize_t n = TIFFReadEncodedStrip(tif, static_cast<uint32_t>(strip), buf.data(), static_cast<tmsize_t>(buf.size()));
+    if (n < 0) {
+      TIFFClose(tif);
+      throw InputError(path, 0, "read error: strip " + std::to_string(strip) + " cannot be decoded (truncated or corrupt file?)");
+    }
+    const long row0 = strip * static_cast<long>(rps), rows = static_cast<long>(static_cast<size_t>(n) / row_bytes);
+    for (long y = std::max(ya, row0); y < std::min(yb, row0 + rows); ++y) row(buf.data() + static_cast<size_t>(y - row0) * row_bytes, y);
+    if (row0 + rows < std::min(yb, row0 + static_cast<long>(rps))) {
+      TIFFClose(tif);
+      throw InputError(path, 0, "read error: strip " + std::to_string(strip) + " is short (truncated file?)");
+    }
+  }
+  TIFFClose(tif);
+  return true;
+}
+
+bool set_rpc_tag_in_place(const std::string& file, const std::array<double, 92>& values) {
+  register_rpc_tag();
+  TIFF* tif = TIFFOpen(file.c_str(), "r+");
+  if (!tif) return false;
+  int ok = TIFFSetField(tif, TIFFTAG_RPCCOEFFICIENT, static_cast<uint32_t>(92), values.data()) && TIFFRewriteDirectory(tif);
+  TIFFClose(tif);
+  return ok != 0;
+}
+}  // namespace
 
 TiffWriterU16::TiffWriterU16(const std::string& path, long width, long height,
                              const std::vector<std::pair<std::string, std::string>>& tags)
@@ -185,10 +272,14 @@ void TiffWriterU16::write_rows(long y0, long rows, const uint16_t* data) {
   impl_->next_row = y0 + rows;
 }
 
+void TiffWriterU16::set_rpc_tag(const std::array<double, 92>& values) { impl_->rpc_tag = values; }
+
 void TiffWriterU16::close() {
   if (impl_->closed) return;
   if (impl_->next_row != impl_->height) throw std::logic_error("TiffWriterU16: image not complete");
   if (!impl_->out->close()) throw InputError(impl_->path, 0, "write error: " + impl_->out->geterror());
+  if (impl_->rpc_tag && !set_rpc_tag_in_place(impl_->tmp, *impl_->rpc_tag))
+    throw InputError(impl_->path, 0, "cannot write RPC tag 50844");
   impl_->closed = true;
   finish_output(impl_->tmp, impl_->path);
 }
@@ -223,81 +314,143 @@ void write_image_u16(const std::string& path, long width, long height, const std
   write_whole(path, width, height, data, TypeDesc::UINT16);
 }
 
-namespace {
-// RPC00B term order of the 20 cubic monomials in normalized (P = lat, L = lon, H = height).
-double rpc_poly(const std::array<double, 20>& c, double L, double P, double H) {
-  const double t[20] = {1,         L,         P,         H,         L * P,     L * H,     P * H,
-                        L * L,     P * P,     H * H,     P * L * H, L * L * L, L * P * P, L * H * H,
-                        L * L * P, P * P * P, P * H * H, L * L * H, P * P * H, H * H * H};
-  double s = 0;
-  for (int i = 0; i < 20; ++i) s += c[i] * t[i];
-  return s;
-}
-}  // namespace
-
-std::array<double, 2> Rpc::project(double lon, double lat, double h) const {
-  double L = (lon - lon_off) / lon_scale, P = (lat - lat_off) / lat_scale, H = (h - height_off) / height_scale;
-  double line = rpc_poly(line_num, L, P, H) / rpc_poly(line_den, L, P, H) * line_scale + line_off;
-  double samp = rpc_poly(samp_num, L, P, H) / rpc_poly(samp_den, L, P, H) * samp_scale + samp_off;
-  return {samp, line};
-}
-
-std::array<double, 2> Rpc::localize(double x, double y, double h) const {
-  double lon = lon_off, lat = lat_off;
-  const double d = 1e-7;
-  for (int it = 0; it < 50; ++it) {
-    auto f = project(lon, lat, h);
-    double rx = x - f[0], ry = y - f[1];
-    if (std::hypot(rx, ry) < 1e-9) return {lon, lat};
-    auto fl = project(lon + d, lat, h), fp = project(lon, lat + d, h);
-    double a = (fl[0] - f[0]) / d, b = (fp[0] - f[0]) / d, c = (fl[1] - f[1]) / d, e = (fp[1] - f[1]) / d;
-    double det = a * e - b * c;
-    if (!(std::fabs(det) > 0)) break;
-    lon += (e * rx - b * ry) / det;
-    lat += (-c * rx + a * ry) / det;
-  }
-  auto f = project(lon, lat, h);
-  if (std::hypot(x - f[0], y - f[1]) < 1e-6) return {lon, lat};
-  throw NumericalError("RPC localization did not converge");
-}
-
-std::optional<Rpc> read_rpc(const std::string& path) {
-  TIFFSetWarningHandler(nullptr);
-  TIFFSetErrorHandler(nullptr);
+std::optional<RpcTagValues> read_rpc_tag(const std::string& path) {
+  register_rpc_tag();
+  note_input(path);
   TIFF* tif = TIFFOpen(path.c_str(), "r");
   if (!tif) throw InputError(path, 0, "not a TIFF file (no RPC tag can be read)");
   uint32_t count = 0;
   double* v = nullptr;
   int ok = TIFFGetField(tif, TIFFTAG_RPCCOEFFICIENT, &count, &v);
-  std::optional<Rpc> out;
+  std::optional<RpcTagValues> out;
   if (ok) {
     if (count != 92 || !v) {
       TIFFClose(tif);
       throw InputError(path, 0, "RPC tag 50844 holds " + std::to_string(count) + " values instead of 92");
     }
-    Rpc r;
-    r.err_bias = v[0];
-    r.err_rand = v[1];
-    r.line_off = v[2];
-    r.samp_off = v[3];
-    r.lat_off = v[4];
-    r.lon_off = v[5];
-    r.height_off = v[6];
-    r.line_scale = v[7];
-    r.samp_scale = v[8];
-    r.lat_scale = v[9];
-    r.lon_scale = v[10];
-    r.height_scale = v[11];
-    for (int i = 0; i < 20; ++i) {
-      r.line_num[i] = v[12 + i];
-      r.line_den[i] = v[32 + i];
-      r.samp_num[i] = v[52 + i];
-      r.samp_den[i] = v[72 + i];
-    }
+    RpcTagValues r;
+    std::copy(v, v + 92, r.begin());
     out = r;
   }
   TIFFClose(tif);
   return out;
+}
+
+void copy_tiff_with_rpc_tag(const std::string& src, const std::string& dst, const RpcTagValues& values) {
+  note_input(src);
+  claim_output(dst);
+  std::string tmp = claim_temp(dst);
+  auto fail = [&](const std::string& why) {
+    discard_temp(tmp);
+    throw InputError(dst, 0, why);
+  };
+  {
+    std::FILE* in = std::fopen(src.c_str(), "rb");
+    if (!in) {
+      discard_temp(tmp);
+      throw InputError(src, 0, "cannot open");
+    }
+    std::FILE* out = std::fopen(tmp.c_str(), "wb");
+    if (!out) {
+      std::fclose(in);
+      fail("cannot create");
+    }
+    char buf[1 << 16];
+    size_t n;
+    bool ok = true;
+    while ((n = std::fread(buf, 1, sizeof buf, in)) > 0) ok = ok && std::fwrite(buf, 1, n, out) == n;
+    ok = ok && !std::ferror(in);
+    std::fclose(in);
+    ok = (std::fclose(out) == 0) && ok;
+    if (!ok) fail("cannot copy " + src);
+  }
+  if (!set_rpc_tag_in_place(tmp, values)) {
+    discard_temp(tmp);
+    throw InputError(src, 0, "not a TIFF file, or its RPC tag 50844 cannot be written");
+  }
+  finish_output(tmp, dst);
+}
+
+void write_geotiff_grid(const std::string& path, const GeoGrid& g) {
+  if (g.width <= 0 || g.height <= 0 || static_cast<long>(g.data.size()) != g.width * g.height)
+    throw std::logic_error("write_geotiff_grid: size mismatch");
+  register_rpc_tag();
+  claim_output(path);
+  std::string tmp = claim_temp(path);
+  TIFF* tif = TIFFOpen(tmp.c_str(), "w");
+  if (!tif) {
+    discard_temp(tmp);
+    throw InputError(path, 0, "cannot create");
+  }
+  TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, static_cast<uint32_t>(g.width));
+  TIFFSetField(tif, TIFFTAG_IMAGELENGTH, static_cast<uint32_t>(g.height));
+  TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 1);
+  TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 32);
+  TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+  TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+  TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
+  TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, 16);
+  TIFFSetField(tif, TIFFTAG_SOFTWARE, written_by().c_str());
+  const double scale[3] = {g.dlon, g.dlat, 0};
+  const double tie[6] = {0, 0, 0, g.lon0, g.lat0, 0};
+  // GeoKeys: version 1.1.0, 4 keys: GTModelType = 2 (geographic), GTRasterType = 2 (PixelIsPoint),
+  // GeographicType = 4326 (WGS 84), GeogAngularUnits = 9102 (degree)
+  const uint16_t keys[] = {1, 1, 0, 4, 1024, 0, 1, 2, 1025, 0, 1, 2, 2048, 0, 1, 4326, 2054, 0, 1, 9102};
+  bool ok = TIFFSetField(tif, 33550, 3, scale) && TIFFSetField(tif, 33922, 6, tie) &&
+            TIFFSetField(tif, 34735, static_cast<int>(sizeof keys / sizeof keys[0]), keys);
+  for (long y = 0; ok && y < g.height; ++y)
+    ok = TIFFWriteScanline(tif, const_cast<float*>(g.data.data() + y * g.width), static_cast<uint32_t>(y), 0) == 1;
+  TIFFClose(tif);
+  if (!ok) {
+    discard_temp(tmp);
+    throw InputError(path, 0, "cannot write the GeoTIFF");
+  }
+  finish_output(tmp, path);
+}
+
+GeoGrid read_geotiff_grid(const std::string& path) {
+  // georeferencing through libtiff (OIIO does not expose the GeoTIFF tags), pixels through OIIO
+  register_rpc_tag();
+  note_input(path);
+  TIFF* tif = TIFFOpen(path.c_str(), "r");
+  if (!tif) throw InputError(path, 0, "not a TIFF file (a DEM must be a GeoTIFF)");
+  auto doubles = [&](uint32_t tag, uint32_t n, double* out) {
+    uint16_t count = 0;
+    double* v = nullptr;
+    if (!TIFFGetField(tif, tag, &count, &v) || !v || count < n) return false;
+    std::copy(v, v + n, out);
+    return true;
+  };
+  double scale[3], tie[6];
+  bool geo = doubles(33550, 3, scale) && doubles(33922, 6, tie);
+  std::map<int, int> keys;
+  uint16_t nk = 0;
+  uint16_t* k = nullptr;
+  if (TIFFGetField(tif, 34735, &nk, &k) && k && nk >= 4)
+    for (int e = 0; e < k[3] && 4 + 4 * e + 3 < nk; ++e)
+      if (k[4 + 4 * e + 1] == 0) keys[k[4 + 4 * e]] = k[4 + 4 * e + 3];
+  TIFFClose(tif);
+  if (!geo) throw InputError(path, 0, "no GeoTIFF georeferencing (ModelPixelScale and ModelTiepoint tags)");
+  auto key = [&](int id, int def) { return keys.count(id) ? keys[id] : def; };
+  int model = key(1024, 0), geog = key(2048, 0);
+  if (model != 2 || geog != 4326)
+    throw InputError(path, 0, "the DEM must be in geographic WGS 84 coordinates (EPSG:4326); GTModelType " +
+                                  std::to_string(model) + ", GeographicType " + std::to_string(geog));
+  if (!(scale[0] > 0) || !(scale[1] > 0)) throw InputError(path, 0, "ModelPixelScale must be positive");
+  GeoGrid g;
+  g.dlon = scale[0];
+  g.dlat = scale[1];
+  // the tie point maps raster (I, J) to (lon, lat); PixelIsArea (1, the default) puts raster (0, 0) at the
+  // corner of the first sample, PixelIsPoint (2) at its centre
+  double shift = key(1025, 1) == 2 ? 0.0 : 0.5;
+  g.lon0 = tie[3] + (shift - tie[0]) * g.dlon;
+  g.lat0 = tie[4] - (shift - tie[1]) * g.dlat;
+  Raster r = read_band(path, 0);
+  g.width = r.width;
+  g.height = r.height;
+  g.data = std::move(r.data);
+  return g;
 }
 
 }  // namespace tpkit

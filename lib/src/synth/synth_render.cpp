@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -19,6 +20,8 @@
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
 #include "tpkit/image_io.hpp"
+#include "tpkit/rpc_bias.hpp"
+#include "tpkit/rpc_io.hpp"
 #include "tpkit/synth_noise.hpp"
 #include "tpkit/synth_scene.hpp"
 #include "tpkit/synth_terrain.hpp"
@@ -94,6 +97,43 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
   }
 }
 
+namespace {
+// The views' RPC00B models (biased where asked), each checked against its camera; the fit errors and the
+// origin go into the metadata.
+std::vector<RpcModel> synth_rpc_models(const SynthScene& scene, const SynthGeoFrame& geo,
+                                       const std::map<int, ImageBias>& bias, Meta& meta) {
+  std::vector<RpcModel> out;
+  const auto& o = geo.origin();
+  meta_set(meta, "origin", format_number(o.lat) + "," + format_number(o.lon) + "," + format_number(o.h) +
+                               " (lat, lon degrees WGS84, h m above the ellipsoid of the scene centre X = Y = S/2, Z = 0)");
+  for (int v = 0; v < SynthScene::kViews; ++v) {
+    auto it = bias.find(v);
+    RpcFit f = synth_view_rpc(scene, geo, v, it == bias.end() ? ImageBias{} : it->second);
+    if (!(f.max_px <= 0.01))
+      throw NumericalError("the RPC fitted to view " + std::to_string(v + 1) + " misses its camera by " +
+                           format_number(f.max_px) + " px (more than 0.01)");
+    meta_set(meta, "rpc_fit_view" + std::to_string(v + 1) + "_px", "rms " + format_number(f.rms_px) + ", max " + format_number(f.max_px));
+    out.push_back(f.model);
+  }
+  return out;
+}
+
+void write_synth_rpc_files(const std::string& dir, const std::vector<ImageRef>& images, const Meta& meta,
+                           const std::vector<RpcModel>& rpcs, const std::map<int, ImageBias>& bias) {
+  for (int v = 0; v < SynthScene::kViews; ++v) write_rpc_txt(dir + "/view" + std::to_string(v + 1) + "_rpc.txt", rpcs[v]);
+  BiasTable bt;
+  bt.images = images;
+  bt.meta = meta;
+  meta_set(bt.meta, "bias", "injected into the written RPCs: truth pixel = written RPC projection + (a0 + a1 x + a2 y, "
+                            "b0 + b1 x + b2 y) (pixels, x y of the written projection)");
+  for (int v = 0; v < SynthScene::kViews; ++v) {
+    auto it = bias.find(v);
+    bt.bias.push_back(it == bias.end() ? ImageBias{} : it->second);
+  }
+  save_bias_table(dir + "/truth.bias", bt);
+}
+}  // namespace
+
 void write_synth_scene(const SynthScene& scene, const std::string& dir, const SynthWriteOptions& opt) {
   const SynthParams& p = scene.params();
   // Truth first: it is quick and may fail (too few visible points) before anything is written.
@@ -120,6 +160,12 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
 
   std::vector<ImageRef> images;
   for (int v = 0; v < SynthScene::kViews; ++v) images.push_back({"view" + std::to_string(v + 1) + ".tif", p.size, p.size});
+  std::vector<RpcModel> rpcs;
+  std::optional<SynthGeoFrame> geo;
+  if (opt.rpc) {
+    geo.emplace(scene, opt.origin);
+    rpcs = synth_rpc_models(scene, *geo, opt.rpc_bias, meta);
+  }
 
   // Views: strips rendered by worker threads in batches, written in order (bounded memory).
   const long W = p.size, rows = std::max(1L, opt.strip_rows);
@@ -133,6 +179,7 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     TiffWriterU16 writer(dir + "/" + images[v].path, W, W, {{"ImageDescription", desc},
                                                                  // fixed, so that the same seed gives the same bytes
                                                                  {"DateTime", "2000:01:01 00:00:00"}});
+    if (opt.rpc) writer.set_rpc_tag(rpc_tag_values(rpcs[v]));
     const long batch = 2L * threads;
     std::vector<std::vector<uint16_t>> buf(static_cast<size_t>(std::min(batch, strips)));
     for (long s0 = 0; s0 < strips; s0 += batch) {
@@ -176,6 +223,23 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
   for (Eigen::Index i = 0; i < truth.xy.rows(); ++i) tr.id[i] = i + 1;
   tr.extra.names = {"X", "Y", "Z"};
   tr.extra.values = truth.ground;
+  if (opt.rpc) {
+    meta_set(tr.meta, "truth", "noise-free projections of ground points visible in all three views; X Y Z in metres "
+                               "(local frame); lon lat in degrees WGS84, h in metres above the ellipsoid");
+    tr.extra.names = {"X", "Y", "Z", "lon", "lat", "h"};
+    tr.extra.values.resize(truth.ground.rows(), 6);
+    for (Eigen::Index i = 0; i < truth.ground.rows(); ++i) {
+      Eigen::Vector3d g = truth.ground.row(i).transpose();
+      tr.extra.values.block<1, 3>(i, 0) = g.transpose();
+      tr.extra.values.block<1, 3>(i, 3) = geo->to_llh(g).transpose();
+    }
+    write_synth_rpc_files(dir, images, meta, rpcs, opt.rpc_bias);
+    write_geotiff_grid(dir + "/truth.dem.tif", synth_dem(scene, *geo, 1.0));
+  } else {
+    for (int v = 0; v < SynthScene::kViews; ++v) remove_on_commit(dir + "/view" + std::to_string(v + 1) + "_rpc.txt");
+    remove_on_commit(dir + "/truth.bias");
+    remove_on_commit(dir + "/truth.dem.tif");
+  }
   save_tracks(dir + "/truth.tracks", tr);
 
   Cameras cams;

@@ -1,0 +1,470 @@
+#include "tpkit/rpc_adjust.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "tpkit/error.hpp"
+#include "tpkit/formats.hpp"
+#include "tpkit/image_io.hpp"
+#include "tpkit/parallel_for.hpp"
+#include "tpkit/rpc_ground.hpp"
+#include "tpkit/svg_plot.hpp"
+#include "tpkit/text_table.hpp"
+#include "tpkit/tool_support.hpp"
+
+namespace tpkit {
+
+namespace {
+
+// The bias block as Ceres sees it: {a0, a1 * S, a2 * S, b0, b1 * S, b2 * S}, so that every term is in pixels
+// over an image (S = 1000 px) and the problem is well scaled.
+constexpr double kLinearScale = 1000;
+
+ImageBias from_block(const std::array<double, 6>& p) {
+  ImageBias b;
+  b.a = {p[0], p[1] / kLinearScale, p[2] / kLinearScale};
+  b.b = {p[3], p[4] / kLinearScale, p[5] / kLinearScale};
+  return b;
+}
+
+struct ObservationCost {
+  const RpcModel* model;
+  double x, y;
+  template <typename T>
+  bool operator()(const T* bias, const T* g, T* r) const {
+    T p[2];
+    model->project_t(g, p);
+    const T u = p[0] / kLinearScale, v = p[1] / kLinearScale;
+    r[0] = p[0] + bias[0] + bias[1] * u + bias[2] * v - x;
+    r[1] = p[1] + bias[3] + bias[4] * u + bias[5] * v - y;
+    return true;
+  }
+};
+
+// A fixed image: the same residual without a bias block.
+struct FixedObservationCost {
+  const RpcModel* model;
+  double x, y;
+  template <typename T>
+  bool operator()(const T* g, T* r) const {
+    T p[2];
+    model->project_t(g, p);
+    r[0] = p[0] - x;
+    r[1] = p[1] - y;
+    return true;
+  }
+};
+
+struct BiasPriorCost {
+  std::array<double, 6> inv_sigma;
+  template <typename T>
+  bool operator()(const T* bias, T* r) const {
+    for (int k = 0; k < 6; ++k) r[k] = bias[k] * inv_sigma[k];
+    return true;
+  }
+};
+
+// (h - H(lon, lat)) / sigma, H evaluated where the point is now (a DEM's slope moves it with the point).
+class HeightPriorCost : public ceres::SizedCostFunction<1, 3> {
+ public:
+  HeightPriorCost(const HeightPrior* prior, double h_start) : prior_(prior), h_start_(h_start) {}
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const double* g = p[0];
+    double h = h_start_, grad[2] = {0, 0};
+    if (!prior_->at(g[0], g[1], h, grad)) grad[0] = grad[1] = 0, h = h_start_;  // stepped off the DEM: as at the start
+    const double w = 1.0 / prior_->sigma;
+    r[0] = (g[2] - h) * w;
+    if (J && J[0]) {
+      J[0][0] = -grad[0] * w;
+      J[0][1] = -grad[1] * w;
+      J[0][2] = w;
+    }
+    return true;
+  }
+
+ private:
+  const HeightPrior* prior_;
+  double h_start_;
+};
+
+class ProgressCallback : public ceres::IterationCallback {
+ public:
+  ProgressCallback(Progress* p) : p_(p) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    if (p_) p_->add();
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  Progress* p_;
+};
+
+std::vector<RpcObservation> observations(const std::vector<AdjustImage>& images, const std::vector<ImageBias>* bias,
+                                         const AdjustTrack& t) {
+  std::vector<RpcObservation> v;
+  for (const auto& [i, xy] : t.views) v.push_back({&images[i].model, bias ? &(*bias)[i] : nullptr, xy});
+  return v;
+}
+
+void check_tracks(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks) {
+  for (const auto& t : tracks) {
+    if (t.views.size() < 2) throw InputError(t.source, 0, "track " + std::to_string(t.id) + " has fewer than two views");
+    for (const auto& [i, xy] : t.views)
+      if (i < 0 || i >= static_cast<int>(images.size()))
+        throw InputError(t.source, 0, "track " + std::to_string(t.id) + " names an image out of range");
+  }
+  if (tracks.empty()) throw NumericalError("no tracks to adjust the RPCs with");
+}
+
+// Initial ground points: the zero-bias least-squares intersection of every track.
+void initial_points(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                    const AdjustOptions& o, AdjustResult& r) {
+  const size_t n = tracks.size();
+  r.ground.assign(n, Eigen::Vector3d::Zero());
+  r.rms_before.assign(n, std::numeric_limits<double>::quiet_NaN());
+  r.initial_ok.assign(n, 0);
+  parallel_for(n, o.threads, [&](size_t t) {
+    auto v = observations(images, nullptr, tracks[t]);
+    double h0 = NAN;
+    if (o.height.at) {
+      const RpcModel& m = images[tracks[t].views[0].first].model;
+      try {
+        Eigen::Vector2d ll = m.localize(v[0].xy[0], v[0].xy[1], m.height_off);
+        double h;
+        if (o.height.at(ll[0], ll[1], h, nullptr)) h0 = h;
+      } catch (const NumericalError&) {
+      }
+    }
+    RpcIntersection x = intersect_rpc(v, h0);
+    if (x.ok) {
+      r.ground[t] = x.llh;
+      r.rms_before[t] = x.rms_px;
+      r.initial_ok[t] = 1;
+    }
+  });
+}
+
+}  // namespace
+
+AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                         const AdjustOptions& o) {
+  check_tracks(images, tracks);
+  AdjustResult r;
+  initial_points(images, tracks, o, r);
+  long usable = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
+  if (usable == 0) throw NumericalError("no track could be intersected with the given RPCs (do the images overlap?)");
+
+  const size_t ni = images.size(), nt = tracks.size();
+  std::vector<std::array<double, 6>> block(ni, std::array<double, 6>{});
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  auto used = bias_terms_used(o.model);
+  std::vector<int> constant_terms;
+  for (int k = 0; k < 6; ++k)
+    if (!used[k]) constant_terms.push_back(k);
+  std::vector<char> image_seen(ni, 0);
+  for (size_t t = 0; t < nt; ++t) {
+    if (!r.initial_ok[t]) continue;
+    double* g = r.ground[t].data();
+    for (const auto& [i, xy] : tracks[t].views) {
+      image_seen[i] = 1;
+      ceres::LossFunction* loss = new ceres::HuberLoss(o.loss_px);
+      if (images[i].fixed) {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedObservationCost, 2, 3>(
+                                     new FixedObservationCost{&images[i].model, xy[0], xy[1]}),
+                                 loss, g);
+      } else {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ObservationCost, 2, 6, 3>(
+                                     new ObservationCost{&images[i].model, xy[0], xy[1]}),
+                                 loss, block[i].data(), g);
+      }
+    }
+    if (o.height.at) {
+      double h;
+      if (o.height.at(r.ground[t][0], r.ground[t][1], h, nullptr))
+        problem.AddResidualBlock(new HeightPriorCost(&o.height, h), nullptr, g);
+    }
+  }
+  BiasPriorCost prior;
+  for (int k = 0; k < 6; ++k)
+    prior.inv_sigma[k] = 1.0 / (k % 3 == 0 ? o.prior_shift_px : o.prior_linear * kLinearScale);
+  for (size_t i = 0; i < ni; ++i) {
+    if (images[i].fixed || !image_seen[i]) continue;
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BiasPriorCost, 6, 6>(new BiasPriorCost(prior)), nullptr,
+                             block[i].data());
+    if (!constant_terms.empty())
+      problem.SetManifold(block[i].data(), new ceres::SubsetManifold(6, constant_terms));
+  }
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = ni <= 200 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+  so.num_threads = std::max(1, o.threads);
+  so.max_num_iterations = o.max_iterations;
+  so.function_tolerance = 1e-12;
+  so.gradient_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-12;
+  so.logging_type = ceres::SILENT;
+  std::unique_ptr<Progress> progress;
+  if (o.progress) progress = std::make_unique<Progress>("rpc-adjust: iterations", o.max_iterations);
+  ProgressCallback cb(progress.get());
+  so.callbacks.push_back(&cb);
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (progress) progress->done();
+  r.iterations = static_cast<int>(summary.iterations.size());
+  r.solver_report = summary.BriefReport();
+  if (!summary.IsSolutionUsable()) throw NumericalError("the adjustment failed: " + summary.BriefReport());
+
+  r.bias.resize(ni);
+  for (size_t i = 0; i < ni; ++i) r.bias[i] = images[i].fixed ? ImageBias{} : from_block(block[i]);
+
+  // residuals before (zero bias, initial points) and after, per observation and per track
+  r.rms_after.assign(nt, std::numeric_limits<double>::quiet_NaN());
+  r.sigma_h.assign(nt, std::numeric_limits<double>::quiet_NaN());
+  r.flagged.assign(nt, 0);
+  double sum = 0;
+  long count = 0;
+  std::vector<Eigen::Vector3d> before(nt);
+  for (size_t t = 0; t < nt; ++t) {
+    if (!r.initial_ok[t]) continue;
+    auto v0 = observations(images, nullptr, tracks[t]);
+    RpcIntersection x0 = intersect_rpc(v0);  // the zero-bias point again (the fit moved r.ground)
+    before[t] = x0.ok ? x0.llh : r.ground[t];
+    auto v = observations(images, &r.bias, tracks[t]);
+    double s = 0;
+    for (size_t k = 0; k < v.size(); ++k) {
+      Eigen::Vector2d e0 = rpc_observe(v0[k], before[t]) - v0[k].xy;
+      Eigen::Vector2d e1 = rpc_observe(v[k], r.ground[t]) - v[k].xy;
+      r.obs_track.push_back(static_cast<int>(t));
+      r.obs_image.push_back(tracks[t].views[k].first);
+      r.obs_xy.push_back(v[k].xy);
+      r.res_before.push_back(e0);
+      r.res_after.push_back(e1);
+      s += e1.squaredNorm();
+    }
+    sum += s;
+    count += static_cast<long>(v.size());
+    r.rms_after[t] = std::sqrt(s / v.size());
+    r.flagged[t] = r.rms_after[t] > o.flag_px;
+  }
+  r.sigma0 = std::sqrt(sum / std::max(1L, 2 * count));
+  for (size_t t = 0; t < nt; ++t)
+    if (r.initial_ok[t]) r.sigma_h[t] = r.sigma0 * height_sigma_unit(observations(images, &r.bias, tracks[t]), r.ground[t]);
+  return r;
+}
+
+double residual_rms(const AdjustResult& r, bool after, int image) {
+  double s = 0;
+  long n = 0;
+  for (size_t k = 0; k < r.obs_image.size(); ++k) {
+    if (image >= 0 && r.obs_image[k] != image) continue;
+    s += (after ? r.res_after[k] : r.res_before[k]).squaredNorm();
+    ++n;
+  }
+  return n ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+double held_out_rms(const std::vector<AdjustImage>& images, const std::vector<ImageBias>& bias,
+                    const std::vector<AdjustTrack>& tracks, long* n_out) {
+  check_tracks(images, tracks);
+  double s = 0;
+  long n = 0;
+  for (const auto& t : tracks) {
+    auto v = observations(images, &bias, t);
+    RpcIntersection x = intersect_rpc(v);
+    if (!x.ok) continue;
+    s += x.rms_px * x.rms_px * v.size();
+    n += static_cast<long>(v.size());
+  }
+  if (n_out) *n_out = n;
+  return n ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+RpcFit fold_bias(const RpcModel& m, const ImageBias& bias, long width, long height, double h_lo, double h_hi) {
+  RpcFitVolume v;
+  v.lon0 = v.lat0 = std::numeric_limits<double>::infinity();
+  v.lon1 = v.lat1 = -v.lon0;
+  v.h0 = h_lo;
+  v.h1 = h_hi;
+  const double xs[] = {-0.5, width - 0.5}, ys[] = {-0.5, height - 0.5};
+  for (double h : {h_lo, h_hi})
+    for (double x : xs)
+      for (double y : ys) {
+        Eigen::Vector2d ll = m.localize(x, y, h);
+        v.lon0 = std::min(v.lon0, ll[0]);
+        v.lon1 = std::max(v.lon1, ll[0]);
+        v.lat0 = std::min(v.lat0, ll[1]);
+        v.lat1 = std::max(v.lat1, ll[1]);
+      }
+  RpcFit f = fit_rpc([&](const Eigen::Vector3d& g) { return bias.apply(m.project(g)); }, v);
+  f.model.err_bias = m.err_bias;
+  f.model.err_rand = m.err_rand;
+  return f;
+}
+
+}  // namespace tpkit
+
+// ---------------------------------------------------------------- tracks, priors, figure (tool support)
+
+namespace tpkit {
+
+namespace {
+namespace fs = std::filesystem;
+int match_image(const std::string& track_file, const std::string& ref, const std::vector<std::string>& images) {
+  for (size_t i = 0; i < images.size(); ++i)
+    if (images[i] == ref) return static_cast<int>(i);
+  std::error_code ec;
+  fs::path base = fs::path(track_file).parent_path();
+  for (const fs::path& cand : {fs::path(ref), base / ref})
+    if (fs::exists(cand, ec))
+      for (size_t i = 0; i < images.size(); ++i)
+        if (fs::exists(images[i], ec) && fs::equivalent(cand, images[i], ec)) return static_cast<int>(i);
+  int found = -1;
+  for (size_t i = 0; i < images.size(); ++i)
+    if (fs::path(images[i]).filename() == fs::path(ref).filename()) {
+      if (found >= 0) return -2;  // ambiguous
+      found = static_cast<int>(i);
+    }
+  return found;
+}
+}  // namespace
+
+std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, const std::vector<std::string>& images) {
+  std::vector<AdjustTrack> out;
+  for (const auto& f : files) {
+    Tracks t = read_tracks(f);
+    std::vector<int> map;
+    for (size_t k = 0; k < t.images.size(); ++k) {
+      int i = match_image(f, t.images[k].path, images);
+      if (i < 0)
+        throw InputError(t.source, 0, "image" + std::to_string(k + 1) + " '" + t.images[k].path + "' is " +
+                                          (i == -2 ? "ambiguous among" : "not one of") + " the images given");
+      map.push_back(i);
+    }
+    if (static_cast<int>(map.size()) != t.views())
+      throw InputError(t.source, 0, "the header names " + std::to_string(map.size()) + " images for " +
+                                        std::to_string(t.views()) + " views");
+    for (size_t r = 0; r < t.size(); ++r) {
+      AdjustTrack a;
+      a.source = t.source;
+      a.id = t.id[r];
+      for (int v = 0; v < t.views(); ++v) a.views.emplace_back(map[v], t.point(r, v));
+      out.push_back(std::move(a));
+    }
+  }
+  return out;
+}
+
+HeightPrior parse_height_prior(const std::string& text) {
+  std::string h = text, s;
+  for (const char* sep : {"\xC2\xB1", "+-", ","}) {
+    size_t k = text.find(sep);
+    if (k != std::string::npos) {
+      h = text.substr(0, k);
+      s = text.substr(k + std::strlen(sep));
+      break;
+    }
+  }
+  double hv, sv;
+  size_t u1 = 0, u2 = 0;
+  try {
+    hv = std::stod(h, &u1);
+    sv = std::stod(s, &u2);
+  } catch (...) {
+    u1 = 0;
+  }
+  if (u1 == 0 || u1 != h.size() || u2 != s.size() || !std::isfinite(hv) || !(sv > 0) || !std::isfinite(sv))
+    throw UsageError("--height-prior: expected H+-S (metres above the ellipsoid, S > 0), got '" + text + "'");
+  HeightPrior p;
+  p.sigma = sv;
+  p.at = [hv](double, double, double& out, double* grad) {
+    out = hv;
+    if (grad) grad[0] = grad[1] = 0;
+    return true;
+  };
+  return p;
+}
+
+HeightPrior dem_height_prior(const GeoGrid& dem, double sigma) {
+  auto grid = std::make_shared<GeoGrid>(dem);
+  HeightPrior p;
+  p.sigma = sigma;
+  p.at = [grid](double lon, double lat, double& h, double* grad) {
+    const GeoGrid& g = *grid;
+    double fx = (lon - g.lon0) / g.dlon, fy = (g.lat0 - lat) / g.dlat;
+    if (!(fx >= 0) || !(fy >= 0) || fx > g.width - 1 || fy > g.height - 1) return false;
+    long x0 = std::min(static_cast<long>(fx), g.width - 2), y0 = std::min(static_cast<long>(fy), g.height - 2);
+    if (g.width < 2 || g.height < 2) return false;
+    double ax = fx - x0, ay = fy - y0;
+    auto at = [&](long x, long y) { return static_cast<double>(g.data[static_cast<size_t>(y) * g.width + x]); };
+    const double z00 = at(x0, y0), z10 = at(x0 + 1, y0), z01 = at(x0, y0 + 1), z11 = at(x0 + 1, y0 + 1);
+    h = (1 - ay) * ((1 - ax) * z00 + ax * z10) + ay * ((1 - ax) * z01 + ax * z11);
+    if (grad) {
+      grad[0] = ((1 - ay) * (z10 - z00) + ay * (z11 - z01)) / g.dlon;
+      grad[1] = -((1 - ax) * (z01 - z00) + ax * (z11 - z10)) / g.dlat;  // rows run south
+    }
+    return std::isfinite(h);
+  };
+  return p;
+}
+
+void plot_rpc_residuals(const std::string& path, const std::vector<AdjustImage>& images, const AdjustResult& r,
+                        const std::string& title) {
+  const int n = static_cast<int>(images.size());
+  const int cols = std::min(n, 4), rows_of_images = (n + cols - 1) / cols;
+  const double pw = 300, ph = 300, gap = 60;
+  SvgPlot plot(cols * (pw + gap) + gap, rows_of_images * (ph + gap) + gap + 40, title);
+  // one exaggeration for the whole figure: the 90th percentile of the residuals before -> 4% of the width
+  std::vector<double> len;
+  for (const auto& e : r.res_before) len.push_back(e.norm());
+  std::sort(len.begin(), len.end());
+  double p90 = len.empty() ? 1 : std::max(len[len.size() * 9 / 10], 1e-3);
+  long wmax = 1;
+  for (const auto& im : images) wmax = std::max(wmax, std::max(im.width, im.height));
+  const double k = 0.04 * wmax / p90;
+  for (int i = 0; i < n; ++i) {
+    SvgPlot::PanelSpec s;
+    s.left = gap + (i % cols) * (pw + gap);
+    s.top = gap + 20 + (i / cols) * (ph + gap);
+    s.width = pw;
+    s.height = ph;
+    s.xmin = -0.5;
+    s.xmax = images[i].width - 0.5;
+    s.ymin = -0.5;
+    s.ymax = images[i].height - 0.5;
+    s.y_down = true;
+    s.equal_aspect = true;
+    s.title = fs::path(images[i].path).filename().string() + (images[i].fixed ? " (fixed)" : "") + ": before " +
+              format_number(std::round(residual_rms(r, false, i) * 1000) / 1000) + " px, after " +
+              format_number(std::round(residual_rms(r, true, i) * 1000) / 1000) + " px";
+    s.xlabel = "x (px)";
+    s.ylabel = "y (px)";
+    int p = plot.panel(s);
+    // at most ~1500 arrows per panel (every m-th observation)
+    long count = std::count(r.obs_image.begin(), r.obs_image.end(), i);
+    long step = std::max(1L, count / 1500), seen = 0;
+    for (size_t o = 0; o < r.obs_image.size(); ++o) {
+      if (r.obs_image[o] != i || (seen++ % step) != 0) continue;
+      const auto& q = r.obs_xy[o];
+      plot.arrow(p, q[0], q[1], k * r.res_before[o][0], k * r.res_before[o][1], "#d62728", 0.6);
+      plot.arrow(p, q[0], q[1], k * r.res_after[o][0], k * r.res_after[o][1], "#1f77b4", 0.8);
+    }
+    if (i == 0) {
+      plot.segment(p, 0.05 * images[i].width, 0.95 * images[i].height, 0.05 * images[i].width + k * p90,
+                   0.95 * images[i].height, "black", 2);
+      plot.text(p, 0.05 * images[i].width, 0.92 * images[i].height, format_number(std::round(p90 * 1000) / 1000) + " px", 10);
+      plot.legend(p, {{"before (zero bias)", "#d62728"}, {"after", "#1f77b4"}});
+    }
+  }
+  plot.save(path);
+}
+
+}  // namespace tpkit

@@ -1,0 +1,687 @@
+#include "tpkit/rpc_io.hpp"
+
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/image_io.hpp"
+#include "tpkit/text_table.hpp"
+
+namespace tpkit {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// ---------------------------------------------------------------- shared helpers
+
+std::string read_whole(const std::string& path) {
+  note_input(path);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string trim(const std::string& s) {
+  size_t a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
+  return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
+}
+
+// A decimal number (an optional '+' allowed, as in Ikonos files); false for anything else.
+bool parse_double(std::string s, double& v) {
+  s = trim(s);
+  if (!s.empty() && s[0] == '+') s.erase(0, 1);
+  if (s.empty()) return false;
+  auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size() && std::isfinite(v);
+}
+
+double number_or_throw(const std::string& text, const std::string& file, long line, const std::string& key) {
+  double v;
+  if (!parse_double(text, v)) throw InputError(file, line, key + ": '" + trim(text) + "' is not a number");
+  return v;
+}
+
+// The named scalar fields of RPC00B, in the order of the GeoTIFF tag after ERR_BIAS, ERR_RAND.
+struct Field {
+  const char* txt;  // GDAL / Ikonos key
+  const char* rpb;  // DigitalGlobe key
+  double RpcModel::*member;
+};
+const Field kScalars[] = {
+    {"ERR_BIAS", "errBias", &RpcModel::err_bias},          {"ERR_RAND", "errRand", &RpcModel::err_rand},
+    {"LINE_OFF", "lineOffset", &RpcModel::line_off},       {"SAMP_OFF", "sampOffset", &RpcModel::samp_off},
+    {"LAT_OFF", "latOffset", &RpcModel::lat_off},          {"LONG_OFF", "longOffset", &RpcModel::lon_off},
+    {"HEIGHT_OFF", "heightOffset", &RpcModel::height_off}, {"LINE_SCALE", "lineScale", &RpcModel::line_scale},
+    {"SAMP_SCALE", "sampScale", &RpcModel::samp_scale},    {"LAT_SCALE", "latScale", &RpcModel::lat_scale},
+    {"LONG_SCALE", "longScale", &RpcModel::lon_scale},     {"HEIGHT_SCALE", "heightScale", &RpcModel::height_scale},
+};
+struct PolyField {
+  const char* txt;
+  const char* rpb;
+  RpcPoly RpcModel::*member;
+};
+const PolyField kPolys[] = {
+    {"LINE_NUM_COEFF", "lineNumCoef", &RpcModel::line_num},
+    {"LINE_DEN_COEFF", "lineDenCoef", &RpcModel::line_den},
+    {"SAMP_NUM_COEFF", "sampNumCoef", &RpcModel::samp_num},
+    {"SAMP_DEN_COEFF", "sampDenCoef", &RpcModel::samp_den},
+};
+
+// Checks what makes a model unusable (zero scales, all-zero denominators).
+void check_model(const RpcModel& m, const std::string& file) {
+  const double scales[] = {m.line_scale, m.samp_scale, m.lat_scale, m.lon_scale, m.height_scale};
+  for (double s : scales)
+    if (!(s != 0)) throw InputError(file, 0, "an RPC scale is 0");
+  auto zero = [](const RpcPoly& p) {
+    for (double c : p)
+      if (c != 0) return false;
+    return true;
+  };
+  if (zero(m.line_den) || zero(m.samp_den)) throw InputError(file, 0, "an RPC denominator is all zeros");
+}
+
+std::string join_poly(const RpcPoly& p, const char* sep) {
+  std::string s;
+  for (int i = 0; i < 20; ++i) s += (i ? sep : "") + format_number(p[i]);
+  return s;
+}
+
+// ---------------------------------------------------------------- GDAL / Ikonos text
+
+RpcModel parse_txt(const std::string& text, const std::string& file) {
+  std::map<std::string, std::pair<double, long>> kv;
+  std::istringstream in(text);
+  std::string line;
+  long no = 0;
+  while (std::getline(in, line)) {
+    ++no;
+    std::string t = trim(line);
+    if (t.empty()) continue;
+    size_t colon = t.find(':');
+    if (colon == std::string::npos) throw InputError(file, no, "expected 'KEY: value'");
+    std::string key = trim(t.substr(0, colon)), value = trim(t.substr(colon + 1));
+    if (key.empty()) throw InputError(file, no, "expected 'KEY: value'");
+    // a trailing unit word ("pixels", "degrees", "meters") is allowed
+    size_t sp = value.find_last_of(" \t");
+    if (sp != std::string::npos && std::isalpha(static_cast<unsigned char>(value[sp + 1])))
+      value = trim(value.substr(0, sp));
+    double v = number_or_throw(value, file, no, key);
+    if (!kv.emplace(key, std::make_pair(v, no)).second) throw InputError(file, no, key + " given twice");
+  }
+  RpcModel m;
+  auto get = [&](const std::string& key, bool required, double& out) {
+    auto it = kv.find(key);
+    if (it == kv.end()) {
+      if (required) throw InputError(file, 0, "missing " + key);
+      return;
+    }
+    out = it->second.first;
+  };
+  for (const auto& f : kScalars) get(f.txt, std::string(f.txt).rfind("ERR_", 0) != 0, m.*f.member);
+  for (const auto& p : kPolys)
+    for (int i = 0; i < 20; ++i) get(std::string(p.txt) + "_" + std::to_string(i + 1), true, (m.*p.member)[i]);
+  check_model(m, file);
+  return m;
+}
+
+// ---------------------------------------------------------------- DigitalGlobe .RPB
+
+struct Token {
+  std::string text;
+  long line;
+  bool quoted;
+};
+
+std::vector<Token> tokenize_rpb(const std::string& text, const std::string& file) {
+  std::vector<Token> out;
+  long line = 1;
+  size_t i = 0;
+  while (i < text.size()) {
+    char c = text[i];
+    if (c == '\n') {
+      ++line;
+      ++i;
+    } else if (std::isspace(static_cast<unsigned char>(c))) {
+      ++i;
+    } else if (c == '=' || c == ';' || c == '(' || c == ')' || c == ',') {
+      out.push_back({std::string(1, c), line, false});
+      ++i;
+    } else if (c == '"') {
+      size_t e = text.find('"', i + 1);
+      if (e == std::string::npos || text.find('\n', i) < e) throw InputError(file, line, "unterminated string");
+      out.push_back({text.substr(i + 1, e - i - 1), line, true});
+      i = e + 1;
+    } else {
+      size_t e = i;
+      while (e < text.size() && !std::isspace(static_cast<unsigned char>(text[e])) && std::string("=;(),\"").find(text[e]) == std::string::npos)
+        ++e;
+      out.push_back({text.substr(i, e - i), line, false});
+      i = e;
+    }
+  }
+  return out;
+}
+
+RpcModel parse_rpb(const std::string& text, const std::string& file) {
+  auto tok = tokenize_rpb(text, file);
+  size_t i = 0;
+  auto at = [&](size_t k) -> const Token& {
+    if (k >= tok.size())
+      throw InputError(file, tok.empty() ? 1 : tok.back().line, "unexpected end of file (missing END;)");
+    return tok[k];
+  };
+  auto expect = [&](const char* s) {
+    const Token& t = at(i);
+    if (t.quoted || t.text != s) throw InputError(file, t.line, std::string("expected '") + s + "', got '" + t.text + "'");
+    ++i;
+  };
+  std::map<std::string, std::pair<std::vector<double>, long>> image;
+  bool in_image = false, ended = false;
+  while (!ended) {
+    const Token& name = at(i++);
+    if (name.quoted) throw InputError(file, name.line, "expected a name, got a string");
+    if (name.text == "END") {
+      expect(";");
+      ended = true;
+      break;
+    }
+    expect("=");
+    if (name.text == "BEGIN_GROUP" || name.text == "END_GROUP") {
+      const Token& g = at(i++);
+      if (name.text == "BEGIN_GROUP") {
+        if (in_image) throw InputError(file, name.line, "nested group");
+        if (g.text != "IMAGE") throw InputError(file, g.line, "unknown group '" + g.text + "' (expected IMAGE)");
+        in_image = true;
+      } else {
+        if (!in_image || g.text != "IMAGE") throw InputError(file, g.line, "END_GROUP without BEGIN_GROUP = IMAGE");
+        in_image = false;
+      }
+      if (i < tok.size() && tok[i].text == ";") ++i;
+      continue;
+    }
+    std::vector<double> values;
+    if (at(i).text == "(" && !at(i).quoted) {
+      ++i;
+      while (true) {
+        const Token& v = at(i++);
+        values.push_back(number_or_throw(v.text, file, v.line, name.text));
+        const Token& sep = at(i++);
+        if (sep.text == ")") break;
+        if (sep.text != ",") throw InputError(file, sep.line, "expected ',' or ')' in " + name.text);
+      }
+    } else {
+      const Token& v = at(i++);
+      if (in_image) values.push_back(number_or_throw(v.text, file, v.line, name.text));
+    }
+    expect(";");
+    if (in_image && !image.emplace(name.text, std::make_pair(values, name.line)).second)
+      throw InputError(file, name.line, name.text + " given twice");
+  }
+  if (in_image) throw InputError(file, at(i - 1).line, "END before END_GROUP = IMAGE");
+  if (i != tok.size()) throw InputError(file, tok[i].line, "text after END;");
+  RpcModel m;
+  for (const auto& f : kScalars) {
+    auto it = image.find(f.rpb);
+    if (it == image.end()) {
+      if (std::string(f.rpb).rfind("err", 0) == 0) continue;
+      throw InputError(file, 0, std::string("missing IMAGE.") + f.rpb);
+    }
+    if (it->second.first.size() != 1) throw InputError(file, it->second.second, std::string(f.rpb) + ": expected one value");
+    m.*f.member = it->second.first[0];
+  }
+  for (const auto& p : kPolys) {
+    auto it = image.find(p.rpb);
+    if (it == image.end()) throw InputError(file, 0, std::string("missing IMAGE.") + p.rpb);
+    if (it->second.first.size() != 20)
+      throw InputError(file, it->second.second, std::string(p.rpb) + ": " + std::to_string(it->second.first.size()) +
+                                                     " coefficients instead of 20");
+    std::copy(it->second.first.begin(), it->second.first.end(), (m.*p.member).begin());
+  }
+  check_model(m, file);
+  return m;
+}
+
+// ---------------------------------------------------------------- DIMAP v2 XML
+
+// Leaf elements of an XML document: path "A.B.C" (element names from the root's child down) -> text, line.
+struct XmlLeaf {
+  std::string text;
+  long line;
+};
+std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file) {
+  std::map<std::string, XmlLeaf> out;
+  std::vector<std::string> stack;
+  std::string text;
+  bool had_child = false;
+  long line = 1;
+  size_t i = 0;
+  auto count_lines = [&](size_t a, size_t b) {
+    for (size_t k = a; k < b && k < s.size(); ++k) line += s[k] == '\n';
+  };
+  auto path = [&]() {
+    std::string p;
+    for (size_t k = 1; k < stack.size(); ++k) p += (k > 1 ? "." : "") + stack[k];
+    return p;
+  };
+  while (i < s.size()) {
+    if (s[i] != '<') {
+      size_t e = s.find('<', i);
+      if (e == std::string::npos) e = s.size();
+      text += s.substr(i, e - i);
+      count_lines(i, e);
+      i = e;
+      continue;
+    }
+    long tag_line = line;
+    auto skip_to = [&](const char* end) {
+      size_t e = s.find(end, i);
+      if (e == std::string::npos) throw InputError(file, tag_line, "unterminated markup");
+      count_lines(i, e + std::strlen(end));
+      i = e + std::strlen(end);
+    };
+    if (s.compare(i, 4, "<!--") == 0) {
+      skip_to("-->");
+      continue;
+    }
+    if (s.compare(i, 2, "<?") == 0) {
+      skip_to("?>");
+      continue;
+    }
+    if (s.compare(i, 2, "<!") == 0) {
+      skip_to(">");
+      continue;
+    }
+    size_t e = s.find('>', i);
+    if (e == std::string::npos) throw InputError(file, tag_line, "unterminated tag");
+    std::string tag = s.substr(i + 1, e - i - 1);
+    count_lines(i, e + 1);
+    i = e + 1;
+    bool closing = !tag.empty() && tag[0] == '/';
+    bool empty = !tag.empty() && tag.back() == '/';
+    std::string name = tag.substr(closing ? 1 : 0);
+    if (empty) name.pop_back();
+    name = name.substr(0, name.find_first_of(" \t\r\n"));
+    if (name.empty()) throw InputError(file, tag_line, "empty tag name");
+    if (closing) {
+      if (stack.empty() || stack.back() != name)
+        throw InputError(file, tag_line, "</" + name + "> does not close <" + (stack.empty() ? "" : stack.back()) + ">");
+      if (!had_child) out[path()] = {trim(text), tag_line};
+      stack.pop_back();
+      had_child = true;
+      text.clear();
+    } else if (empty) {
+      had_child = true;
+    } else {
+      stack.push_back(name);
+      had_child = false;
+      text.clear();
+    }
+  }
+  if (!stack.empty()) throw InputError(file, line, "end of file inside <" + stack.back() + ">");
+  if (out.empty()) throw InputError(file, 1, "not an XML document");
+  return out;
+}
+
+// DIMAP pixel offsets (1-based) <-> tpkit's: the number is read in extended precision and 1 subtracted
+// before rounding to double, so that every double offset has a decimal that reads back to it exactly.
+bool dimap_offset_value(const std::string& text, double& v) {
+  std::string t = trim(text);
+  if (t.empty()) return false;
+  char* end = nullptr;
+  long double x = std::strtold(t.c_str(), &end);
+  if (end != t.c_str() + t.size()) return false;
+  v = static_cast<double>(x - 1.0L);
+  return std::isfinite(v);
+}
+std::string dimap_offset(double tpkit_off) {
+  std::string s = format_number(tpkit_off + 1.0);
+  double back;
+  if (dimap_offset_value(s, back) && back == tpkit_off) return s;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.21Lg", static_cast<long double>(tpkit_off) + 1.0L);
+  return buf;
+}
+
+RpcModel parse_dimap(const std::string& text, const std::string& file) {
+  auto leaves = xml_leaves(text, file);
+  // the RPC root element varies (Dimap_Document); find Global_RFM below it
+  std::string base;
+  for (const auto& [p, l] : leaves) {
+    size_t k = p.find("Global_RFM.");
+    if (k != std::string::npos) {
+      base = p.substr(0, k + 11);
+      break;
+    }
+  }
+  if (base.empty()) throw InputError(file, 0, "no Global_RFM element (not a DIMAP RPC file)");
+  auto find = [&](const std::vector<std::string>& names) -> const std::pair<const std::string, XmlLeaf>* {
+    for (const auto& n : names) {
+      auto it = leaves.find(base + n);
+      if (it != leaves.end()) return &*it;
+    }
+    return nullptr;
+  };
+  auto value = [&](const std::vector<std::string>& names, bool required, double& out) {
+    auto* e = find(names);
+    if (!e) {
+      if (required) throw InputError(file, 0, "missing " + base + names[0]);
+      return false;
+    }
+    out = number_or_throw(e->second.text, file, e->second.line, e->first);
+    return true;
+  };
+  RpcModel m;
+  const char* kInverse[] = {"Inverse_Model.", "GroundtoImage_Values."};
+  const char* kDirect[] = {"Direct_Model.", "ImagetoGround_Values."};
+  for (const auto& p : kPolys)
+    for (int i = 0; i < 20; ++i) {
+      std::string n = std::string(p.txt) + "_" + std::to_string(i + 1);
+      value({kInverse[0] + n, kInverse[1] + n}, true, (m.*p.member)[i]);
+    }
+  // direct model: Pléiades names its outputs SAMP (longitude) and LINE (latitude), Pléiades Neo LON and LAT
+  struct DirectPoly {
+    const char* phr;
+    const char* pneo;
+    RpcPoly RpcModel::*member;
+  };
+  const DirectPoly direct[] = {{"SAMP_NUM_COEFF", "LON_NUM_COEFF", &RpcModel::lon_num},
+                               {"SAMP_DEN_COEFF", "LON_DEN_COEFF", &RpcModel::lon_den},
+                               {"LINE_NUM_COEFF", "LAT_NUM_COEFF", &RpcModel::lat_num},
+                               {"LINE_DEN_COEFF", "LAT_DEN_COEFF", &RpcModel::lat_den}};
+  int found = 0;
+  for (const auto& d : direct)
+    for (int i = 0; i < 20; ++i) {
+      std::string k = "_" + std::to_string(i + 1);
+      found += value({kDirect[0] + std::string(d.phr) + k, kDirect[1] + std::string(d.pneo) + k,
+                      kDirect[0] + std::string(d.pneo) + k},
+                     false, (m.*d.member)[i]);
+    }
+  if (found != 0 && found != 80) throw InputError(file, 0, "incomplete Direct_Model (" + std::to_string(found) + " of 80 coefficients)");
+  m.has_direct = found == 80;
+  const std::pair<const char*, double RpcModel::*> scalars[] = {
+      {"LONG_SCALE", &RpcModel::lon_scale},     {"LONG_OFF", &RpcModel::lon_off},     {"LAT_SCALE", &RpcModel::lat_scale},
+      {"LAT_OFF", &RpcModel::lat_off},          {"HEIGHT_SCALE", &RpcModel::height_scale},
+      {"HEIGHT_OFF", &RpcModel::height_off},    {"SAMP_SCALE", &RpcModel::samp_scale}, {"SAMP_OFF", &RpcModel::samp_off},
+      {"LINE_SCALE", &RpcModel::line_scale},    {"LINE_OFF", &RpcModel::line_off}};
+  for (const auto& [n, member] : scalars) {
+    if (member == &RpcModel::samp_off || member == &RpcModel::line_off) continue;
+    value({std::string("RFM_Validity.") + n}, true, m.*member);
+  }
+  // DIMAP: the centre of the top-left pixel is (1, 1); tpkit and RPC00B: (0, 0)
+  for (auto [n, member] : {std::make_pair("SAMP_OFF", &RpcModel::samp_off), std::make_pair("LINE_OFF", &RpcModel::line_off)}) {
+    auto* e = find({std::string("RFM_Validity.") + n});
+    if (!e) throw InputError(file, 0, "missing " + base + "RFM_Validity." + n);
+    if (!dimap_offset_value(e->second.text, m.*member))
+      throw InputError(file, e->second.line, e->first + ": '" + e->second.text + "' is not a number");
+  }
+  check_model(m, file);
+  if (m.has_direct) {
+    auto zero = [](const RpcPoly& p) {
+      for (double c : p)
+        if (c != 0) return false;
+      return true;
+    };
+    if (zero(m.lon_den) || zero(m.lat_den)) throw InputError(file, 0, "a Direct_Model denominator is all zeros");
+  }
+  return m;
+}
+
+void xml_poly(std::ostringstream& os, const char* indent, const std::string& name, const RpcPoly& p) {
+  for (int i = 0; i < 20; ++i)
+    os << indent << '<' << name << '_' << i + 1 << '>' << format_number(p[i]) << "</" << name << '_' << i + 1 << ">\n";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- public
+
+const char* rpc_form_name(RpcForm f) {
+  switch (f) {
+    case RpcForm::tiff: return "tiff";
+    case RpcForm::txt: return "txt";
+    case RpcForm::rpb: return "rpb";
+    case RpcForm::dimap: return "dimap";
+  }
+  return "?";
+}
+
+RpcForm rpc_form_of(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".rpb") return RpcForm::rpb;
+  if (ext == ".txt") return RpcForm::txt;
+  if (ext == ".xml") return RpcForm::dimap;
+  if (ext == ".tif" || ext == ".tiff") return RpcForm::tiff;
+  throw InputError(path, 0, "unknown RPC file kind (expected .RPB, _rpc.txt, RPC_*.XML or a GeoTIFF)");
+}
+
+RpcModel read_rpc_txt(const std::string& path) { return parse_txt(read_whole(path), path); }
+RpcModel read_rpc_rpb(const std::string& path) { return parse_rpb(read_whole(path), path); }
+RpcModel read_rpc_dimap(const std::string& path) { return parse_dimap(read_whole(path), path); }
+
+std::array<double, 92> rpc_tag_values(const RpcModel& m) {
+  RpcTagValues v;
+  for (int i = 0; i < 12; ++i) v[i] = m.*kScalars[i].member;
+  for (int p = 0; p < 4; ++p)
+    for (int i = 0; i < 20; ++i) v[12 + 20 * p + i] = (m.*kPolys[p].member)[i];
+  return v;
+}
+
+RpcModel rpc_from_tag_values(const std::array<double, 92>& v) {
+  RpcModel m;
+  for (int i = 0; i < 12; ++i) m.*kScalars[i].member = v[i];
+  for (int p = 0; p < 4; ++p)
+    for (int i = 0; i < 20; ++i) (m.*kPolys[p].member)[i] = v[12 + 20 * p + i];
+  return m;
+}
+
+std::optional<RpcModel> read_rpc_tiff(const std::string& path) {
+  auto v = read_rpc_tag(path);
+  if (!v) return std::nullopt;
+  RpcModel m = rpc_from_tag_values(*v);
+  check_model(m, path);
+  return m;
+}
+
+RpcModel read_rpc_file(const std::string& path) {
+  switch (rpc_form_of(path)) {
+    case RpcForm::txt: return read_rpc_txt(path);
+    case RpcForm::rpb: return read_rpc_rpb(path);
+    case RpcForm::dimap: return read_rpc_dimap(path);
+    case RpcForm::tiff: {
+      auto m = read_rpc_tiff(path);
+      if (!m) throw InputError(path, 0, "no RPC tag 50844 in this TIFF");
+      return *m;
+    }
+  }
+  throw InputError(path, 0, "unknown RPC file kind");
+}
+
+std::string format_rpc_txt(const RpcModel& m) {
+  std::ostringstream os;
+  for (const auto& f : kScalars) os << f.txt << ": " << format_number(m.*f.member) << '\n';
+  for (const auto& p : kPolys)
+    for (int i = 0; i < 20; ++i) os << p.txt << '_' << i + 1 << ": " << format_number((m.*p.member)[i]) << '\n';
+  return os.str();
+}
+
+std::string format_rpc_rpb(const RpcModel& m) {
+  std::ostringstream os;
+  os << "satId = \"tpkit\";\nbandId = \"P\";\nSpecId = \"RPC00B\";\nBEGIN_GROUP = IMAGE\n";
+  for (const auto& f : kScalars) os << '\t' << f.rpb << " = " << format_number(m.*f.member) << ";\n";
+  for (const auto& p : kPolys) os << '\t' << p.rpb << " = (\n\t\t\t" << join_poly(m.*p.member, ",\n\t\t\t") << ");\n";
+  os << "END_GROUP = IMAGE\nEND;\n";
+  return os.str();
+}
+
+RpcModel with_direct_model(const RpcModel& m) {
+  if (m.has_direct) return m;
+  // the direct model is the RPC00B fit of (x, y, h) -> (lon, lat), with the roles of ground and image swapped
+  RpcFitVolume v;
+  v.lon0 = m.samp_off - m.samp_scale;
+  v.lon1 = m.samp_off + m.samp_scale;
+  v.lat0 = m.line_off - m.line_scale;
+  v.lat1 = m.line_off + m.line_scale;
+  v.h0 = m.height_off - m.height_scale;
+  v.h1 = m.height_off + m.height_scale;
+  RpcFit f = fit_rpc(
+      [&](const Eigen::Vector3d& xyh) {
+        try {
+          Eigen::Vector2d ll = m.localize(xyh[0], xyh[1], xyh[2]);
+          return ll;
+        } catch (const NumericalError&) {
+          return Eigen::Vector2d(NAN, NAN);
+        }
+      },
+      v);
+  RpcModel out = m;
+  out.has_direct = true;
+  // the fit normalizes its outputs by its own offsets and scales; re-express them with the model's
+  // lon/lat normalization: lon = (N/D) * s_f + o_f = ((N * s_f + D * (o_f - o_m)) / s_m) / D * s_m + o_m
+  auto renorm = [](const RpcPoly& num, const RpcPoly& den, double s_f, double o_f, double s_m, double o_m, RpcPoly& n_out,
+                   RpcPoly& d_out) {
+    for (int i = 0; i < 20; ++i) n_out[i] = (num[i] * s_f + den[i] * (o_f - o_m)) / s_m;
+    d_out = den;
+  };
+  // the fit's "image" outputs are (lon, lat) as its samp and line
+  renorm(f.model.samp_num, f.model.samp_den, f.model.samp_scale, f.model.samp_off, m.lon_scale, m.lon_off, out.lon_num,
+         out.lon_den);
+  renorm(f.model.line_num, f.model.line_den, f.model.line_scale, f.model.line_off, m.lat_scale, m.lat_off, out.lat_num,
+         out.lat_den);
+  // the fit's inputs were normalized by its own (x, y, h) box, which is the model's (samp, line, height) box
+  return out;
+}
+
+std::string format_rpc_dimap(const RpcModel& model) {
+  RpcModel m = with_direct_model(model);
+  std::ostringstream os;
+  os << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+        "<Dimap_Document name=\"RPC\">\n"
+        "  <Metadata_Identification>\n"
+        "    <METADATA_FORMAT version=\"2.0\">DIMAP</METADATA_FORMAT>\n"
+        "    <METADATA_PROFILE>PHR_SENSOR</METADATA_PROFILE>\n"
+        "    <METADATA_SUBPROFILE>RPC</METADATA_SUBPROFILE>\n"
+        "  </Metadata_Identification>\n"
+        "  <Rational_Function_Model>\n"
+        "    <Global_RFM>\n"
+        "      <Direct_Model>\n";
+  const char* in = "        ";
+  xml_poly(os, in, "SAMP_NUM_COEFF", m.lon_num);
+  xml_poly(os, in, "SAMP_DEN_COEFF", m.lon_den);
+  xml_poly(os, in, "LINE_NUM_COEFF", m.lat_num);
+  xml_poly(os, in, "LINE_DEN_COEFF", m.lat_den);
+  os << "      </Direct_Model>\n      <Inverse_Model>\n";
+  for (const auto& p : kPolys) xml_poly(os, in, p.txt, m.*p.member);
+  // validity domain: DIMAP pixels are 1-based
+  os << "      </Inverse_Model>\n"
+        "      <RFM_Validity>\n"
+        "        <Direct_Model_Validity_Domain>\n"
+        "          <FIRST_ROW>" << format_number(std::max(1.0, std::floor(m.line_off - m.line_scale) + 1)) << "</FIRST_ROW>\n"
+        "          <FIRST_COL>" << format_number(std::max(1.0, std::floor(m.samp_off - m.samp_scale) + 1)) << "</FIRST_COL>\n"
+        "          <LAST_ROW>" << format_number(std::ceil(m.line_off + m.line_scale) + 1) << "</LAST_ROW>\n"
+        "          <LAST_COL>" << format_number(std::ceil(m.samp_off + m.samp_scale) + 1) << "</LAST_COL>\n"
+        "        </Direct_Model_Validity_Domain>\n"
+        "        <Inverse_Model_Validity_Domain>\n"
+        "          <FIRST_LON>" << format_number(m.lon_off - m.lon_scale) << "</FIRST_LON>\n"
+        "          <FIRST_LAT>" << format_number(m.lat_off - m.lat_scale) << "</FIRST_LAT>\n"
+        "          <LAST_LON>" << format_number(m.lon_off + m.lon_scale) << "</LAST_LON>\n"
+        "          <LAST_LAT>" << format_number(m.lat_off + m.lat_scale) << "</LAST_LAT>\n"
+        "        </Inverse_Model_Validity_Domain>\n"
+        "        <LONG_SCALE>" << format_number(m.lon_scale) << "</LONG_SCALE>\n"
+        "        <LONG_OFF>" << format_number(m.lon_off) << "</LONG_OFF>\n"
+        "        <LAT_SCALE>" << format_number(m.lat_scale) << "</LAT_SCALE>\n"
+        "        <LAT_OFF>" << format_number(m.lat_off) << "</LAT_OFF>\n"
+        "        <HEIGHT_SCALE>" << format_number(m.height_scale) << "</HEIGHT_SCALE>\n"
+        "        <HEIGHT_OFF>" << format_number(m.height_off) << "</HEIGHT_OFF>\n"
+        "        <SAMP_SCALE>" << format_number(m.samp_scale) << "</SAMP_SCALE>\n"
+        "        <SAMP_OFF>" << dimap_offset(m.samp_off) << "</SAMP_OFF>\n"
+        "        <LINE_SCALE>" << format_number(m.line_scale) << "</LINE_SCALE>\n"
+        "        <LINE_OFF>" << dimap_offset(m.line_off) << "</LINE_OFF>\n"
+        "      </RFM_Validity>\n"
+        "    </Global_RFM>\n"
+        "  </Rational_Function_Model>\n"
+        "</Dimap_Document>\n";
+  return os.str();
+}
+
+void write_rpc_txt(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_txt(m)); }
+void write_rpc_rpb(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_rpb(m)); }
+void write_rpc_dimap(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_dimap(m)); }
+
+void write_rpc_tiff_copy(const std::string& image, const std::string& out, const RpcModel& m) {
+  copy_tiff_with_rpc_tag(image, out, rpc_tag_values(m));
+}
+
+void write_rpc_file(const std::string& path, RpcForm form, const RpcModel& m) {
+  switch (form) {
+    case RpcForm::txt: return write_rpc_txt(path, m);
+    case RpcForm::rpb: return write_rpc_rpb(path, m);
+    case RpcForm::dimap: return write_rpc_dimap(path, m);
+    case RpcForm::tiff: throw UsageError("an RPC tag is written into a copy of an image (write_rpc_tiff_copy)");
+  }
+}
+
+std::vector<std::string> rpc_sidecar_candidates(const std::string& image) {
+  fs::path p(image);
+  fs::path stem = p.parent_path() / p.stem();
+  std::vector<std::string> out = {stem.string() + "_rpc.txt", stem.string() + "_RPC.TXT", stem.string() + ".RPB",
+                                  stem.string() + ".rpb"};
+  std::string name = p.stem().string();
+  if (name.rfind("IMG_", 0) == 0) {
+    std::string rest = std::regex_replace(name.substr(4), std::regex("_R[0-9]+C[0-9]+$"), "");
+    out.push_back((p.parent_path() / ("RPC_" + rest + ".XML")).string());
+  }
+  return out;
+}
+
+std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides) {
+  auto it = overrides.find(image);
+  if (it == overrides.end()) {
+    std::error_code ec;
+    for (auto o = overrides.begin(); o != overrides.end(); ++o)
+      if (fs::exists(o->first, ec) && fs::exists(image, ec) && fs::equivalent(o->first, image, ec)) it = o;
+  }
+  if (it != overrides.end()) return RpcSource{read_rpc_file(it->second), it->second, rpc_form_of(it->second)};
+  std::string ext = fs::path(image).extension().string();
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".tif" || ext == ".tiff") {
+    if (auto m = read_rpc_tiff(image)) return RpcSource{*m, image, RpcForm::tiff};
+  }
+  for (const auto& c : rpc_sidecar_candidates(image))
+    if (fs::is_regular_file(c)) return RpcSource{read_rpc_file(c), c, rpc_form_of(c)};
+  return std::nullopt;
+}
+
+RpcSource load_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides) {
+  if (auto s = find_image_rpc(image, overrides)) return *s;
+  std::string names;
+  for (const auto& c : rpc_sidecar_candidates(image)) names += (names.empty() ? "" : ", ") + fs::path(c).filename().string();
+  throw InputError(image, 0, "no RPC model: no tag 50844, none of " + names + " beside it, and no --rpc " + image + "=FILE");
+}
+
+std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::string>& values) {
+  std::map<std::string, std::string> out;
+  for (const auto& v : values) {
+    size_t eq = v.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == v.size())
+      throw UsageError("--rpc: expected IMAGE=FILE, got '" + v + "'");
+    if (!out.emplace(v.substr(0, eq), v.substr(eq + 1)).second)
+      throw UsageError("--rpc: image '" + v.substr(0, eq) + "' given twice");
+  }
+  return out;
+}
+
+}  // namespace tpkit

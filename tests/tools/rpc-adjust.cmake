@@ -1,0 +1,26 @@
+# rpc-adjust: injected biases on two synthetic views (the third fixed, the scene's DEM as height prior) are
+# recovered: residuals vanish, the adjusted models give the truth heights; bad input is refused.
+set(synth_biased "tp-synth -o syn --size 512 --points 400 --rpc-bias 2:6,-8,0.002,-0.001,0.001,0.0015 --rpc-bias 3:-10,4,0.001,0.0005")
+set(adjust "rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --fixed syn/view1.tif")
+tpkit_tool_test(rpc-adjust.recovers-affine-biases
+  COMMAND "${synth_biased} && ${adjust} --dem syn/truth.dem.tif -o adj && tp-ground syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --rpc syn/view2.tif=adj/view2_rpc.txt --rpc syn/view3.tif=adj/view3.RPB -o g.points && paste <(grep -v '^#' syn/truth.tracks) <(grep -v '^#' g.points) | awk '{ s += ($13 - $17)^2 @SEMI@ n++ } END { r = sqrt(s / n) @SEMI@ print (r < 0.25 ? \"heights ok\" : \"heights off\"), r }'"
+  STDOUT_MATCH "^heights ok "
+  CHECK_FILE adj/rpc.residuals
+  FILE_MATCH "# rms_before_px: [1-9][0-9.]*\n# rms_after_px: (0\\.00[0-9]*|[0-9.]+e-[0-9]+)\n.*# flagged_tracks: 0\n")
+tpkit_tool_test(rpc-adjust.outputs
+  COMMAND "${synth_biased} && ${adjust} --model shift --crs utm -o adj && ls adj | tr '\\n' ' '"
+  STDOUT_MATCH "ground.points residuals.svg rpc.bias rpc.residuals view1.RPB view1_rpc.txt view2.RPB view2_rpc.txt view3.RPB view3_rpc.txt"
+  CHECK_FILE adj/ground.points
+  FILE_MATCH "^# tpkit ground 1\n.*# crs: EPSG:32631 .*# columns: track easting northing h sigma_h views rms_px flagged\n")
+tpkit_tool_test(rpc-adjust.image-without-rpc
+  COMMAND "${synth_biased} && rpc-adjust syn/view1.tif syn/truth.dem.tif --tracks syn/truth.tracks -o adj"
+  EXPECT_FAIL STDERR_MATCH "\nrpc-adjust: syn/truth.dem.tif: no RPC model" NO_FILE adj/rpc.bias)
+tpkit_tool_test(rpc-adjust.malformed-model
+  COMMAND "${synth_biased} && sed 's/^LAT_OFF: .*/LAT_OFF: north/' syn/view2_rpc.txt > bad_rpc.txt && ${adjust} --rpc syn/view2.tif=bad_rpc.txt -o adj"
+  EXPECT_FAIL STDERR_MATCH "\nrpc-adjust: bad_rpc.txt:5: LAT_OFF: 'north' is not a number" NO_FILE adj)
+tpkit_tool_test(rpc-adjust.bad-model
+  COMMAND "rpc-adjust a.tif --tracks t --model rotation -o adj"
+  EXPECT_FAIL STDERR_MATCH "^rpc-adjust: --model: expected shift, drift or affine")
+tpkit_tool_test(rpc-adjust.held-out
+  COMMAND "${synth_biased} && tp-sample --help >/dev/null && (grep '^#' syn/truth.tracks @SEMI@ grep -v '^#' syn/truth.tracks | awk 'NR % 2 == 1') > fit.tracks && (grep '^#' syn/truth.tracks @SEMI@ grep -v '^#' syn/truth.tracks | awk 'NR % 2 == 0') > check.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks fit.tracks --check check.tracks --fixed syn/view1.tif -o adj"
+  STDERR_MATCH "held-out [0-9.e-]+ px \\(600 observations\\)")

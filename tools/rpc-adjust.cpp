@@ -1,0 +1,263 @@
+// rpc-adjust: bias compensation of RPC cameras from tie points (man/rpc-adjust.1).
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/image_io.hpp"
+#include "tpkit/parallel_for.hpp"
+#include "tpkit/rpc_adjust.hpp"
+#include "tpkit/rpc_ground.hpp"
+#include "tpkit/rpc_io.hpp"
+#include "tpkit/text_table.hpp"
+#include "tpkit/tool_support.hpp"
+
+extern const char* const tpkit_man_page;
+
+namespace {
+namespace fs = std::filesystem;
+using namespace tpkit;
+
+struct Opts {
+  std::vector<std::string> images, tracks, check, fixed, rpc;
+  std::string model = "affine", height_prior, dem, crs = "geographic", out;
+  double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01;
+  int threads = 1, iterations = 100;
+  bool write_tiff = false;
+};
+
+std::string num(double v, int digits = 4) {
+  std::ostringstream os;
+  os.precision(digits);
+  os << v;
+  return os.str();
+}
+
+std::vector<AdjustImage> load_images(const Opts& o, std::vector<RpcSource>& sources) {
+  auto overrides = parse_rpc_overrides(o.rpc);
+  for (const auto& kv : overrides)
+    if (std::find(o.images.begin(), o.images.end(), kv.first) == o.images.end())
+      throw UsageError("--rpc " + kv.first + "=...: not one of the images");
+  std::vector<AdjustImage> out;
+  std::set<std::string> stems;
+  for (const auto& path : o.images) {
+    AdjustImage im;
+    im.path = path;
+    ImageInfo info = image_info(path);
+    im.width = info.width;
+    im.height = info.height;
+    sources.push_back(load_image_rpc(path, overrides));
+    im.model = sources.back().model;
+    if (!stems.insert(fs::path(path).stem().string()).second)
+      throw UsageError("two images named " + fs::path(path).stem().string() + ": their adjusted models would share a name in -o");
+    out.push_back(im);
+  }
+  for (const auto& f : o.fixed) {
+    auto it = std::find(o.images.begin(), o.images.end(), f);
+    if (it == o.images.end()) throw UsageError("--fixed " + f + ": not one of the images");
+    out[it - o.images.begin()].fixed = true;
+  }
+  return out;
+}
+
+std::string models_line(const std::vector<RpcSource>& s, size_t i) {
+  return s[i].path + " (" + rpc_form_name(s[i].form) + ")";
+}
+
+void write_points(const std::string& path, const Opts& o, const std::vector<AdjustImage>& images,
+                  const std::vector<RpcSource>& sources, const std::vector<AdjustTrack>& tracks, const AdjustResult& r) {
+  const RpcModel& m0 = images[0].model;
+  GroundConverter conv(parse_ground_crs(o.crs), m0.lon_off, m0.lat_off);
+  std::vector<ImageRef> refs;
+  for (const auto& im : images) refs.push_back({im.path, im.width, im.height});
+  Meta meta;
+  meta_set(meta, "crs", conv.description());
+  for (size_t i = 0; i < images.size(); ++i) meta_set(meta, "model" + std::to_string(i + 1), models_line(sources, i) + " + bias");
+  meta_set(meta, "sigma_h", "standard deviation of h (m) for the a posteriori image noise sigma0 = " + format_number(r.sigma0) + " px");
+  meta_set(meta, "rms_px", "RMS over the track's views of the residual after the adjustment (pixels)");
+  meta_set(meta, "flagged", "1: rms_px above --flag " + format_number(o.flag) + " px");
+  std::vector<std::string> cols = {"track"};
+  for (const auto& c : conv.columns()) cols.push_back(c);
+  cols.insert(cols.end(), {"sigma_h", "views", "rms_px", "flagged"});
+  std::ostringstream os;
+  write_header(os, "ground", 1, refs, meta, cols);
+  for (size_t t = 0; t < tracks.size(); ++t) {
+    if (!r.initial_ok[t]) continue;
+    Eigen::Vector3d c = conv(r.ground[t]);
+    write_record(os, {static_cast<double>(tracks[t].id), c[0], c[1], c[2], r.sigma_h[t],
+                      static_cast<double>(tracks[t].views.size()), r.rms_after[t], static_cast<double>(r.flagged[t])});
+  }
+  write_file_atomic(path, os.str());
+}
+
+void write_residuals(const std::string& path, const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                     const AdjustResult& r, double check_rms, long check_n) {
+  std::vector<ImageRef> refs;
+  for (const auto& im : images) refs.push_back({im.path, im.width, im.height});
+  Meta meta;
+  meta_set(meta, "residual", "projected minus observed, pixels; before: zero bias and the least-squares point of "
+                             "the delivered models; after: the adjusted biases and points");
+  std::ostringstream os;
+  write_header(os, "rpc-residuals", 1, refs, meta,
+               {"track", "image", "x", "y", "dx_before", "dy_before", "dx_after", "dy_after", "flagged"});
+  for (size_t k = 0; k < r.obs_image.size(); ++k) {
+    int t = r.obs_track[k];
+    write_record(os, {static_cast<double>(tracks[t].id), static_cast<double>(r.obs_image[k] + 1), r.obs_xy[k][0],
+                      r.obs_xy[k][1], r.res_before[k][0], r.res_before[k][1], r.res_after[k][0], r.res_after[k][1],
+                      static_cast<double>(r.flagged[t])});
+  }
+  long used = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
+  long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
+  os << "# tracks: " << used << '\n';
+  os << "# tracks_not_intersected: " << static_cast<long>(tracks.size()) - used << '\n';
+  os << "# observations: " << r.obs_image.size() << '\n';
+  os << "# rms_before_px: " << format_number(residual_rms(r, false)) << '\n';
+  os << "# rms_after_px: " << format_number(residual_rms(r, true)) << '\n';
+  for (size_t i = 0; i < images.size(); ++i) {
+    os << "# image" << i + 1 << "_rms_before_px: " << format_number(residual_rms(r, false, static_cast<int>(i))) << '\n';
+    os << "# image" << i + 1 << "_rms_after_px: " << format_number(residual_rms(r, true, static_cast<int>(i))) << '\n';
+  }
+  os << "# flagged_tracks: " << flagged << '\n';
+  if (check_n > 0) {
+    os << "# check_observations: " << check_n << '\n';
+    os << "# check_rms_px: " << format_number(check_rms) << '\n';
+  }
+  os << "# iterations: " << r.iterations << '\n';
+  write_file_atomic(path, os.str());
+}
+
+// The adjusted models: bias folded into a refitted RPC00B per image, as _rpc.txt and .RPB (and a TIFF copy).
+std::vector<RpcFit> write_models(const Opts& o, const std::vector<AdjustImage>& images, const AdjustResult& r) {
+  double h_lo = INFINITY, h_hi = -INFINITY;
+  for (size_t t = 0; t < r.ground.size(); ++t)
+    if (r.initial_ok[t]) {
+      h_lo = std::min(h_lo, r.ground[t][2]);
+      h_hi = std::max(h_hi, r.ground[t][2]);
+    }
+  // the refit covers the tracks' heights with a margin (and at least the models' own height range near them)
+  const double margin = std::max(50.0, 0.25 * (h_hi - h_lo));
+  h_lo -= margin;
+  h_hi += margin;
+  std::vector<RpcFit> fits(images.size());
+  parallel_for(images.size(), o.threads, [&](size_t i) {
+    fits[i] = fold_bias(images[i].model, r.bias[i], images[i].width, images[i].height, h_lo, h_hi);
+  });
+  for (size_t i = 0; i < images.size(); ++i) {
+    std::string stem = (fs::path(o.out) / fs::path(images[i].path).stem()).string();
+    write_rpc_txt(stem + "_rpc.txt", fits[i].model);
+    write_rpc_rpb(stem + ".RPB", fits[i].model);
+    if (o.write_tiff) write_rpc_tiff_copy(images[i].path, (fs::path(o.out) / fs::path(images[i].path).filename()).string(), fits[i].model);
+  }
+  return fits;
+}
+
+void write_bias(const std::string& path, const Opts& o, const std::vector<AdjustImage>& images,
+                const std::vector<RpcSource>& sources, const AdjustResult& r, const std::vector<RpcFit>& fits) {
+  BiasTable bt;
+  for (const auto& im : images) bt.images.push_back({im.path, im.width, im.height});
+  meta_set(bt.meta, "model", o.model);
+  meta_set(bt.meta, "bias", "observed pixel = model projection (x, y) + (a0 + a1 x + a2 y, b0 + b1 x + b2 y), pixels");
+  for (size_t i = 0; i < images.size(); ++i) meta_set(bt.meta, "model" + std::to_string(i + 1), models_line(sources, i));
+  meta_set(bt.meta, "solver", r.solver_report);
+  bt.bias = r.bias;
+  bt.extra_names = {"fixed", "refit_rms_px", "refit_max_px"};
+  for (size_t i = 0; i < images.size(); ++i) bt.extra.push_back({images[i].fixed ? 1.0 : 0.0, fits[i].rms_px, fits[i].max_px});
+  save_bias_table(path, bt);
+}
+
+int run(const Opts& o) {
+  if (o.images.empty()) throw UsageError("no images given");
+  if (o.tracks.empty()) throw UsageError("--tracks: at least one tracks file is needed");
+  if (o.out.empty()) throw UsageError("-o DIR is required");
+  const BiasModel model = parse_bias_model(o.model);
+  parse_ground_crs(o.crs);
+  if (o.threads < 1 || o.threads > kMaxThreads) throw UsageError("--threads must be between 1 and " + std::to_string(kMaxThreads));
+  AdjustOptions ao;
+  ao.model = model;
+  ao.loss_px = o.loss;
+  ao.flag_px = o.flag;
+  ao.prior_shift_px = o.prior_shift;
+  ao.prior_linear = o.prior_linear;
+  ao.threads = o.threads;
+  ao.max_iterations = o.iterations;
+  ao.progress = isatty(2);
+  if (!o.height_prior.empty() && !o.dem.empty()) throw UsageError("--height-prior and --dem exclude each other");
+  if (!o.height_prior.empty()) ao.height = parse_height_prior(o.height_prior);
+  if (!o.dem.empty()) ao.height = dem_height_prior(read_geotiff_grid(o.dem), o.dem_sigma);
+  std::vector<RpcSource> sources;
+  std::vector<AdjustImage> images = load_images(o, sources);
+  const std::vector<AdjustTrack> tracks = gather_tracks(o.tracks, o.images);
+  const std::vector<AdjustTrack> check = gather_tracks(o.check, o.images);
+
+  create_output_dir(o.out);
+  std::vector<std::string> inputs = o.images;
+  inputs.insert(inputs.end(), o.tracks.begin(), o.tracks.end());
+  inputs.insert(inputs.end(), o.check.begin(), o.check.end());
+  if (!o.dem.empty()) inputs.push_back(o.dem);
+  const fs::path dir(o.out);
+  check_outputs({{"-o", (dir / "rpc.bias").string()},
+                 {"-o", (dir / "ground.points").string()},
+                 {"-o", (dir / "rpc.residuals").string()},
+                 {"-o", (dir / "residuals.svg").string()}},
+                inputs);
+
+  AdjustResult r = adjust_rpcs(images, tracks, ao);
+  long check_n = 0;
+  double check_rms = check.empty() ? NAN : held_out_rms(images, r.bias, check, &check_n);
+  auto fits = write_models(o, images, r);
+  write_bias((dir / "rpc.bias").string(), o, images, sources, r, fits);
+  write_points((dir / "ground.points").string(), o, images, sources, tracks, r);
+  write_residuals((dir / "rpc.residuals").string(), images, tracks, r, check_rms, check_n);
+  plot_rpc_residuals((dir / "residuals.svg").string(), images, r,
+                     "rpc-adjust --model " + o.model + ": residual vectors before (red) and after (blue)");
+
+  long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
+  long used = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
+  std::cerr << "rpc-adjust: " << used << " tracks, " << r.obs_image.size() << " observations, model " << o.model
+            << ": rms " << num(residual_rms(r, false)) << " px before, " << num(residual_rms(r, true)) << " px after";
+  if (check_n > 0) std::cerr << ", held-out " << num(check_rms) << " px (" << check_n << " observations)";
+  std::cerr << "; " << r.iterations << " iterations\n";
+  double worst_refit = 0;
+  for (const auto& f : fits) worst_refit = std::max(worst_refit, f.max_px);
+  std::cerr << "rpc-adjust: adjusted models refitted to the biased ones within " << num(worst_refit, 3) << " px\n";
+  if (used < static_cast<long>(tracks.size()))
+    warn(std::to_string(tracks.size() - used) + " tracks could not be intersected with the delivered models (left out)");
+  if (flagged > 0)
+    warn(std::to_string(flagged) + " tracks keep an RMS residual above --flag " + num(o.flag) +
+         " px after the robust fit (flagged in ground.points and rpc.residuals)");
+  return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  return tpkit::run_tool(
+      "rpc-adjust", argc, argv,
+      [&](CLI::App& app) -> std::function<int()> {
+        auto o = std::make_shared<Opts>();
+        app.add_option("images", o->images, "the images (their RPCs: tag 50844 or a sidecar beside them)");
+        app.add_option("--tracks", o->tracks, "tracks files (any number of views >= 2 each)");
+        app.add_option("--check", o->check, "held-out tracks files: evaluated, not used in the fit");
+        app.add_option("--model", o->model, "bias model: shift, drift or affine");
+        app.add_option("--fixed", o->fixed, "an image whose model is kept (repeatable)");
+        app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
+        app.add_option("--height-prior", o->height_prior, "H+-S: height prior of every ground point (m)");
+        app.add_option("--dem", o->dem, "GeoTIFF DEM (EPSG:4326, m above the ellipsoid): height prior");
+        app.add_option("--dem-sigma", o->dem_sigma, "sigma of the DEM heights (m)")->check(Positive);
+        app.add_option("--crs", o->crs, "ground.points coordinates: geographic, utm or ecef");
+        app.add_option("--loss", o->loss, "Huber loss scale (px)")->check(Positive);
+        app.add_option("--flag", o->flag, "flag tracks whose RMS after the fit exceeds this (px)")->check(Positive);
+        app.add_option("--prior-shift", o->prior_shift, "sigma of the shift terms' prior (px)")->check(Positive);
+        app.add_option("--prior-linear", o->prior_linear, "sigma of the linear terms' prior (px per px)")->check(Positive);
+        app.add_option("--iterations", o->iterations, "largest number of solver iterations")->check(Positive);
+        app.add_option("--threads", o->threads, "threads");
+        app.add_flag("--write-tiff", o->write_tiff, "also write a copy of each image with the adjusted tag 50844");
+        app.add_option("-o,--out", o->out, "output folder (created if needed)");
+        return [o]() { return run(*o); };
+      },
+      tpkit_man_page);
+}
