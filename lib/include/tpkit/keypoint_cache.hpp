@@ -32,4 +32,11 @@ void save_keypoints(const std::string& path, const std::string& identity, const 
 Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int threads, const std::string& dir,
                              Progress* progress = nullptr, bool* from_cache = nullptr);
 
+// Region runs (tp-match --region): the keypoints of some tiles of the global detection grid
+// (detect_sift_tile_set with the whole image's stretch `st`), each tile kept in its own cache file
+// whose identity is the image's plus " tile=INDEX stretch=LO,HI", so that jobs on neighbouring regions
+// that share the folder detect each tile once. `cached_tiles` (may be null) counts the tiles loaded.
+Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
+                                   int threads, const std::string& dir, long* cached_tiles = nullptr);
+
 }  // namespace tpkit

@@ -13,6 +13,7 @@
 
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
+#include "tpkit/text_table.hpp"
 #include "tpkit/tool_support.hpp"
 
 namespace tpkit {
@@ -41,10 +42,22 @@ std::string keypoint_cache_identity(const ImageSource& src, const SiftOptions& o
   return s.str();
 }
 
-std::string keypoint_cache_path(const std::string& dir, const ImageSource& src, const SiftOptions& o) {
+namespace {
+std::string cache_path_of(const std::string& dir, const ImageSource& src, const std::string& identity) {
   char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a(keypoint_cache_identity(src, o))));
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fnv1a(identity)));
   return (std::filesystem::path(dir) / (std::filesystem::path(src.path).filename().string() + "." + hex + ".sift")).string();
+}
+
+void create_cache_dir(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(dir + ": cannot create the keypoint cache folder: " + ec.message());
+}
+}  // namespace
+
+std::string keypoint_cache_path(const std::string& dir, const ImageSource& src, const SiftOptions& o) {
+  return cache_path_of(dir, src, keypoint_cache_identity(src, o));
 }
 
 namespace {
@@ -150,9 +163,8 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
                              Progress* progress, bool* from_cache) {
   if (from_cache) *from_cache = false;
   if (dir.empty()) return detect_sift_tiles(src, o, threads, progress);
+  create_cache_dir(dir);
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError(dir + ": cannot create the keypoint cache folder: " + ec.message());
   const std::string identity = keypoint_cache_identity(src, o);
   const std::string path = keypoint_cache_path(dir, src, o);
   Keypoints K;
@@ -165,6 +177,37 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
   K = detect_sift_tiles(src, o, threads, progress);
   save_keypoints(path, identity, K);
   return K;
+}
+
+Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
+                                   int threads, const std::string& dir, long* cached_tiles) {
+  if (cached_tiles) *cached_tiles = 0;
+  if (dir.empty()) return detect_sift_tile_set(src, o, st, tiles, threads);
+  create_cache_dir(dir);
+  const std::string base = keypoint_cache_identity(src, o) + " stretch=" + format_number(st.lo) + "," + format_number(st.hi);
+  std::vector<Keypoints> per_tile(tiles.size());
+  std::vector<Tile> missing;
+  std::vector<size_t> missing_at;
+  std::vector<std::string> identity(tiles.size()), path(tiles.size());
+  for (size_t t = 0; t < tiles.size(); ++t) {
+    identity[t] = base + " tile=" + std::to_string(tiles[t].index);
+    path[t] = cache_path_of(dir, src, identity[t]);
+    if (load_keypoints(path[t], identity[t], per_tile[t])) {
+      if (cached_tiles) ++*cached_tiles;
+      continue;
+    }
+    std::error_code ec;
+    if (std::filesystem::exists(path[t], ec))
+      warn(path[t] + ": keypoint cache entry unusable (truncated, corrupt or of other options): detecting again");
+    missing.push_back(tiles[t]);
+    missing_at.push_back(t);
+  }
+  std::vector<Keypoints> found = detect_tiles_ranked(src, o, st, missing, threads);
+  for (size_t k = 0; k < missing.size(); ++k) {
+    save_keypoints(path[missing_at[k]], identity[missing_at[k]], found[k]);
+    per_tile[missing_at[k]] = std::move(found[k]);
+  }
+  return gather_tiles(std::move(per_tile), tiles, st);
 }
 
 }  // namespace tpkit

@@ -20,7 +20,7 @@ std::string detector_tag(const SiftOptions& o, const ImageSource& src) {
   s << "opencv-sift " << CV_VERSION << " band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
     << " max_per_tile=" << o.max_per_tile << " contrast=" << format_number(o.contrast) << " edge=" << format_number(o.edge)
     << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " stretch=" << format_number(o.stretch_lo)
-    << "," << format_number(o.stretch_hi);
+    << "," << format_number(o.stretch_hi) << " ids=tile-rank";
   if (src.nodata) s << " nodata=" << format_number(*src.nodata);
   if (!src.mask.empty()) s << " mask=" << src.mask;
   return s.str();
@@ -90,38 +90,84 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
 }
 }  // namespace
 
-Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int threads, Progress* progress) {
+namespace {
+// The order of keypoints within a tile (their rank: the id's low digits) and within a band of tiles.
+bool keypoint_before(const cv::KeyPoint& p, const cv::KeyPoint& q) {
+  if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;
+  if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
+  if (p.size != q.size) return p.size < q.size;
+  if (p.angle != q.angle) return p.angle < q.angle;
+  if (p.response != q.response) return p.response < q.response;
+  return p.octave < q.octave;
+}
+
+// One tile's keypoints in their rank order, with their ids.
+Keypoints ranked_tile(TileResult r, const Tile& t, const std::string& path) {
+  std::vector<int> order(r.kp.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return keypoint_before(r.kp[a], r.kp[b]); });
+  if (static_cast<long long>(order.size()) >= kIdsPerTile)
+    throw InputError(path, 0, "detection tile " + std::to_string(t.index) + " holds more than " + std::to_string(kIdsPerTile) + " keypoints");
   Keypoints K;
-  K.stretch = percentile_stretch(src, o.stretch_lo, o.stretch_hi);
-  std::vector<Tile> tiles = tile_grid(src.info.width, src.info.height, o.tile, o.overlap);
-  K.tiles = static_cast<long>(tiles.size());
-  std::vector<TileResult> res(tiles.size());
+  K.kp.reserve(order.size());
+  K.id.reserve(order.size());
+  K.desc.create(static_cast<int>(order.size()), 128, CV_8U);
+  for (size_t j = 0; j < order.size(); ++j) {
+    K.kp.push_back(r.kp[order[j]]);
+    std::memcpy(K.desc.ptr<uint8_t>(static_cast<int>(j)), r.desc.ptr<uint8_t>(order[j]), 128);
+    K.id.push_back(static_cast<long long>(t.index) * kIdsPerTile + static_cast<long long>(j));
+  }
+  return K;
+}
+}  // namespace
+
+std::vector<Tile> tiles_meeting(const std::vector<Tile>& grid, double x0, double y0, double x1, double y1) {
+  std::vector<Tile> out;
+  for (const Tile& t : grid)
+    if (t.cx1 - 0.5 > x0 && t.cx0 - 0.5 < x1 && t.cy1 - 0.5 > y0 && t.cy0 - 0.5 < y1) out.push_back(t);
+  return out;
+}
+
+Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int threads, Progress* progress) {
+  const Stretch st = percentile_stretch(src, o.stretch_lo, o.stretch_hi);
+  return detect_sift_tile_set(src, o, st, tile_grid(src.info.width, src.info.height, o.tile, o.overlap), threads, progress);
+}
+
+std::vector<Keypoints> detect_tiles_ranked(const ImageSource& src, const SiftOptions& o, const Stretch& st,
+                                           const std::vector<Tile>& tiles, int threads, Progress* progress) {
+  std::vector<Keypoints> res(tiles.size());
   threads = std::max(1, threads);
-  // Tile rows one at a time: the row's band of the image (full width, with the overlaps) is read once
-  // and the row's tiles are cut from it, so that a file stored in strips is decoded once per row, not
-  // once per tile (a 10000-pixel-wide strip image would otherwise be decoded ten times over).
+  // Tile rows one at a time: the row's band of the image (the columns its tiles read, with the overlaps)
+  // is read once and the row's tiles are cut from it, so that a file stored in strips is decoded once per
+  // row, not once per tile (a 10000-pixel-wide strip image would otherwise be decoded ten times over).
   for (size_t r0 = 0; r0 < tiles.size();) {
     size_t r1 = r0;
-    long ya = tiles[r0].ry0, yb = tiles[r0].ry1;
+    long ya = tiles[r0].ry0, yb = tiles[r0].ry1, xa = tiles[r0].rx0, xb = tiles[r0].rx1;
     while (r1 < tiles.size() && tiles[r1].cy0 == tiles[r0].cy0) {
-      ya = std::min(ya, tiles[r1].ry0);
-      yb = std::max(yb, tiles[r1].ry1);
+      ya = std::min(ya, tiles[r1].ry0), yb = std::max(yb, tiles[r1].ry1);
+      xa = std::min(xa, tiles[r1].rx0), xb = std::max(xb, tiles[r1].rx1);
       ++r1;
     }
-    const Raster band = read_valid_region(src, 0, ya, src.info.width, yb - ya);
+    const Raster band = read_valid_region(src, xa, ya, xb - xa, yb - ya);
     const int workers = std::min<int>(threads, static_cast<int>(r1 - r0));
     // OpenCV parallelises inside each tile on its own pool, sized once per process (opencv_threads.hpp)
     parallel_for(r1 - r0, workers, [&](size_t k) {
-      res[r0 + k] = detect_tile(src, band, o, K.stretch, tiles[r0 + k]);
+      res[r0 + k] = ranked_tile(detect_tile(src, band, o, st, tiles[r0 + k]), tiles[r0 + k], src.path);
       if (progress) progress->add(1);
     });
     r0 = r1;
   }
+  return res;
+}
 
+Keypoints gather_tiles(std::vector<Keypoints> res, const std::vector<Tile>& tiles, const Stretch& st) {
   // Gather into the stable order. Tile cores split the rows into bands, so sorting by y first never
   // mixes two bands: gather band by band and free each band's tiles once copied. The output is
   // allocated once at its final size; the allocator maps it lazily, so resident memory grows as the
   // tiles shrink and peaks near one copy of the keypoints, not two.
+  Keypoints K;
+  K.stretch = st;
+  K.tiles = static_cast<long>(tiles.size());
   size_t total = 0;
   for (const auto& r : res) total += r.kp.size();
   K.kp.reserve(total);
@@ -140,23 +186,25 @@ Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int th
       for (int r = 0; r < static_cast<int>(res[t].kp.size()); ++r) refs.push_back({t, r});
     std::sort(refs.begin(), refs.end(), [&](const Ref& a, const Ref& b) {
       const cv::KeyPoint &p = res[a.tile].kp[a.row], &q = res[b.tile].kp[b.row];
-      if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;
-      if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
-      if (p.size != q.size) return p.size < q.size;
-      if (p.angle != q.angle) return p.angle < q.angle;
-      if (p.response != q.response) return p.response < q.response;
-      return p.octave < q.octave;
+      if (keypoint_before(p, q)) return true;
+      if (keypoint_before(q, p)) return false;
+      return res[a.tile].id[a.row] < res[b.tile].id[b.row];
     });
     for (const Ref& r : refs) {
       const int i = static_cast<int>(K.kp.size());
       K.kp.push_back(res[r.tile].kp[r.row]);
       std::memcpy(K.desc.ptr<uint8_t>(i), res[r.tile].desc.ptr<uint8_t>(r.row), 128);
-      K.id.push_back(static_cast<long long>(i));
+      K.id.push_back(res[r.tile].id[r.row]);
     }
-    for (size_t t = t0; t < t1; ++t) res[t] = TileResult{};
+    for (size_t t = t0; t < t1; ++t) res[t] = Keypoints{};
     t0 = t1;
   }
   return K;
+}
+
+Keypoints detect_sift_tile_set(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
+                               int threads, Progress* progress) {
+  return gather_tiles(detect_tiles_ranked(src, o, st, tiles, threads, progress), tiles, st);
 }
 
 }  // namespace tpkit

@@ -1,0 +1,89 @@
+// The job list of a scaled-out tie-point run (tp-plan): overlapping pairs of a list of images, each
+// pair split into regions of image 1, written for three engines that schedule it -- make -j, GNU
+// parallel, Slurm job arrays -- with no scheduler of our own.
+//
+// Stages (every job is one shell command line; every path absolute and single-quoted, so names with
+// spaces or quotes are safe; outputs under the work folder, which must be shared by all machines):
+//   geometry  per pair:   tp-match --write-geometry WORK/geometry/pair-I-J.geometry IMG_I IMG_J
+//   tiles     per region: tp-match --geometry ... --region X0 Y0 W H --cache WORK/cache
+//                         -o WORK/tiles/pair-I-J/tile-K.matches IMG_I IMG_J
+//   merge     per pair:   tp-merge -o WORK/pairs/pair-I-J.matches WORK/tiles/pair-I-J/tile-*.matches
+//   chain     once:       tp-chain --images IMG... -o WORK/tracks.tracks WORK/pairs/*.matches
+// I, J, K count from 1 (I < J, in list order; regions row-major over image 1).
+//
+// Pairs: two images are paired when their footprints overlap. A footprint is the image's ground
+// outline (longitude, latitude in degrees); image_footprint() gives none today (the RPC footprints of
+// component rpc go there), and an image without a footprint is paired with every image of the list.
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tpkit {
+
+struct Footprint {
+  std::vector<std::array<double, 2>> lonlat;  // outline, degrees
+};
+
+struct PlanImage {
+  std::string path;  // absolute
+  long width = 0, height = 0;
+  std::optional<Footprint> footprint;
+};
+
+// The footprint of an image, when one can be known. Today: none (see above).
+std::optional<Footprint> image_footprint(const std::string& path);
+// True when the footprints' longitude/latitude boxes meet, or when either is unknown.
+bool footprints_may_overlap(const PlanImage& a, const PlanImage& b);
+
+struct PlanOptions {
+  long tile = 2048;                       // region size, image-1 pixels
+  long overlap = 0;                       // regions grown by this on every side (duplicates merged)
+  int threads = 1;                        // tp-match --threads of a job (and Slurm --cpus-per-task)
+  std::string work;                       // shared work folder, absolute
+  std::string bin;                        // folder of the tpkit tools; empty = found on PATH
+  std::vector<std::string> match_args;    // more tp-match arguments, for every tp-match job
+};
+
+struct PlanJob {
+  std::string target;                     // output, relative to the work folder
+  std::vector<std::string> depends;       // targets it needs, relative to the work folder
+  std::string command;                    // one shell command line
+};
+
+struct Plan {
+  std::vector<std::array<size_t, 2>> pairs;  // 0-based image indices
+  std::vector<PlanJob> geometry, tiles, merge, chain;
+};
+
+// Image sizes read from the files; throws InputError for an unreadable image, UsageError for fewer
+// than two images or no overlapping pair.
+std::vector<PlanImage> plan_images(const std::vector<std::string>& paths);
+Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o);
+
+// The regions [x0, y0, w, h] of a width x height image: a grid of tile-sized cells (the last ones
+// shorter) grown by overlap, clipped.
+std::vector<std::array<long, 4>> plan_regions(long width, long height, long tile, long overlap);
+
+// 'text' for a POSIX shell ('\'' for a quote). Throws UsageError for a newline or NUL in it.
+std::string shell_quote(const std::string& text);
+
+// The engines' files, as text:
+// Makefile fragment: targets relative to the work folder, `make -C WORK -f plan.mk -j N` ($ doubled).
+std::string plan_makefile(const Plan& p);
+// A GNU parallel job file: one command a line (`parallel < FILE`).
+std::string plan_job_file(const std::vector<PlanJob>& jobs);
+// The Slurm array job: runs line $SLURM_ARRAY_TASK_ID of the job file named by its argument.
+std::string plan_sbatch_script();
+// Submits the four stages as job arrays, each after the previous (afterok); --wait waits for the last.
+std::string plan_slurm_submit(const Plan& p, const PlanOptions& o);
+// Runs the four job files with GNU parallel, stage after stage; arguments go to parallel.
+std::string plan_parallel_runner(const PlanOptions& o);
+
+// Writes WORK/plan.mk, WORK/jobs/{geometry,tiles,merge,chain}.jobs, WORK/slurm-array.sbatch,
+// WORK/submit-slurm.sh, WORK/run-parallel.sh and the output folders (cache, geometry, tiles/pair-I-J,
+// pairs, logs), all in the run's output transaction.
+void write_plan(const Plan& p, const PlanOptions& o);
+
+}  // namespace tpkit

@@ -1,0 +1,109 @@
+#include "tpkit/match_region.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "tpkit/error.hpp"
+#include "tpkit/keypoint_cache.hpp"
+#include "tpkit/text_table.hpp"
+
+namespace tpkit {
+
+namespace {
+
+// The keypoints of K at positions inside [x0, x1) x [y0, y1) (order and ids kept).
+Keypoints keypoints_in(const Keypoints& K, const std::array<double, 4>& w) {
+  Keypoints out;
+  out.stretch = K.stretch;
+  out.tiles = K.tiles;
+  std::vector<int> keep;
+  for (int i = 0; i < static_cast<int>(K.kp.size()); ++i) {
+    const cv::Point2f p = K.kp[static_cast<size_t>(i)].pt;
+    if (p.x >= w[0] && p.x < w[2] && p.y >= w[1] && p.y < w[3]) keep.push_back(i);
+  }
+  out.desc.create(static_cast<int>(keep.size()), 128, CV_8U);
+  for (size_t j = 0; j < keep.size(); ++j) {
+    out.kp.push_back(K.kp[static_cast<size_t>(keep[j])]);
+    out.id.push_back(K.id[static_cast<size_t>(keep[j])]);
+    K.desc.row(keep[j]).copyTo(out.desc.row(static_cast<int>(j)));
+  }
+  return out;
+}
+
+std::array<double, 4> clipped(const std::array<double, 4>& w, const ImageSource& s) {
+  return {std::max(-0.5, w[0]), std::max(-0.5, w[1]), std::min(s.info.width - 0.5, w[2]), std::min(s.info.height - 0.5, w[3])};
+}
+
+// Detects the tiles of `s` meeting window w (pixel-centre coordinates) and keeps the keypoints inside it.
+Keypoints window_keypoints(const ImageSource& s, const PairMatchOptions& o, const Stretch& st, const std::array<double, 4>& w,
+                           long* tiles, long* cached) {
+  const std::vector<Tile> grid = tile_grid(s.info.width, s.info.height, o.sift.tile, o.sift.overlap);
+  const std::vector<Tile> need = tiles_meeting(grid, w[0], w[1], w[2], w[3]);
+  *tiles = static_cast<long>(need.size());
+  return keypoints_in(detect_sift_tiles_cached(s, o.sift, st, need, o.threads, o.cache_dir, cached), w);
+}
+
+}  // namespace
+
+Matches matches_in_window(const Matches& M, const std::array<long, 4>& win) {
+  const double x0 = win[0] - 0.5, y0 = win[1] - 0.5, x1 = x0 + win[2], y1 = y0 + win[3];
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index k = 0; k < M.xy.rows(); ++k)
+    if (M.xy(k, 0) >= x0 && M.xy(k, 0) < x1 && M.xy(k, 1) >= y0 && M.xy(k, 1) < y1) keep.push_back(k);
+  Matches out = M;
+  out.id1.clear();
+  out.id2.clear();
+  out.line.clear();
+  out.xy.resize(static_cast<Eigen::Index>(keep.size()), 4);
+  out.extra.values.resize(static_cast<Eigen::Index>(keep.size()), M.extra.values.cols());
+  for (size_t j = 0; j < keep.size(); ++j) {
+    const Eigen::Index k = keep[j], r = static_cast<Eigen::Index>(j);
+    out.id1.push_back(M.id1[static_cast<size_t>(k)]);
+    out.id2.push_back(M.id2[static_cast<size_t>(k)]);
+    out.xy.row(r) = M.xy.row(k);
+    if (M.extra.values.cols() > 0) out.extra.values.row(r) = M.extra.values.row(k);
+    if (!M.line.empty()) out.line.push_back(M.line[static_cast<size_t>(k)]);
+  }
+  return out;
+}
+
+Matches match_region(const ImageSource& a, const ImageSource& b, const PairGeometry& G, const PairMatchOptions& o,
+                     const RegionOptions& r, PairMatchStats* stats, RegionStats* rstats) {
+  const auto& w = r.window;
+  if (w[2] <= 0 || w[3] <= 0) throw UsageError("--region: width and height must be > 0");
+  if (w[0] < 0 || w[1] < 0 || w[0] + w[2] > a.info.width || w[1] + w[3] > a.info.height)
+    throw UsageError("--region " + std::to_string(w[0]) + " " + std::to_string(w[1]) + " " + std::to_string(w[2]) + " " +
+                     std::to_string(w[3]) + " is not inside " + a.path + " (" + std::to_string(a.info.width) + "x" +
+                     std::to_string(a.info.height) + ")");
+  const auto t0 = std::chrono::steady_clock::now();
+  RegionStats rs;
+  PairMatchStats st;
+  const std::array<double, 4> grown1 =
+      clipped({w[0] - 0.5 - r.margin, w[1] - 0.5 - r.margin, w[0] + w[2] - 0.5 + r.margin, w[1] + w[3] - 0.5 + r.margin}, a);
+  Keypoints K1 = window_keypoints(a, o, G.stretch1, grown1, &rs.tiles1, &rs.cached_tiles1);
+  rs.window2 = clipped(image2_window(G, grown1, r.margin), b);
+  Keypoints K2;
+  if (rs.window2[0] < rs.window2[2] && rs.window2[1] < rs.window2[3])
+    K2 = window_keypoints(b, o, G.stretch2, rs.window2, &rs.tiles2, &rs.cached_tiles2);
+  const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  Matches all = match_keypoints(a, b, std::move(K1), std::move(K2), o, &st);
+  rs.matched = static_cast<long>(all.size());
+  Matches M = matches_in_window(all, w);
+  st.seconds[0] = detect_s;
+  st.cached1 = rs.tiles1 > 0 && rs.cached_tiles1 == rs.tiles1;
+  st.cached2 = rs.tiles2 > 0 && rs.cached_tiles2 == rs.tiles2;
+  meta_set(M.meta, "region", std::to_string(w[0]) + " " + std::to_string(w[1]) + " " + std::to_string(w[2]) + " " +
+                                 std::to_string(w[3]) + " (x0 y0 width height, image1 pixels; margin " + format_number(r.margin) +
+                                 " px: " + std::to_string(rs.matched) + " matches of the grown window, " +
+                                 std::to_string(M.size()) + " in the region)");
+  meta_set(M.meta, "region-read", std::to_string(rs.tiles1) + " detection tiles of image1, " + std::to_string(rs.tiles2) +
+                                      " of image2 in x " + format_number(std::round(rs.window2[0])) + ".." +
+                                      format_number(std::round(rs.window2[2])) + " y " + format_number(std::round(rs.window2[1])) +
+                                      ".." + format_number(std::round(rs.window2[3])));
+  if (stats) *stats = st;
+  if (rstats) *rstats = rs;
+  return M;
+}
+
+}  // namespace tpkit

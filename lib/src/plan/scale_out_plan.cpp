@@ -1,0 +1,217 @@
+#include "tpkit/scale_out_plan.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/image_io.hpp"
+
+namespace tpkit {
+
+namespace fs = std::filesystem;
+
+std::optional<Footprint> image_footprint(const std::string&) {
+  // The ground outline from the image's RPC (component rpc: localize the image corners at the
+  // heights of the scene) goes here. Until then no image has a footprint: every pair is planned.
+  return std::nullopt;
+}
+
+bool footprints_may_overlap(const PlanImage& a, const PlanImage& b) {
+  if (!a.footprint || !b.footprint || a.footprint->lonlat.empty() || b.footprint->lonlat.empty()) return true;
+  auto box = [](const Footprint& f) {
+    std::array<double, 4> r{1e300, 1e300, -1e300, -1e300};
+    for (const auto& p : f.lonlat)
+      r = {std::min(r[0], p[0]), std::min(r[1], p[1]), std::max(r[2], p[0]), std::max(r[3], p[1])};
+    return r;
+  };
+  const auto p = box(*a.footprint), q = box(*b.footprint);
+  return p[0] <= q[2] && q[0] <= p[2] && p[1] <= q[3] && q[1] <= p[3];
+}
+
+std::vector<PlanImage> plan_images(const std::vector<std::string>& paths) {
+  if (paths.size() < 2) throw UsageError("tp-plan needs two images or more, got " + std::to_string(paths.size()));
+  std::vector<PlanImage> out;
+  for (const auto& p : paths) {
+    shell_quote(p);  // refuses a newline
+    const ImageInfo info = image_info(p);
+    std::error_code ec;
+    const fs::path abs = fs::absolute(p, ec).lexically_normal();
+    for (const auto& q : out)
+      if (q.path == abs.string()) throw UsageError("the image " + p + " is listed twice");
+    out.push_back({abs.string(), info.width, info.height, image_footprint(p)});
+  }
+  return out;
+}
+
+std::vector<std::array<long, 4>> plan_regions(long width, long height, long tile, long overlap) {
+  std::vector<std::array<long, 4>> out;
+  for (long y = 0; y < height; y += tile)
+    for (long x = 0; x < width; x += tile) {
+      const long x0 = std::max(0L, x - overlap), y0 = std::max(0L, y - overlap);
+      const long x1 = std::min(width, x + tile + overlap), y1 = std::min(height, y + tile + overlap);
+      out.push_back({x0, y0, x1 - x0, y1 - y0});
+    }
+  return out;
+}
+
+std::string shell_quote(const std::string& text) {
+  if (text.find('\n') != std::string::npos || text.find('\r') != std::string::npos || text.find('\0') != std::string::npos)
+    throw UsageError("a path with a line break cannot go into a job file: " + text.substr(0, text.find_first_of("\r\n")) + "...");
+  std::string q = "'";
+  for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+namespace {
+
+std::string pair_name(const std::array<size_t, 2>& p) {
+  return "pair-" + std::to_string(p[0] + 1) + "-" + std::to_string(p[1] + 1);
+}
+
+std::string tool(const PlanOptions& o, const std::string& name) {
+  return o.bin.empty() ? name : shell_quote((fs::path(o.bin) / name).string());
+}
+
+std::string in_work(const PlanOptions& o, const std::string& rel) { return shell_quote((fs::path(o.work) / rel).string()); }
+
+std::string match_args(const PlanOptions& o) {
+  std::string s = " --threads " + std::to_string(o.threads);
+  for (const auto& a : o.match_args) s += " " + shell_quote(a);
+  return s;
+}
+
+}  // namespace
+
+Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
+  if (o.tile < 256) throw UsageError("--tile must be at least 256 pixels");
+  if (o.overlap < 0) throw UsageError("--overlap must be >= 0");
+  Plan p;
+  for (size_t i = 0; i < images.size(); ++i)
+    for (size_t j = i + 1; j < images.size(); ++j)
+      if (footprints_may_overlap(images[i], images[j])) p.pairs.push_back({i, j});
+  if (p.pairs.empty()) throw UsageError("no two images of the list overlap");
+  const std::string quiet = " -q";
+  std::vector<std::string> pair_files;
+  for (const auto& pr : p.pairs) {
+    const PlanImage &a = images[pr[0]], &b = images[pr[1]];
+    const std::string name = pair_name(pr), geo = "geometry/" + name + ".geometry";
+    const std::string imgs = " " + shell_quote(a.path) + " " + shell_quote(b.path);
+    p.geometry.push_back({geo, {}, tool(o, "tp-match") + quiet + match_args(o) + " --write-geometry " + in_work(o, geo) + imgs});
+    PlanJob merge{"pairs/" + name + ".matches", {}, tool(o, "tp-merge") + quiet + " -o " + in_work(o, "pairs/" + name + ".matches")};
+    const auto regions = plan_regions(a.width, a.height, o.tile, o.overlap);
+    for (size_t k = 0; k < regions.size(); ++k) {
+      const auto& r = regions[k];
+      const std::string out = "tiles/" + name + "/tile-" + std::to_string(k + 1) + ".matches";
+      p.tiles.push_back({out, {geo},
+                         tool(o, "tp-match") + quiet + match_args(o) + " --geometry " + in_work(o, geo) + " --region " +
+                             std::to_string(r[0]) + " " + std::to_string(r[1]) + " " + std::to_string(r[2]) + " " +
+                             std::to_string(r[3]) + " --cache " + in_work(o, "cache") + " -o " + in_work(o, out) + imgs});
+      merge.depends.push_back(out);
+      merge.command += " " + in_work(o, out);
+    }
+    pair_files.push_back(merge.target);
+    p.merge.push_back(merge);
+  }
+  PlanJob chain{"tracks.tracks", pair_files, tool(o, "tp-chain") + quiet + " --images"};
+  for (const auto& im : images) chain.command += " " + shell_quote(im.path);
+  chain.command += " -o " + in_work(o, "tracks.tracks");
+  for (const auto& f : pair_files) chain.command += " " + in_work(o, f);
+  p.chain.push_back(chain);
+  return p;
+}
+
+std::string plan_makefile(const Plan& p) {
+  std::ostringstream s;
+  s << "# tpkit plan (tp-plan): make -C WORK -f plan.mk -j N\n"
+       "# Targets are relative to the work folder; every command line is the job files' own.\n"
+       ".PHONY: tpkit-all\n"
+       ".DELETE_ON_ERROR:\n"
+       "tpkit-all: tracks.tracks\n";
+  auto dollars = [](const std::string& c) {
+    std::string r;
+    for (char ch : c) r += ch == '$' ? std::string("$$") : std::string(1, ch);
+    return r;
+  };
+  for (const auto* stage : {&p.geometry, &p.tiles, &p.merge, &p.chain})
+    for (const PlanJob& j : *stage) {
+      s << j.target << ":";
+      for (const auto& d : j.depends) s << " " << d;
+      s << "\n\t" << dollars(j.command) << "\n";
+    }
+  return s.str();
+}
+
+std::string plan_job_file(const std::vector<PlanJob>& jobs) {
+  std::string s;
+  for (const PlanJob& j : jobs) s += j.command + "\n";
+  return s;
+}
+
+std::string plan_sbatch_script() {
+  return "#!/bin/bash\n"
+         "# tpkit plan (tp-plan): one job of a job array runs line $SLURM_ARRAY_TASK_ID of the job file $1.\n"
+         "# Submitted by submit-slurm.sh: sbatch --array=1-N slurm-array.sbatch JOBFILE\n"
+         "set -euo pipefail\n"
+         "line=$(sed -n \"${SLURM_ARRAY_TASK_ID}p\" \"$1\")\n"
+         "if [ -z \"$line\" ]; then echo \"no job ${SLURM_ARRAY_TASK_ID} in $1\" >&2; exit 1; fi\n"
+         "exec bash -c \"$line\"\n";
+}
+
+std::string plan_slurm_submit(const Plan& p, const PlanOptions& o) {
+  std::ostringstream s;
+  s << "#!/bin/bash\n"
+       "# tpkit plan (tp-plan): submits the stages geometry, tiles, merge, chain as Slurm job arrays, each\n"
+       "# after the previous one succeeded (afterok). Usage: bash submit-slurm.sh [--wait] [SBATCH OPTIONS...]\n"
+       "# The sbatch options go to every stage; --wait returns when the last stage ends, with its status.\n"
+       "# Prints each stage's job id.\n"
+       "set -euo pipefail\n"
+       "W=" << shell_quote(o.work) << "\n"
+       "wait=()\n"
+       "if [ \"${1:-}\" = --wait ]; then wait=(--wait); shift; fi\n"
+       "opts=(\"$@\")\n"
+       "dep=()\n"
+       "submit() {  # STAGE JOBS [--wait]\n"
+       "  local id\n"
+       "  id=$(sbatch --parsable \"${@:3}\" \"${dep[@]}\" \"${opts[@]}\" --job-name=\"tpkit-$1\" --array=\"1-$2\" \\\n"
+       "       --cpus-per-task=" << o.threads << " --output=\"$W/logs/$1-%a.log\" \"$W/slurm-array.sbatch\" \"$W/jobs/$1.jobs\")\n"
+       "  id=${id%%;*}\n"
+       "  echo \"$1 $id\"\n"
+       "  dep=(--dependency=\"afterok:$id\")\n"
+       "}\n"
+    << "submit geometry " << p.geometry.size() << "\n"
+    << "submit tiles " << p.tiles.size() << "\n"
+    << "submit merge " << p.merge.size() << "\n"
+    << "submit chain " << p.chain.size() << " \"${wait[@]}\"\n";
+  return s.str();
+}
+
+std::string plan_parallel_runner(const PlanOptions& o) {
+  return "#!/bin/bash\n"
+         "# tpkit plan (tp-plan): runs the stages with GNU parallel, one after the other.\n"
+         "# Usage: bash run-parallel.sh [PARALLEL OPTIONS...]   (e.g. -j 8, --sshloginfile FILE)\n"
+         "set -euo pipefail\n"
+         "W=" +
+         shell_quote(o.work) +
+         "\n"
+         "for s in geometry tiles merge chain; do\n"
+         "  parallel --halt now,fail=1 --joblog \"$W/logs/parallel-$s.joblog\" \"$@\" < \"$W/jobs/$s.jobs\"\n"
+         "done\n";
+}
+
+void write_plan(const Plan& p, const PlanOptions& o) {
+  const fs::path W(o.work);
+  for (const char* d : {"", "jobs", "cache", "geometry", "tiles", "pairs", "logs"}) create_output_dir((W / d).string());
+  for (const auto& pr : p.pairs) create_output_dir((W / "tiles" / pair_name(pr)).string());
+  write_file_atomic((W / "plan.mk").string(), plan_makefile(p));
+  write_file_atomic((W / "jobs/geometry.jobs").string(), plan_job_file(p.geometry));
+  write_file_atomic((W / "jobs/tiles.jobs").string(), plan_job_file(p.tiles));
+  write_file_atomic((W / "jobs/merge.jobs").string(), plan_job_file(p.merge));
+  write_file_atomic((W / "jobs/chain.jobs").string(), plan_job_file(p.chain));
+  write_file_atomic((W / "slurm-array.sbatch").string(), plan_sbatch_script());
+  write_file_atomic((W / "submit-slurm.sh").string(), plan_slurm_submit(p, o));
+  write_file_atomic((W / "run-parallel.sh").string(), plan_parallel_runner(o));
+}
+
+}  // namespace tpkit

@@ -1,0 +1,34 @@
+# tp-match --region / --write-geometry and tp-merge: a pair split into four regions, merged, against
+# the whole run (same ids and positions for at least 99% of its matches, nothing invented); the
+# duplicates of overlapping regions; files of another pair refused; bad regions and geometries.
+set(_scene "tp-synth --out s --size 640 --seed 4 --threads 2 --supersample 1 >/dev/null")
+set(_regions "tp-match -q --write-geometry g s/view1.tif s/view2.tif && for r in '0 0 320 320' '320 0 320 320' '0 320 320 320' '320 320 320 320'; do set -- $r; tp-match -q --threads 2 --geometry g --region $r s/view1.tif s/view2.tif -o t-$1-$2.m || exit 1; done")
+set(_compare "awk 'FNR == 1 { f++ } /^#/ { next } f == 1 { w[$1 \" \" $4] = $2 \" \" $3 \" \" $5 \" \" $6; n++; next } { m++; k = $1 \" \" $4; if ((k in w) && w[k] == $2 \" \" $3 \" \" $5 \" \" $6) s++ } END { printf \"whole %d merged %d same %d\\n\", n, m, s; exit !(n > 1000 && s >= 0.99 * n && m <= 1.01 * n) }'")
+tpkit_tool_test(tp-merge.regions-equal-whole
+  COMMAND "${_scene} && tp-match -q --threads 2 s/view1.tif s/view2.tif -o whole.m && ${_regions} && tp-merge t-*.m -o merged.m && ${_compare} whole.m merged.m"
+  STDERR_MATCH "4 files, [0-9]+ records: 0 duplicates"
+  CHECK_FILE merged.m FILE_MATCH "# merged: 4 files")
+tpkit_tool_test(tp-merge.overlap-duplicates
+  COMMAND "${_scene} && tp-match -q --write-geometry g s/view1.tif s/view2.tif && tp-match -q --geometry g --region 0 0 400 640 s/view1.tif s/view2.tif -o a.m && tp-match -q --geometry g --region 240 0 400 640 s/view1.tif s/view2.tif -o b.m && tp-merge a.m b.m -o m.m && tp-match -q s/view1.tif s/view2.tif -o whole.m && ${_compare} whole.m m.m"
+  STDERR_MATCH "2 files, [0-9]+ records: [1-9][0-9]+ duplicates")
+tpkit_tool_test(tp-merge.other-pair
+  COMMAND "${_scene} && tp-match -q --write-geometry g s/view1.tif s/view2.tif && tp-match -q --geometry g --region 0 0 100 100 s/view1.tif s/view2.tif -o a.m && tp-match -q --region 0 0 100 100 s/view1.tif s/view3.tif -o b.m && tp-merge a.m b.m -o m.m"
+  EXPECT_FAIL STDERR_MATCH "b.m: is a matches file of s/view1.tif and s/view3.tif, not of" NO_FILE m.m)
+tpkit_tool_test(tp-merge.other-detector
+  COMMAND "${_scene} && tp-match -q --region 0 0 100 100 s/view1.tif s/view2.tif -o a.m && tp-match -q --tile 512 --region 0 0 100 100 s/view1.tif s/view2.tif -o b.m && tp-merge a.m b.m -o m.m"
+  EXPECT_FAIL STDERR_MATCH "detector1 differs" NO_FILE m.m)
+tpkit_tool_test(tp-match.region-outside
+  COMMAND "${_scene} && tp-match --region 600 0 100 100 s/view1.tif s/view2.tif -o a.m"
+  EXPECT_FAIL STDERR_MATCH "--region 600 0 100 100 is not inside s/view1.tif \\(640x640\\)" NO_FILE a.m)
+tpkit_tool_test(tp-match.region-not-a-number
+  COMMAND "${_scene} && tp-match --region 0 0 1e2 100 s/view1.tif s/view2.tif -o a.m"
+  EXPECT_FAIL STDERR_MATCH "whole pixels, got '1e2'" NO_FILE a.m)
+tpkit_tool_test(tp-match.geometry-other-pair
+  COMMAND "${_scene} && tp-synth --out t --size 320 --seed 1 --supersample 1 >/dev/null && tp-match -q --write-geometry g t/view1.tif t/view2.tif && tp-match --geometry g --region 0 0 100 100 s/view1.tif s/view2.tif -o a.m"
+  EXPECT_FAIL STDERR_MATCH "g: image1 is 320x320 in the geometry but s/view1.tif is 640x640" NO_FILE a.m)
+tpkit_tool_test(tp-match.geometry-without-region
+  COMMAND "${_scene} && tp-match -q --write-geometry g s/view1.tif s/view2.tif && tp-match --geometry g s/view1.tif s/view2.tif -o a.m"
+  EXPECT_FAIL STDERR_MATCH "--geometry goes with --region" NO_FILE a.m)
+tpkit_tool_test(tp-match.geometry-file
+  COMMAND "${_scene} && tp-match -q --write-geometry g s/view1.tif s/view2.tif"
+  CHECK_FILE g FILE_MATCH "^# tpkit geometry 1\n.*# image1: s/view1.tif 640 640\n.*# columns: a11 a12 a13 a21 a22 a23 spread lo1 hi1 lo2 hi2\n[-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+\n$")

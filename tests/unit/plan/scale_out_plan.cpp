@@ -1,0 +1,59 @@
+// tp-plan's pieces: shell quoting, regions, pairs from footprints, the jobs and the Makefile text.
+#include "tpkit/scale_out_plan.hpp"
+
+#include <gtest/gtest.h>
+
+#include "tpkit/error.hpp"
+
+using namespace tpkit;
+
+TEST(ScaleOutPlan, ShellQuote) {
+  EXPECT_EQ(shell_quote("a b"), "'a b'");
+  EXPECT_EQ(shell_quote("it's"), "'it'\\''s'");
+  EXPECT_EQ(shell_quote("$x `y` \"z\""), "'$x `y` \"z\"'");
+  EXPECT_THROW(shell_quote("a\nb"), UsageError);
+}
+
+TEST(ScaleOutPlan, RegionsCoverTheImage) {
+  const auto r = plan_regions(1000, 600, 400, 0);
+  ASSERT_EQ(r.size(), 6u);  // 3 x 2
+  EXPECT_EQ(r[2], (std::array<long, 4>{800, 0, 200, 400}));
+  EXPECT_EQ(r[5], (std::array<long, 4>{800, 400, 200, 200}));
+  const auto o = plan_regions(1000, 600, 400, 16);
+  EXPECT_EQ(o[4], (std::array<long, 4>{384, 384, 432, 216}));
+}
+
+TEST(ScaleOutPlan, PairsFromFootprints) {
+  PlanImage a{"/a", 10, 10, std::nullopt}, b{"/b", 10, 10, Footprint{{{{0, 0}}, {{1, 1}}}}},
+      c{"/c", 10, 10, Footprint{{{{2, 2}}, {{3, 3}}}}}, d{"/d", 10, 10, Footprint{{{{0.5, 0.5}}, {{2.5, 2.5}}}}};
+  EXPECT_TRUE(footprints_may_overlap(a, b));  // unknown footprint: paired
+  EXPECT_FALSE(footprints_may_overlap(b, c));
+  EXPECT_TRUE(footprints_may_overlap(b, d));
+  PlanOptions o;
+  o.work = "/w d";
+  o.tile = 256;
+  const Plan p = make_plan({b, c, d}, o);
+  ASSERT_EQ(p.pairs.size(), 2u);  // (b, d), (c, d)
+  EXPECT_EQ(p.pairs[0], (std::array<size_t, 2>{0, 2}));
+  EXPECT_EQ(p.pairs[1], (std::array<size_t, 2>{1, 2}));
+  EXPECT_EQ(p.geometry.size(), 2u);
+  EXPECT_EQ(p.tiles.size(), 2u);
+  EXPECT_EQ(p.tiles[1].command,
+            "tp-match -q --threads 1 --geometry '/w d/geometry/pair-2-3.geometry' --region 0 0 10 10 --cache '/w d/cache' "
+            "-o '/w d/tiles/pair-2-3/tile-1.matches' '/c' '/d'");
+  EXPECT_EQ(p.merge[0].depends, (std::vector<std::string>{"tiles/pair-1-3/tile-1.matches"}));
+  EXPECT_EQ(p.chain[0].command,
+            "tp-chain -q --images '/b' '/c' '/d' -o '/w d/tracks.tracks' '/w d/pairs/pair-1-3.matches' '/w d/pairs/pair-2-3.matches'");
+}
+
+TEST(ScaleOutPlan, MakefileDoublesDollars) {
+  PlanImage a{"/x/$a", 300, 300, std::nullopt}, b{"/x/b", 300, 300, std::nullopt};
+  PlanOptions o;
+  o.work = "/w";
+  const std::string mk = plan_makefile(make_plan({a, b}, o));
+  EXPECT_NE(mk.find("'/x/$$a'"), std::string::npos);
+  EXPECT_EQ(mk.find("'/x/$a'"), std::string::npos);
+  EXPECT_NE(mk.find("tiles/pair-1-2/tile-1.matches: geometry/pair-1-2.geometry\n\t"), std::string::npos);
+  EXPECT_NE(mk.find("pairs/pair-1-2.matches: tiles/pair-1-2/tile-1.matches\n"), std::string::npos);
+  EXPECT_THROW(make_plan({a}, o), UsageError);
+}

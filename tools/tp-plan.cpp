@@ -1,0 +1,74 @@
+// tp-plan: the job list of a scaled-out tie-point run (pairs x regions, merge, chain) for make -j,
+// GNU parallel and Slurm job arrays.
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "tpkit/atomic_output.hpp"
+#include "tpkit/error.hpp"
+#include "tpkit/scale_out_plan.hpp"
+#include "tpkit/tool_support.hpp"
+
+extern const char* const tpkit_man_page;
+
+namespace {
+struct Opts {
+  std::vector<std::string> images;
+  std::string list, match_options;
+  tpkit::PlanOptions p;
+  bool quiet = false;
+};
+
+// One image path a line; blank lines and lines starting with '#' skipped; spaces are part of the name.
+std::vector<std::string> read_list(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw tpkit::InputError(path, 0, "cannot read the image list");
+  std::vector<std::string> out;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    out.push_back(line);
+  }
+  return out;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  return tpkit::run_tool(
+      "tp-plan", argc, argv,
+      [&](CLI::App& app) -> std::function<int()> {
+        auto o = std::make_shared<Opts>();
+        app.add_option("IMAGES", o->images, "images (or --list)");
+        app.add_option("--list", o->list, "file of image paths, one a line");
+        app.add_option("-o,--work", o->p.work, "work folder shared by every machine: plan, cache, outputs")->required();
+        app.add_option("--tile", o->p.tile, "region size, image-1 pixels")->check(CLI::Range(256L, 1L << 30));
+        app.add_option("--overlap", o->p.overlap, "regions grown by this on every side, pixels")->check(tpkit::NonNegative);
+        app.add_option("--threads", o->p.threads, "threads of each tp-match job (Slurm --cpus-per-task)")->check(CLI::Range(1, 1024));
+        app.add_option("--bin", o->p.bin, "folder of the tpkit tools on the machines (default: on PATH)");
+        app.add_option("--match-options", o->match_options, "more tp-match options for every match job, space separated");
+        app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
+        return [o]() {
+          std::vector<std::string> paths = o->images;
+          if (!o->list.empty())
+            for (const auto& p : read_list(o->list)) paths.push_back(p);
+          std::istringstream mo(o->match_options);
+          for (std::string a; mo >> a;) o->p.match_args.push_back(a);
+          o->p.work = std::filesystem::absolute(o->p.work).lexically_normal().string();
+          if (!o->p.bin.empty()) o->p.bin = std::filesystem::absolute(o->p.bin).lexically_normal().string();
+          tpkit::shell_quote(o->p.work);
+          const auto images = tpkit::plan_images(paths);
+          const tpkit::Plan plan = tpkit::make_plan(images, o->p);
+          tpkit::write_plan(plan, o->p);
+          if (!o->quiet)
+            std::cerr << "tp-plan: " << images.size() << " images, " << plan.pairs.size() << " pairs, " << plan.tiles.size()
+                      << " region jobs; make -C " << tpkit::shell_quote(o->p.work) << " -f plan.mk -j N, or bash "
+                      << tpkit::shell_quote(o->p.work + "/run-parallel.sh") << " -j N, or bash "
+                      << tpkit::shell_quote(o->p.work + "/submit-slurm.sh") << "\n";
+          return 0;
+        };
+      },
+      tpkit_man_page);
+}
