@@ -1,6 +1,7 @@
 // tp-match: sub-pixel tie points between two images (SIFT + affine F RANSAC + least-squares matching),
 // or between every pair of several images.
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -11,7 +12,10 @@
 #include "tpkit/formats.hpp"
 #include "tpkit/match_every_pair.hpp"
 #include "tpkit/match_pair.hpp"
+#include "tpkit/match_region.hpp"
 #include "tpkit/opencv_threads.hpp"
+#include "tpkit/rpc_guided_matching.hpp"
+#include "tpkit/rpc_io.hpp"
 #include "tpkit/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
@@ -25,7 +29,74 @@ struct Opts {
   int threads = 0;
   bool no_refine = false, no_mutual = false, global = false, l2 = false, quiet = false;
   tpkit::PairMatchOptions p;
+  std::vector<long> region;  // --region X0 Y0 W H
+  double region_margin = 256;
+  std::string geometry, write_geometry;
+  std::vector<std::string> rpc_files;  // --rpc IMG=FILE
+  bool no_rpc = false, rpc_guided = false;
+  std::vector<double> height_range;
+  std::vector<tpkit::RpcModel> rpc;  // image k's model (rpc_of[k] points here)
+  std::vector<const tpkit::RpcModel*> rpc_of;
 };
+
+// The RPC models of the images (a sidecar, the tag or --rpc): RPC-guided search when every image of a
+// pair has one, unless --no-rpc or --global; --rpc-guided asks for it and fails without models.
+void load_rpcs(Opts& o) {
+  o.rpc_of.assign(o.images.size(), nullptr);
+  if (o.no_rpc || o.global) return;
+  const auto overrides = tpkit::parse_rpc_overrides(o.rpc_files);
+  for (const auto& kv : overrides)
+    if (std::find(o.images.begin(), o.images.end(), kv.first) == o.images.end())
+      throw tpkit::UsageError("--rpc " + kv.first + "=" + kv.second + ": " + kv.first + " is not one of the images");
+  o.rpc.reserve(o.images.size());
+  for (size_t k = 0; k < o.images.size(); ++k) {
+    if (o.rpc_guided) {
+      o.rpc.push_back(tpkit::load_image_rpc(o.images[k], overrides).model);
+    } else if (auto s = tpkit::find_image_rpc(o.images[k], overrides)) {
+      o.rpc.push_back(s->model);
+    } else {
+      continue;
+    }
+    o.rpc_of[k] = &o.rpc.back();
+  }
+  o.p.rpc_only = o.rpc_guided;
+  if (!o.height_range.empty()) {
+    o.p.rpc_guide.height_given = true;
+    o.p.rpc_guide.h_lo = o.height_range[0], o.p.rpc_guide.h_hi = o.height_range[1];
+  }
+  if (o.images.size() == 2) o.p.rpc1 = o.rpc_of[0], o.p.rpc2 = o.rpc_of[1];
+  if (!(o.p.rpc1 && o.p.rpc2)) o.p.rpc1 = o.p.rpc2 = nullptr;
+  for (size_t i = 0; i < o.images.size(); ++i)  // the heights of every RPC pair, before any work
+    for (size_t j = i + 1; j < o.images.size(); ++j)
+      if (o.rpc_of[i] && o.rpc_of[j]) {
+        double lo, hi;
+        tpkit::rpc_height_range(*o.rpc_of[i], *o.rpc_of[j], o.p.rpc_guide, lo, hi);
+      }
+}
+
+// Two images and --region / --write-geometry: the region run or the geometry of the pair.
+int region_or_geometry_run(const Opts& o, const std::vector<tpkit::ImageSource>& src,
+                           const std::function<void(const std::string&, const tpkit::PairMatchStats&)>& report) {
+  if (!o.write_geometry.empty()) {
+    tpkit::save_pair_geometry(o.write_geometry, tpkit::estimate_pair_geometry(src[0], src[1], o.p.sift, {}));
+    return 0;
+  }
+  tpkit::PairGeometry G;
+  if (!o.geometry.empty()) {
+    G = tpkit::read_pair_geometry(o.geometry);
+    tpkit::check_pair_geometry(G, o.geometry, src[0], src[1], o.p.sift);
+  } else {
+    G = tpkit::estimate_pair_geometry(src[0], src[1], o.p.sift, {});
+  }
+  tpkit::RegionOptions r;
+  r.window = {o.region[0], o.region[1], o.region[2], o.region[3]};
+  r.margin = o.region_margin;
+  tpkit::PairMatchStats st;
+  tpkit::Matches m = tpkit::match_region(src[0], src[1], G, o.p, r, &st);
+  tpkit::save_matches(o.out, m);
+  report(o.images[0] + " and " + o.images[1], st);
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,6 +148,32 @@ int main(int argc, char** argv) {
             ->check(tpkit::NonNegative);
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
         app.add_flag("--quadratic", o->p.lsm.quadratic, "LSM: after the affine fit, bend the map along the epipolar lines (steep terrain)");
+        app.add_option("--region", [o](CLI::results_t r) {
+          o->region.clear();
+          for (const auto& v : r) {
+            size_t used = 0;
+            long x = 0;
+            try {
+              x = std::stol(v, &used);
+            } catch (const std::exception&) {
+              used = 0;
+            }
+            if (used == 0 || used != v.size()) throw CLI::ValidationError("--region", "X0 Y0 W H are whole pixels, got '" + v + "'");
+            o->region.push_back(x);
+          }
+          return true;
+        }, "X0 Y0 W H: match only image-1 keypoints in this window, image-1 pixels")->expected(4);
+        app.add_option("--region-margin", o->region_margin, "with --region: pixels matched beyond the window for context")
+            ->check(tpkit::NonNegative);
+        app.add_option("--geometry", o->geometry, "with --region: pair geometry file written by --write-geometry");
+        app.add_option("--write-geometry", o->write_geometry, "write the pair geometry file (coarse map, stretches) and stop");
+        app.add_option("--rpc", o->rpc_files, "IMG=FILE: the RPC model of IMG (txt, RPB, DIMAP XML or TIFF tag)");
+        app.add_flag("--no-rpc", o->no_rpc, "do not use the images' RPC models: the coarse stage finds the geometry");
+        app.add_flag("--rpc-guided", o->rpc_guided, "search along the RPC epipolar curves; fail if an image has no model");
+        app.add_option("--height-range", o->height_range, "LO HI: heights searched with RPCs, metres above the ellipsoid")
+            ->expected(2);
+        app.add_option("--rpc-margin", o->p.rpc_guide.margin, "RPC-guided search: pixels around the epipolar curve")
+            ->check(tpkit::NonNegative);
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
           if (o->p.sift.stretch_lo < 0 || o->p.sift.stretch_hi > 100 || !(o->p.sift.stretch_lo < o->p.sift.stretch_hi))
@@ -95,16 +192,31 @@ int main(int argc, char** argv) {
             throw tpkit::UsageError("with more than two images, -o must name a folder for the pair files");
           if (n > 2 && (!o->mask1.empty() || !o->mask2.empty()))
             throw tpkit::UsageError("--mask1 / --mask2 apply to two images only");
+          if ((!o->region.empty() || !o->write_geometry.empty()) && n != 2)
+            throw tpkit::UsageError("--region and --write-geometry take two images");
+          if (!o->geometry.empty() && o->region.empty()) throw tpkit::UsageError("--geometry goes with --region");
+          if (!o->write_geometry.empty() && !o->region.empty()) throw tpkit::UsageError("--write-geometry and --region are separate runs");
+          if (o->no_rpc && o->rpc_guided) throw tpkit::UsageError("--no-rpc and --rpc-guided exclude each other");
+          if (o->global && o->rpc_guided) throw tpkit::UsageError("--global and --rpc-guided exclude each other");
           std::vector<std::string> inputs = o->images;
           inputs.push_back(o->mask1);
           inputs.push_back(o->mask2);
-          if (n == 2) tpkit::check_outputs({{"-o", o->out}}, inputs);
+          inputs.push_back(o->geometry);
+          if (!o->write_geometry.empty())
+            tpkit::check_outputs({{"--write-geometry", o->write_geometry}}, inputs);
+          else if (n == 2)
+            tpkit::check_outputs({{"-o", o->out}}, inputs);
           std::vector<tpkit::ImageSource> src;
           for (size_t i = 0; i < n; ++i)
             src.push_back(tpkit::open_image_source(o->images[i], o->band - 1, o->nodata, i == 0 ? o->mask1 : i == 1 ? o->mask2 : ""));
+          load_rpcs(*o);
           auto report = [&](const std::string& what, const tpkit::PairMatchStats& st) {
             if (!st.overlap)
               tpkit::warn("no verified matches between " + what + " (do the images overlap?): writing a file with zero records");
+            if (st.rpc_fallback)
+              tpkit::warn("the RPC epipolar curves of " + what + " held no geometry within --rpc-margin " +
+                          tpkit::format_number(o->p.rpc_guide.margin) + " px; the images' own coarse stage found one: "
+                          "the models disagree with the images by more than that (rpc-adjust corrects them)");
             if (st.no_parallax)
               tpkit::warn(what + " have no parallax (the same image, or views without a base): matches verified by a "
                           "2-D affine map; they carry no 3-D information");
@@ -126,6 +238,7 @@ int main(int argc, char** argv) {
             std::cerr << "; seconds: detect " << st.seconds[0] << ", match " << st.seconds[1] << ", verify " << st.seconds[2]
                       << ", refine " << st.seconds[3] << "\n";
           };
+          if (n == 2 && (!o->region.empty() || !o->write_geometry.empty())) return region_or_geometry_run(*o, src, report);
           if (n == 2) {
             tpkit::PairMatchStats st;
             tpkit::Matches m = tpkit::match_pair(src[0], src[1], o->p, &st);
@@ -137,7 +250,7 @@ int main(int argc, char** argv) {
           tpkit::create_output_dir(o->out);  // removed again if the run fails
           double detect_s = 0;
           tpkit::match_every_pair(
-              src, o->p,
+              src, o->p, o->rpc_of,
               [&](size_t i, size_t j, tpkit::Matches& m, const tpkit::PairMatchStats& st) {
                 const std::string f =
                     (std::filesystem::path(o->out) / ("pair-" + std::to_string(i + 1) + "-" + std::to_string(j + 1) + ".matches")).string();

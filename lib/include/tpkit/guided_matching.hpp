@@ -19,6 +19,7 @@
 // product of the two sets, and no float copy or search index of the descriptors is built: memory is
 // the descriptors themselves. Deterministic for any thread count.
 #pragma once
+#include <Eigen/Core>
 #include <vector>
 
 #include "tpkit/affine_fundamental.hpp"
@@ -26,6 +27,44 @@
 #include "tpkit/sift_tiles.hpp"
 
 namespace tpkit {
+
+// The search region of one image-1 keypoint in image 2, pixels: the rectangle of the points x2 with
+// |n . (x2 - a)| <= band and 0 <= u . (x2 - a) <= length, u a unit vector, n = (u.y, -u.x) (a
+// segment of the keypoint's epipolar line or curve, from a, widened by band on both sides).
+// length < 0: the keypoint has no region and is not matched.
+struct SearchRegion {
+  Eigen::Vector2d a{0, 0}, u{1, 0};
+  double length = -1, band = 0;
+};
+
+struct RegionMatchResult {
+  std::vector<DescriptorMatch> matches;  // rows of K1.desc / K2.desc, sorted by i1
+  double candidates_per_query = 0;       // mean descriptors compared per image-1 keypoint
+};
+
+// Stage 2 of the guided search for any geometry (the affine one below, or RPC epipolar curves,
+// rpc_guided_matching.hpp): keypoint i of K1 is compared only with the keypoints of K2 in regions[i];
+// the best must lie there, the ratio test compares it with the second nearest in the region
+// `ratio_margin` pixels wider on every side, and the mutual check asks that i be the nearest of all
+// image-1 keypoints whose wider region holds it. Exact L2 on the 8-bit descriptors; deterministic for
+// any thread count. regions.size() == K1.kp.size().
+RegionMatchResult match_in_regions(const Keypoints& K1, const Keypoints& K2, const std::vector<SearchRegion>& regions,
+                                   const DescriptorMatchOptions& desc, double ratio_margin, int threads);
+
+// Indices (ascending) of the strongest keypoints (response), at most total / grid^2 per cell of a
+// grid x grid split of their extent: the keypoints of a coarse stage.
+std::vector<int> strongest_spread(const std::vector<cv::KeyPoint>& kp, int total, int grid);
+
+// The range of a value sampled at image-1 positions (x, y, value), per cell of a grid x grid split of
+// a w x h image: over the cell and its eight neighbours, or over all samples where those hold fewer
+// than min_samples; widened by margin at both ends. xyv must not be empty.
+struct CellRanges {
+  int grid = 1;
+  long w = 1, h = 1;
+  std::vector<double> lo, hi;  // per cell, row-major
+  size_t cell(double x, double y) const;
+};
+CellRanges cell_ranges(const std::vector<Eigen::Vector3d>& xyv, long w, long h, int grid, int min_samples, double margin);
 
 struct GuidedMatchOptions {
   int coarse_keypoints = 2000;   // strongest keypoints per image used by the coarse match (4000: same

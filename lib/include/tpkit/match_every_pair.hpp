@@ -19,9 +19,11 @@ namespace tpkit {
 
 // on_pair(i, j, matches, stats) is called on the calling thread, in pair order; stats.cached1/2 tell
 // whether the keypoints came from the cache. detect_seconds (may be null): wall time from the call to
-// the end of the last detection. The first error (detection or matching) is rethrown once every
+// the end of the last detection. rpc (empty, or one entry per image, null for none): a pair whose two
+// images have models is searched along the RPC epipolar curves (PairMatchOptions::rpc1/rpc2). The first error (detection or matching) is rethrown once every
 // thread has stopped.
 void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOptions& o,
+                      const std::vector<const RpcModel*>& rpc,
                       const std::function<void(size_t i, size_t j, Matches& m, const PairMatchStats& st)>& on_pair,
                       double* detect_seconds = nullptr);
 

@@ -1,6 +1,8 @@
 // tp-match's pipeline for one pair of images (image 1 -> image 2): SIFT by tiles (sift_tiles.hpp),
 // ratio + mutual nearest neighbours searched along the epipolar band of a coarse affine F
-// (guided_matching.hpp; over all descriptors, match_descriptors.hpp, if that finds no geometry), affine fundamental matrix RANSAC
+// (guided_matching.hpp; over all descriptors, match_descriptors.hpp, if that finds no geometry), or
+// along the epipolar curves of the images' RPC models when both are given (rpc_guided_matching.hpp),
+// then affine fundamental matrix RANSAC
 // (affine_fundamental.hpp), optional grid thinning, then least-squares matching of each verified
 // match (lsm_refine.hpp) region by region. Image 1's position of every record is its keypoint
 // position (the LSM template is fixed there); image 2's is refined.
@@ -17,6 +19,7 @@
 #include "tpkit/image_tiles.hpp"
 #include "tpkit/lsm_refine.hpp"
 #include "tpkit/match_descriptors.hpp"
+#include "tpkit/rpc_guided_matching.hpp"
 #include "tpkit/sift_tiles.hpp"
 
 namespace tpkit {
@@ -26,6 +29,13 @@ struct PairMatchOptions {
   DescriptorMatchOptions desc;
   bool guided = true;             // descriptor search guided by a coarse epipolar geometry (guided_matching.hpp)
   GuidedMatchOptions guide;
+  // RPC-guided search (rpc_guided_matching.hpp): with both models set (not owned), the search regions
+  // come from the images' RPCs instead of the coarse stage; guide.ratio_margin still widens them for
+  // the ratio test and the mutual check.
+  const RpcModel* rpc1 = nullptr;
+  const RpcModel* rpc2 = nullptr;
+  RpcGuideOptions rpc_guide;
+  bool rpc_only = false;          // with models: no fallback to the coarse stage when their curves hold no geometry
   double ransac_threshold = 1.0;  // pixels (geometric distance to the affine F, R^4)
   int ransac_iterations = 20000;
   uint64_t seed = 1;
@@ -49,6 +59,9 @@ struct PairMatchStats {
   bool cached1 = false, cached2 = false;       // keypoints read from the cache
   bool guided = false;                         // the guided search ran (else the global one)
   GuidedMatchResult guide;                     // its figures (matches moved out)
+  bool rpc_guided = false;                     // the search regions came from the RPCs
+  RpcGuidedStats rpc;                          // their figures
+  bool rpc_fallback = false;                   // the curves held no geometry: the coarse stage's was used
   double seconds[4] = {0, 0, 0, 0};             // wall time of detection, matching, verification, refinement
   long dropped[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // by LsmStatus
   bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax

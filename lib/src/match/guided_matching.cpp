@@ -9,12 +9,76 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 
 namespace tpkit {
 
 namespace {
 
-// Indices of the strongest keypoints, at most quota per cell of a grid x grid split of their extent.
+cv::Mat rows_of(const cv::Mat& m, const std::vector<int>& idx) {
+  cv::Mat out(static_cast<int>(idx.size()), m.cols, m.type());
+  for (size_t k = 0; k < idx.size(); ++k) m.row(idx[k]).copyTo(out.row(static_cast<int>(k)));
+  return out;
+}
+
+// Squared L2 distance of two 128-byte descriptors, or some value > bound as soon as the partial sum
+// over whole 32-byte blocks exceeds `bound` (the rest cannot bring it back).
+inline int dist2_u8(const uint8_t* a, const uint8_t* b, int bound) {
+  int s = 0;
+  for (int blk = 0; blk < 128; blk += 32) {
+    for (int k = blk; k < blk + 32; ++k) {
+      const int d = static_cast<int>(a[k]) - static_cast<int>(b[k]);
+      s += d * d;
+    }
+    if (s > bound) return s;
+  }
+  return s;
+}
+
+// Image-2 keypoints bucketed by (d, s) = (n . x2, u . x2) of one frame (u unit, n = (u.y, -u.x)):
+// counting sort into a regular grid of bd x bs pixels.
+struct Buckets {
+  Eigen::Vector2d n{0, -1}, u{1, 0};
+  double d0 = 0, s0 = 0, bd = 8, bs = 32;
+  int nd = 1, ns = 1;
+  std::vector<int> start, items;
+  void build(const std::vector<cv::KeyPoint>& kp) {
+    const size_t count = kp.size();
+    std::vector<double> d(count), s(count);
+    double d1 = -1e300, s1 = -1e300;
+    d0 = s0 = 1e300;
+    for (size_t j = 0; j < count; ++j) {
+      d[j] = n.x() * kp[j].pt.x + n.y() * kp[j].pt.y;
+      s[j] = u.x() * kp[j].pt.x + u.y() * kp[j].pt.y;
+      d0 = std::min(d0, d[j]), d1 = std::max(d1, d[j]);
+      s0 = std::min(s0, s[j]), s1 = std::max(s1, s[j]);
+    }
+    nd = std::max(1, static_cast<int>(std::min(1e6, (d1 - d0) / bd)) + 1);
+    ns = std::max(1, static_cast<int>(std::min(1e6, (s1 - s0) / bs)) + 1);
+    while (static_cast<double>(nd) * ns > 4.0 * static_cast<double>(count) + 1024) {  // sparse keypoints, long extent
+      bd *= 2, bs *= 2;
+      nd = std::max(1, static_cast<int>((d1 - d0) / bd) + 1);
+      ns = std::max(1, static_cast<int>((s1 - s0) / bs) + 1);
+    }
+    start.assign(static_cast<size_t>(nd) * ns + 1, 0);
+    for (size_t j = 0; j < count; ++j) ++start[cell(d[j], s[j]) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    items.resize(count);
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (size_t j = 0; j < count; ++j) items[fill[cell(d[j], s[j])]++] = static_cast<int>(j);  // ascending j per cell
+  }
+  int d_index(double dv) const { return std::clamp(static_cast<int>(std::floor((dv - d0) / bd)), 0, nd - 1); }
+  int s_index(double sv) const { return std::clamp(static_cast<int>(std::floor((sv - s0) / bs)), 0, ns - 1); }
+  size_t cell(double dv, double sv) const { return static_cast<size_t>(d_index(dv)) * ns + s_index(sv); }
+};
+
+struct Best {
+  int dist = std::numeric_limits<int>::max();
+  int idx = -1;
+};
+
+}  // namespace
+
 std::vector<int> strongest_spread(const std::vector<cv::KeyPoint>& kp, int total, int grid) {
   std::vector<int> out;
   if (kp.empty()) return out;
@@ -40,66 +104,40 @@ std::vector<int> strongest_spread(const std::vector<cv::KeyPoint>& kp, int total
   return out;
 }
 
-cv::Mat rows_of(const cv::Mat& m, const std::vector<int>& idx) {
-  cv::Mat out(static_cast<int>(idx.size()), m.cols, m.type());
-  for (size_t k = 0; k < idx.size(); ++k) m.row(idx[k]).copyTo(out.row(static_cast<int>(k)));
-  return out;
+size_t CellRanges::cell(double x, double y) const {
+  const int cx = std::clamp(static_cast<int>((x + 0.5) * grid / std::max(1L, w)), 0, grid - 1);
+  const int cy = std::clamp(static_cast<int>((y + 0.5) * grid / std::max(1L, h)), 0, grid - 1);
+  return static_cast<size_t>(cy) * grid + cx;
 }
 
-// Squared L2 distance of two 128-byte descriptors, or some value > bound as soon as the partial sum
-// over whole 32-byte blocks exceeds `bound` (the rest cannot bring it back).
-inline int dist2_u8(const uint8_t* a, const uint8_t* b, int bound) {
-  int s = 0;
-  for (int blk = 0; blk < 128; blk += 32) {
-    for (int k = blk; k < blk + 32; ++k) {
-      const int d = static_cast<int>(a[k]) - static_cast<int>(b[k]);
-      s += d * d;
-    }
-    if (s > bound) return s;
+CellRanges cell_ranges(const std::vector<Eigen::Vector3d>& xyv, long w, long h, int grid, int min_samples, double margin) {
+  CellRanges r;
+  r.grid = std::max(1, grid), r.w = w, r.h = h;
+  const int G = r.grid;
+  double all_lo = 1e300, all_hi = -1e300;
+  std::vector<std::vector<double>> per_cell(static_cast<size_t>(G) * G);
+  for (const Eigen::Vector3d& s : xyv) {
+    per_cell[r.cell(s.x(), s.y())].push_back(s.z());
+    all_lo = std::min(all_lo, s.z()), all_hi = std::max(all_hi, s.z());
   }
-  return s;
+  r.lo.resize(per_cell.size());
+  r.hi.resize(per_cell.size());
+  for (int cy = 0; cy < G; ++cy)
+    for (int cx = 0; cx < G; ++cx) {
+      double a = 1e300, b = -1e300;
+      long cnt = 0;
+      for (int yy = std::max(0, cy - 1); yy <= std::min(G - 1, cy + 1); ++yy)
+        for (int xx = std::max(0, cx - 1); xx <= std::min(G - 1, cx + 1); ++xx)
+          for (double p : per_cell[static_cast<size_t>(yy) * G + xx]) {
+            a = std::min(a, p), b = std::max(b, p);
+            ++cnt;
+          }
+      if (cnt < min_samples) a = all_lo, b = all_hi;
+      r.lo[static_cast<size_t>(cy) * G + cx] = a - margin;
+      r.hi[static_cast<size_t>(cy) * G + cx] = b + margin;
+    }
+  return r;
 }
-
-// Image-2 keypoints bucketed by (d, s) = (n2 . x2, u2 . x2): counting sort into a regular grid.
-struct Buckets {
-  double d0 = 0, s0 = 0, bd = 8, bs = 32;
-  int nd = 1, ns = 1;
-  std::vector<int> start, items;
-  std::vector<float> d, s;
-  void build(const std::vector<cv::KeyPoint>& kp, const Eigen::Vector2d& n2, const Eigen::Vector2d& u2) {
-    const size_t n = kp.size();
-    d.resize(n);
-    s.resize(n);
-    double d1 = -1e300, s1 = -1e300;
-    d0 = s0 = 1e300;
-    for (size_t j = 0; j < n; ++j) {
-      d[j] = static_cast<float>(n2.x() * kp[j].pt.x + n2.y() * kp[j].pt.y);
-      s[j] = static_cast<float>(u2.x() * kp[j].pt.x + u2.y() * kp[j].pt.y);
-      d0 = std::min(d0, static_cast<double>(d[j])), d1 = std::max(d1, static_cast<double>(d[j]));
-      s0 = std::min(s0, static_cast<double>(s[j])), s1 = std::max(s1, static_cast<double>(s[j]));
-    }
-    nd = std::max(1, static_cast<int>((d1 - d0) / bd) + 1);
-    ns = std::max(1, static_cast<int>((s1 - s0) / bs) + 1);
-    start.assign(static_cast<size_t>(nd) * ns + 1, 0);
-    for (size_t j = 0; j < n; ++j) ++start[cell(d[j], s[j]) + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    items.resize(n);
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (size_t j = 0; j < n; ++j) items[fill[cell(d[j], s[j])]++] = static_cast<int>(j);  // ascending j per cell
-  }
-  size_t cell(double dv, double sv) const {
-    int a = std::clamp(static_cast<int>((dv - d0) / bd), 0, nd - 1);
-    int b = std::clamp(static_cast<int>((sv - s0) / bs), 0, ns - 1);
-    return static_cast<size_t>(a) * ns + b;
-  }
-};
-
-struct Best {
-  int dist = std::numeric_limits<int>::max();
-  int idx = -1;
-};
-
-}  // namespace
 
 GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1, long h1,
                                const DescriptorMatchOptions& desc, const GuidedMatchOptions& g,
@@ -145,38 +183,55 @@ GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1
   res.parallax_max = par.maxCoeff();
 
   // per-cell parallax ranges over image 1
-  const int G = std::max(1, g.coarse_grid);
-  auto cell_of = [&](double x, double y) {
-    int cx = std::clamp(static_cast<int>((x + 0.5) * G / std::max(1L, w1)), 0, G - 1);
-    int cy = std::clamp(static_cast<int>((y + 0.5) * G / std::max(1L, h1)), 0, G - 1);
-    return std::make_pair(cx, cy);
-  };
-  std::vector<std::vector<double>> per_cell(static_cast<size_t>(G) * G);
-  for (size_t q = 0; q < in.size(); ++q) {
-    auto [cx, cy] = cell_of(xy(in[q], 0), xy(in[q], 1));
-    per_cell[static_cast<size_t>(cy) * G + cx].push_back(par(static_cast<Eigen::Index>(q)));
-  }
-  std::vector<double> lo(per_cell.size()), hi(per_cell.size());
-  for (int cy = 0; cy < G; ++cy)
-    for (int cx = 0; cx < G; ++cx) {
-      double a = 1e300, b = -1e300;
-      long cnt = 0;
-      for (int yy = std::max(0, cy - 1); yy <= std::min(G - 1, cy + 1); ++yy)
-        for (int xx = std::max(0, cx - 1); xx <= std::min(G - 1, cx + 1); ++xx)
-          for (double p : per_cell[static_cast<size_t>(yy) * G + xx]) {
-            a = std::min(a, p), b = std::max(b, p);
-            ++cnt;
-          }
-      if (cnt < g.min_cell_samples) a = res.parallax_min, b = res.parallax_max;
-      lo[static_cast<size_t>(cy) * G + cx] = a - g.parallax_margin;
-      hi[static_cast<size_t>(cy) * G + cx] = b + g.parallax_margin;
-    }
+  std::vector<Eigen::Vector3d> samples(in.size());
+  for (size_t q = 0; q < in.size(); ++q) samples[q] << xy(in[q], 0), xy(in[q], 1), par(static_cast<Eigen::Index>(q));
+  const CellRanges ranges = cell_ranges(samples, w1, h1, g.coarse_grid, g.min_cell_samples, g.parallax_margin);
 
-  // 2. guided search
-  Buckets B;
-  B.bd = std::max(4.0, g.band + g.ratio_margin);
-  B.build(K2.kp, n2, u2);
+  // 2. guided search: the band around the epipolar line, over the cell's parallax range
+  std::vector<SearchRegion> regions(K1.kp.size());
+  for (size_t i = 0; i < K1.kp.size(); ++i) {
+    const cv::Point2f p = K1.kp[i].pt;
+    const size_t c = ranges.cell(p.x, p.y);
+    const double dp = lc * p.x + ld * p.y + le;  // n2 . x2 on the line
+    const double sp = plane(0) * p.x + plane(1) * p.y + plane(2);
+    regions[i].u = u2;
+    regions[i].a = dp * n2 + (sp + ranges.lo[c]) * u2;
+    regions[i].length = ranges.hi[c] - ranges.lo[c];
+    regions[i].band = g.band;
+  }
+  RegionMatchResult rm = match_in_regions(K1, K2, regions, desc, g.ratio_margin, threads);
+  res.matches = std::move(rm.matches);
+  res.candidates_per_query = rm.candidates_per_query;
+  res.ok = true;
+  return res;
+}
+
+RegionMatchResult match_in_regions(const Keypoints& K1, const Keypoints& K2, const std::vector<SearchRegion>& regions,
+                                   const DescriptorMatchOptions& desc, double ratio_margin, int threads) {
+  RegionMatchResult res;
   const int n1 = static_cast<int>(K1.kp.size()), n2k = static_cast<int>(K2.kp.size());
+  if (n1 == 0 || n2k == 0) return res;
+  if (regions.size() != K1.kp.size()) throw std::invalid_argument("match_in_regions: one region per image-1 keypoint");
+  // the buckets' frame: the regions' mean direction (the epipolar direction varies slowly over a scene)
+  Buckets B;
+  {
+    Eigen::Vector2d sum(0, 0), ref(0, 0);
+    std::vector<double> widths;
+    for (const SearchRegion& r : regions) {
+      if (r.length < 0) continue;
+      if (ref.squaredNorm() == 0) ref = r.u;
+      sum += r.u.dot(ref) >= 0 ? r.u : Eigen::Vector2d(-r.u);
+      widths.push_back(r.band + ratio_margin);
+    }
+    if (widths.empty()) return res;
+    B.u = sum.norm() > 0 ? Eigen::Vector2d(sum.normalized()) : Eigen::Vector2d(1, 0);
+    B.n = Eigen::Vector2d(B.u.y(), -B.u.x());
+    std::nth_element(widths.begin(), widths.begin() + static_cast<std::ptrdiff_t>(widths.size() / 2), widths.end());
+    B.bd = std::max(4.0, widths[widths.size() / 2]);
+  }
+  B.build(K2.kp);
+  std::vector<double> px(static_cast<size_t>(n2k)), py(static_cast<size_t>(n2k));
+  for (int j = 0; j < n2k; ++j) px[static_cast<size_t>(j)] = K2.kp[static_cast<size_t>(j)].pt.x, py[static_cast<size_t>(j)] = K2.kp[static_cast<size_t>(j)].pt.y;
   const float ratio2 = static_cast<float>(desc.ratio * desc.ratio);
   std::vector<DescriptorMatch> fwd(static_cast<size_t>(n1), DescriptorMatch{-1, -1, 0.f, 0.f});
   const int W = std::max(1, std::min(threads, 64));
@@ -191,26 +246,28 @@ GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1
       const int b0 = next.fetch_add(chunk);
       if (b0 >= n1) break;
       for (int i = b0; i < std::min(n1, b0 + chunk); ++i) {
-        const cv::Point2f p = K1.kp[static_cast<size_t>(i)].pt;
-        auto [cx, cy] = cell_of(p.x, p.y);
-        const size_t c = static_cast<size_t>(cy) * G + cx;
-        const double dp = lc * p.x + ld * p.y + le;
-        const double sp = plane(0) * p.x + plane(1) * p.y + plane(2);
-        const double s_lo = sp + lo[c], s_hi = sp + hi[c];
-        const double rd = g.band + g.ratio_margin;
-        const double ws_lo = s_lo - g.ratio_margin, ws_hi = s_hi + g.ratio_margin;
-        const int da = std::clamp(static_cast<int>(std::floor((dp - rd - B.d0) / B.bd)), 0, B.nd - 1);
-        const int db = std::clamp(static_cast<int>(std::floor((dp + rd - B.d0) / B.bd)), 0, B.nd - 1);
-        const int sa = std::clamp(static_cast<int>(std::floor((ws_lo - B.s0) / B.bs)), 0, B.ns - 1);
-        const int sb = std::clamp(static_cast<int>(std::floor((ws_hi - B.s0) / B.bs)), 0, B.ns - 1);
+        const SearchRegion& R = regions[static_cast<size_t>(i)];
+        if (!(R.length >= 0)) continue;
+        const Eigen::Vector2d nr(R.u.y(), -R.u.x());
+        const double rd = R.band + ratio_margin, ws_lo = -ratio_margin, ws_hi = R.length + ratio_margin;
+        // the wider rectangle's corners in the buckets' frame -> the buckets to visit
+        double dlo = 1e300, dhi = -1e300, slo = 1e300, shi = -1e300;
+        for (double sa : {ws_lo, ws_hi})
+          for (double da : {-rd, rd}) {
+            const Eigen::Vector2d c = R.a + sa * R.u + da * nr;
+            const double dv = B.n.dot(c), sv = B.u.dot(c);
+            dlo = std::min(dlo, dv), dhi = std::max(dhi, dv), slo = std::min(slo, sv), shi = std::max(shi, sv);
+          }
+        const int da = B.d_index(dlo), db = B.d_index(dhi), sa = B.s_index(slo), sb = B.s_index(shi);
         const uint8_t* q = K1.desc.ptr<uint8_t>(i);
-        Best acc, m1, m2;  // best in the band; two best in the wider region
+        Best acc, m1, m2;  // best in the region; two best in the wider region
         for (int a = da; a <= db; ++a)
           for (int b = sa; b <= sb; ++b) {
             const size_t cb = static_cast<size_t>(a) * B.ns + b;
             for (int t = B.start[cb]; t < B.start[cb + 1]; ++t) {
               const int j = B.items[static_cast<size_t>(t)];
-              const double dd = B.d[static_cast<size_t>(j)] - dp, ss = B.s[static_cast<size_t>(j)];
+              const double vx = px[static_cast<size_t>(j)] - R.a.x(), vy = py[static_cast<size_t>(j)] - R.a.y();
+              const double dd = nr.x() * vx + nr.y() * vy, ss = R.u.x() * vx + R.u.y() * vy;
               if (std::abs(dd) > rd || ss < ws_lo || ss > ws_hi) continue;
               // a pair farther than both i's second best and j's best so far changes nothing
               Best& r = bk[static_cast<size_t>(j)];
@@ -223,7 +280,7 @@ GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1
               } else if (d2 < m2.dist || (d2 == m2.dist && j < m2.idx)) {
                 m2 = {d2, j};
               }
-              if (std::abs(dd) <= g.band && ss >= s_lo && ss <= s_hi && (d2 < acc.dist || (d2 == acc.dist && j < acc.idx)))
+              if (std::abs(dd) <= R.band && ss >= 0 && ss <= R.length && (d2 < acc.dist || (d2 == acc.dist && j < acc.idx)))
                 acc = {d2, j};
               if (d2 < r.dist || (d2 == r.dist && i < r.idx)) r = {d2, i};
             }
@@ -251,13 +308,12 @@ GuidedMatchResult guided_match(const Keypoints& K1, const Keypoints& K2, long w1
     }
   long long total = 0;
   for (long long c : compared) total += c;
-  res.candidates_per_query = n1 > 0 ? static_cast<double>(total) / n1 : 0;
+  res.candidates_per_query = static_cast<double>(total) / n1;
   for (const DescriptorMatch& m : fwd) {
     if (m.i1 < 0) continue;
     if (desc.mutual && bj[static_cast<size_t>(m.i2)].idx != m.i1) continue;
     res.matches.push_back(m);
   }
-  res.ok = true;
   return res;
 }
 

@@ -13,6 +13,7 @@
 namespace tpkit {
 
 void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOptions& o,
+                      const std::vector<const RpcModel*>& rpc,
                       const std::function<void(size_t, size_t, Matches&, const PairMatchStats&)>& on_pair,
                       double* detect_seconds) {
   const size_t n = src.size();
@@ -68,6 +69,8 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
       detected[i].get();
       detected[j].get();
       PairMatchOptions po = o;
+      po.rpc1 = po.rpc2 = nullptr;
+      if (rpc.size() == n && rpc[i] && rpc[j]) po.rpc1 = rpc[i], po.rpc2 = rpc[j];
       if (!done) {  // beside detection: the threads it leaves, all of them once it ends (from the next band)
         po.threads = free_threads.load();
         po.live_threads = &free_threads;

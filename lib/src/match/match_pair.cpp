@@ -11,6 +11,7 @@
 #include "tpkit/error.hpp"
 #include "tpkit/keypoint_cache.hpp"
 #include "tpkit/parallel_for.hpp"
+#include "tpkit/rpc_guided_matching.hpp"
 #include "tpkit/text_table.hpp"
 #include "tpkit/tool_support.hpp"
 
@@ -67,17 +68,30 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
 
   // 2. putative matches
   std::vector<DescriptorMatch> put;
-  if (o.guided) {
-    AffineFundamentalRansac cr;
-    cr.threshold = o.ransac_threshold;
-    cr.max_iterations = o.ransac_iterations;
-    cr.seed = o.seed;
-    st.guide = guided_match(K1, K2, a.info.width, a.info.height, o.desc, o.guide, cr, o.min_inliers, o.threads);
-    st.guided = st.guide.ok;
-    put = std::move(st.guide.matches);
-    st.guide.matches.clear();
+  AffineFundamentalRansac cr;
+  cr.threshold = o.ransac_threshold;
+  cr.max_iterations = o.ransac_iterations;
+  cr.seed = o.seed;
+  if (o.rpc1 && o.rpc2) {
+    put = rpc_guided_match(K1, K2, a.info.width, a.info.height, *o.rpc1, *o.rpc2, o.desc, o.guide, o.rpc_guide, cr,
+                           o.min_inliers, o.threads, &st.rpc);
+    st.rpc_guided = true;
   }
-  if (!st.guided) put = match_descriptors(K1.desc, K2.desc, o.desc);
+  // the coarse stage on the images: without models, or when the models' curves held no geometry
+  // (models off by more than the margin) and the caller allows it
+  const bool rpc_failed = st.rpc_guided && !st.rpc.narrowed;
+  if (o.guided && (!st.rpc_guided || (rpc_failed && !o.rpc_only))) {
+    GuidedMatchResult g = guided_match(K1, K2, a.info.width, a.info.height, o.desc, o.guide, cr, o.min_inliers, o.threads);
+    if (g.ok || !st.rpc_guided) {
+      st.rpc_fallback = st.rpc_guided && g.ok;
+      if (st.rpc_fallback) st.rpc_guided = false;
+      st.guided = g.ok;
+      st.guide = std::move(g);
+      put = std::move(st.guide.matches);
+      st.guide.matches.clear();
+    }
+  }
+  if (!st.guided && !st.rpc_guided) put = match_descriptors(K1.desc, K2.desc, o.desc);
   st.putative = static_cast<long>(put.size());
   K1.desc.release();
   K2.desc.release();
@@ -254,12 +268,29 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   meta_set(M.meta, "detector2", detector_tag(o.sift, b));
   meta_set(M.meta, "keypoints", std::to_string(st.keypoints1) + " " + std::to_string(st.keypoints2));
   std::string search = "global";
-  if (st.guided) {
+  if (st.rpc_guided) {
+    auto h = [](double v) { return format_number(std::round(v * 10) / 10); };
+    search = "rpc-guided: epipolar curves over " + h(st.rpc.h_lo) + ".." + h(st.rpc.h_hi) + " m";
+    if (st.rpc.narrowed)
+      search += ", narrowed by the affine F of " + std::to_string(st.rpc.coarse_inliers) + " of " +
+                std::to_string(st.rpc.coarse_putative) + " matches of the strongest keypoints to " + h(st.rpc.cell_h_lo) +
+                ".." + h(st.rpc.cell_h_hi) + " m, bias across the curves " + h(st.rpc.bias_min) + ".." + h(st.rpc.bias_max) +
+                " px (a plane leaves " + format_number(std::round(st.rpc.bias_rms * 100) / 100) + " px rms), band " +
+                format_number(std::round(std::max(o.guide.band, 3 * st.rpc.bias_rms) * 100) / 100) + " px";
+    else
+      search += " (no coarse geometry: " + std::to_string(st.rpc.coarse_inliers) + " inliers)";
+    search += ", mean length " + h(st.rpc.mean_length) + " px, margin " + format_number(o.rpc_guide.margin) +
+              " px, ratio region +" + format_number(o.guide.ratio_margin) + " px";
+    if (st.rpc.unlocalized > 0) search += ", " + std::to_string(st.rpc.unlocalized) + " keypoints without a curve";
+  } else if (st.guided) {
     search = "guided: coarse affine F from " + std::to_string(st.guide.coarse_inliers) + " of " +
              std::to_string(st.guide.coarse_putative) + " matches of the strongest keypoints, band " +
              format_number(o.guide.band) + " px, parallax " + format_number(std::round(st.guide.parallax_min * 10) / 10) +
              ".." + format_number(std::round(st.guide.parallax_max * 10) / 10) + " px + margin " +
              format_number(o.guide.parallax_margin) + ", ratio region +" + format_number(o.guide.ratio_margin) + " px";
+    if (st.rpc_fallback)
+      search += " (the RPC epipolar curves held no geometry within " + format_number(o.rpc_guide.margin) + " px: " +
+                std::to_string(st.rpc.coarse_inliers) + " of " + std::to_string(st.rpc.coarse_putative) + " coarse matches)";
   } else if (o.guided) {
     search = "global (the guided search found no coarse geometry)";
   }

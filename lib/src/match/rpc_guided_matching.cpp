@@ -1,0 +1,186 @@
+#include "tpkit/rpc_guided_matching.hpp"
+
+#include <algorithm>
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "tpkit/error.hpp"
+#include "tpkit/parallel_for.hpp"
+#include "tpkit/text_table.hpp"
+
+namespace tpkit {
+
+void rpc_height_range(const RpcModel& a, const RpcModel& b, const RpcGuideOptions& r, double& h_lo, double& h_hi) {
+  if (r.height_given) {
+    if (!std::isfinite(r.h_lo) || !std::isfinite(r.h_hi) || !(r.h_lo < r.h_hi))
+      throw UsageError("--height-range: LO must be below HI (metres above the ellipsoid)");
+    h_lo = r.h_lo, h_hi = r.h_hi;
+    return;
+  }
+  h_lo = std::max(a.height_min(), b.height_min());
+  h_hi = std::min(a.height_max(), b.height_max());
+  if (!(h_lo < h_hi))
+    throw InputError("the RPC models' height ranges do not meet (" + format_number(a.height_min()) + ".." +
+                     format_number(a.height_max()) + " m and " + format_number(b.height_min()) + ".." +
+                     format_number(b.height_max()) + " m): give --height-range");
+}
+
+namespace {
+
+// The chord of the epipolar curve of pixel (x, y) of image a in image b from height lo to hi.
+struct Chord {
+  Eigen::Vector2d q0{0, 0}, q1{0, 0};
+  double bend = 0;  // largest distance of the curve from the chord, pixels
+  bool ok = false;
+};
+
+Chord chord_of(const RpcModel& a, const RpcModel& b, double x, double y, double lo, double hi, int samples) {
+  Chord c;
+  const auto curve = epipolar_curve(a, b, x, y, lo, hi, samples);
+  if (curve.size() < static_cast<size_t>(samples)) return c;  // a height the model cannot localize
+  c.q0 = curve.front().head<2>();
+  c.q1 = curve.back().head<2>();
+  const Eigen::Vector2d d = c.q1 - c.q0;
+  const double len = d.norm();
+  if (len > 1e-9) {
+    const Eigen::Vector2d n(d.y() / len, -d.x() / len);
+    for (const auto& p : curve) c.bend = std::max(c.bend, std::abs(n.dot(p.head<2>() - c.q0)));
+  }
+  c.ok = true;
+  return c;
+}
+
+SearchRegion region_of(const Chord& c, double along, double across) {
+  SearchRegion r;
+  if (!c.ok) return r;
+  const Eigen::Vector2d d = c.q1 - c.q0;
+  const double len = d.norm();
+  r.u = len > 1e-9 ? Eigen::Vector2d(d / len) : Eigen::Vector2d(1, 0);
+  r.a = c.q0 - along * r.u;
+  r.length = len + 2 * along;
+  r.band = across + c.bend;
+  return r;
+}
+
+Keypoints subset(const Keypoints& K, const std::vector<int>& idx) {
+  Keypoints out;
+  out.desc = cv::Mat(static_cast<int>(idx.size()), K.desc.cols, K.desc.type());
+  for (size_t k = 0; k < idx.size(); ++k) {
+    out.kp.push_back(K.kp[static_cast<size_t>(idx[k])]);
+    K.desc.row(idx[k]).copyTo(out.desc.row(static_cast<int>(k)));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<SearchRegion> rpc_search_regions(const RpcModel& a, const RpcModel& b, const std::vector<cv::KeyPoint>& kp1,
+                                             const std::vector<double>& h_lo, const std::vector<double>& h_hi,
+                                             double along, double across, int samples, int threads, RpcGuidedStats* stats) {
+  samples = std::max(2, samples);
+  std::vector<Chord> chords(kp1.size());
+  parallel_for(kp1.size(), threads, [&](size_t i) {
+    chords[i] = chord_of(a, b, kp1[i].pt.x, kp1[i].pt.y, h_lo[i], h_hi[i], samples);
+  });
+  std::vector<SearchRegion> out(kp1.size());
+  double sum = 0;
+  long n = 0;
+  for (size_t i = 0; i < kp1.size(); ++i) {
+    out[i] = region_of(chords[i], along, across);
+    if (!chords[i].ok) continue;
+    sum += (chords[i].q1 - chords[i].q0).norm();
+    ++n;
+    if (stats) stats->max_bend = std::max(stats->max_bend, chords[i].bend);
+  }
+  if (stats) {
+    stats->unlocalized = static_cast<long>(kp1.size()) - n;
+    stats->mean_length = n > 0 ? sum / n : 0;
+  }
+  return out;
+}
+
+std::vector<DescriptorMatch> rpc_guided_match(const Keypoints& K1, const Keypoints& K2, long w1, long h1, const RpcModel& a,
+                                              const RpcModel& b, const DescriptorMatchOptions& desc,
+                                              const GuidedMatchOptions& g, const RpcGuideOptions& r,
+                                              const AffineFundamentalRansac& ransac, int min_inliers, int threads,
+                                              RpcGuidedStats* stats) {
+  RpcGuidedStats st;
+  double lo = 0, hi = 0;
+  rpc_height_range(a, b, r, lo, hi);
+  st.h_lo = lo, st.h_hi = hi;
+  const size_t n1 = K1.kp.size();
+  std::vector<double> cell_lo(n1, lo), cell_hi(n1, hi);
+  Eigen::Vector3d bias(0, 0, 0);  // across-curve bias plane of step 1, pixels
+  // 1. coarse: the strongest keypoints over the whole range, their heights from the F inliers
+  if (!K1.kp.empty() && !K2.kp.empty()) {
+    const std::vector<int> c1 = strongest_spread(K1.kp, g.coarse_keypoints, g.coarse_grid);
+    const Keypoints C1 = subset(K1, c1);
+    const std::vector<double> clo(c1.size(), lo), chi(c1.size(), hi);
+    RpcGuidedStats cs;
+    const std::vector<SearchRegion> cr = rpc_search_regions(a, b, C1.kp, clo, chi, r.margin, r.margin, r.samples, threads, &cs);
+    const RegionMatchResult coarse = match_in_regions(C1, K2, cr, desc, g.ratio_margin, threads);
+    st.coarse_putative = static_cast<long>(coarse.matches.size());
+    if (st.coarse_putative >= std::max(min_inliers, AffineFundamental::MINIMUM_SAMPLES)) {
+      Eigen::MatrixX4d xy(coarse.matches.size(), 4);
+      for (size_t k = 0; k < coarse.matches.size(); ++k) {
+        const auto &p = C1.kp[static_cast<size_t>(coarse.matches[k].i1)].pt, &q = K2.kp[static_cast<size_t>(coarse.matches[k].i2)].pt;
+        xy.row(static_cast<Eigen::Index>(k)) << p.x, p.y, q.x, q.y;
+      }
+      const AffineFundamentalResult rr = ransac_affine_fundamental(xy, ransac);
+      st.coarse_inliers = rr.ok ? rr.inliers : 0;
+      if (rr.ok && rr.inliers >= min_inliers && cs.mean_length > 0) {
+        // the height of an inlier: where along its chord (linear in h) its image-2 position falls;
+        // its offset across the chord: the models' bias there
+        std::vector<Eigen::Vector3d> heights;
+        std::vector<Eigen::Index> in;
+        std::vector<double> across;
+        for (size_t k = 0; k < coarse.matches.size(); ++k) {
+          const auto row = static_cast<Eigen::Index>(k);
+          if (!rr.inlier[row]) continue;
+          const SearchRegion& R = cr[static_cast<size_t>(coarse.matches[k].i1)];
+          const Eigen::Vector2d v = xy.row(row).tail<2>().transpose() - R.a;
+          const double len = R.length - 2 * r.margin;
+          const double t = len > 1e-9 ? (R.u.dot(v) - r.margin) / len : 0.5;
+          heights.emplace_back(xy(row, 0), xy(row, 1), lo + t * (hi - lo));
+          in.push_back(row);
+          across.push_back(R.u.y() * v.x() - R.u.x() * v.y());
+        }
+        // the bias across the curves, a plane in x1 (shift and drift of the models)
+        Eigen::MatrixX3d A(in.size(), 3);
+        Eigen::VectorXd d(in.size());
+        for (size_t q = 0; q < in.size(); ++q) {
+          A.row(static_cast<Eigen::Index>(q)) << xy(in[q], 0), xy(in[q], 1), 1.0;
+          d(static_cast<Eigen::Index>(q)) = across[q];
+        }
+        bias = A.colPivHouseholderQr().solve(d);
+        const Eigen::VectorXd res = d - A * bias;
+        st.bias_rms = std::sqrt(res.squaredNorm() / static_cast<double>(res.size()));
+        st.bias_min = d.minCoeff(), st.bias_max = d.maxCoeff();
+        const double metres_per_px = (hi - lo) / cs.mean_length;
+        const CellRanges ranges = cell_ranges(heights, w1, h1, g.coarse_grid, g.min_cell_samples, g.parallax_margin * metres_per_px);
+        st.narrowed = true;
+        st.cell_h_lo = 1e300, st.cell_h_hi = -1e300;
+        for (size_t c = 0; c < ranges.lo.size(); ++c)
+          st.cell_h_lo = std::min(st.cell_h_lo, ranges.lo[c]), st.cell_h_hi = std::max(st.cell_h_hi, ranges.hi[c]);
+        for (size_t i = 0; i < n1; ++i) {
+          const size_t c = ranges.cell(K1.kp[i].pt.x, K1.kp[i].pt.y);
+          cell_lo[i] = ranges.lo[c], cell_hi[i] = ranges.hi[c];
+        }
+      }
+    }
+  }
+  // 2. every keypoint in the region of its cell's heights
+  // (narrowed: no margin along the curves beyond the cells' ranges, the measured bias removed across
+  // them, and the affine guided search's band, or 3 x the RMS the bias plane leaves if that is wider)
+  const double along = st.narrowed ? 0.0 : r.margin, across = st.narrowed ? std::max(g.band, 3 * st.bias_rms) : r.margin;
+  std::vector<SearchRegion> regions = rpc_search_regions(a, b, K1.kp, cell_lo, cell_hi, along, across, r.samples, threads, &st);
+  if (st.narrowed)
+    for (size_t i = 0; i < n1; ++i)
+      regions[i].a += (bias(0) * K1.kp[i].pt.x + bias(1) * K1.kp[i].pt.y + bias(2)) * Eigen::Vector2d(regions[i].u.y(), -regions[i].u.x());
+  RegionMatchResult res = match_in_regions(K1, K2, regions, desc, g.ratio_margin, threads);
+  st.candidates_per_query = res.candidates_per_query;
+  if (stats) *stats = st;
+  return std::move(res.matches);
+}
+
+}  // namespace tpkit
