@@ -43,8 +43,8 @@ int main(int argc, char** argv) {
     app.add_option("--optimizer", o->optimizer, "default | random | none")
         ->check(CLI::IsMember({"default", "random", "none"}));
     app.add_option("--seed", o->seed, "seed of every random choice");
-    app.add_option("--trim", o->trim, "fraction of the largest distances left out in each direction");
-    app.add_option("--truncate", o->truncate, "distances capped at this many pixels");
+    CLI::Option* trim_opt = app.add_option("--trim", o->trim, "fraction of the largest distances left out in each direction (default: from the data)");
+    CLI::Option* truncate_opt = app.add_option("--truncate", o->truncate, "distances capped at this many pixels");
     app.add_option("--target", o->target, "cost in pixels at which the search stops");
     app.add_option("--max-iterations", o->max_iterations, "iteration limit");
     app.add_flag("--free-intrinsics", o->free_intrinsics, "20 free physical parameters instead of 12");
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
     app.add_option("--steps", o->steps, "values of the scan");
     app.add_option("--plot", o->plot, "SVG figure of the scan, or of the clusters before and after");
     app.add_flag("--keep-rejected", o->keep_rejected, "write the outputs of a rejected answer too (marked; exit 3)");
-    return [o]() {
+    return [o, trim_opt, truncate_opt]() {
       check_outputs({{"-o", o->out}, {"--pairs", o->pairs}, {"--plot", o->plot}}, {o->a, o->b, o->init});
       if (!o->scan.empty() && o->range.size() != 2) throw UsageError("--scan needs --range LO HI");
       if (o->scan.empty() && !o->range.empty()) throw UsageError("--range goes with --scan");
@@ -83,7 +83,10 @@ int main(int argc, char** argv) {
       oo.max_iterations = o->max_iterations;
       oo.seed = o->seed;
       oo.allow_reflection = o->reflection;
-      CostOptions co{o->trim, o->truncate};
+      // unknown overlap by default: each direction's trim is chosen by the data (cluster_cost.hpp) unless
+      // --trim or --truncate sets the robust cost by hand
+      const bool from_data = trim_opt->count() == 0 && truncate_opt->count() == 0;
+      CostOptions co{o->trim, o->truncate, from_data};
       ClusterCost cost(A.xy, B.xy, co);
       OptimizeResult r = optimize_clusters(cost, start, oo);
 
@@ -101,7 +104,13 @@ int main(int argc, char** argv) {
       m.emplace_back("parameterization", o->param + (o->free_intrinsics ? " (20 free)" : ""));
       m.emplace_back("optimizer", o->optimizer + " (" + r.method + ")");
       m.emplace_back("seed", std::to_string(o->seed));
-      m.emplace_back("trim", num(o->trim));
+      if (from_data) {
+        const auto kept = cost.kept_fractions(r.H);
+        m.emplace_back("trim", "from the data (" + num(std::round((1 - kept.first) * 1e3) / 1e3) + " of cluster1, " +
+                                   num(std::round((1 - kept.second) * 1e3) / 1e3) + " of cluster2 left out)");
+      } else {
+        m.emplace_back("trim", num(o->trim));
+      }
       m.emplace_back("truncate", num(o->truncate));
       m.emplace_back("cost_start", std::isfinite(r.start_cost) ? num(r.start_cost) : "none (no start)");
       m.emplace_back("cost", num(r.cost));

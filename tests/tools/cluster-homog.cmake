@@ -79,3 +79,8 @@ tpkit_tool_test(cluster-homog.verdict-rejected-exit-3
 tpkit_tool_test(cluster-homog.verdict-keep-rejected
   COMMAND "${_unrelated} && cluster-homog ${_s}/cluster-a.points r.points --keep-rejected -o h.homography @SEMI@ echo exit $?"
   STDOUT_MATCH "exit 3" CHECK_FILE h.homography FILE_MATCH "# verdict: rejected\n")
+# unknown overlap by default: without --trim the trim comes from the data and the fractions left out are
+# written (the extra pair: A has 20% extra points, B 30% missing and 20% extra)
+tpkit_tool_test(cluster-homog.trim-from-data-by-default
+  COMMAND "cluster-homog ${_s}/cluster-extra-a.points ${_s}/cluster-extra-b.points --param math -o h.homography"
+  CHECK_FILE h.homography FILE_MATCH "# trim: from the data \\(0\\.[0-9]+ of cluster1, 0\\.[0-9]+ of cluster2 left out\\).*# verdict: accepted.*${_eq4}")

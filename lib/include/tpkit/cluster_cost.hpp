@@ -9,11 +9,19 @@
 // Robust variants, for clusters with extra and missing points:
 //   trim F      each direction averages only the smallest (1 - F) fraction of its distances
 //   truncate T  each distance is replaced by min(d, T) pixels
+//   from data   (trim_from_data; cluster-homog's default) the trim of each direction is chosen by the
+//               data, for every h: of the direction's N distances sorted d_(1) <= ... <= d_(N), the k
+//               smallest are kept where k minimizes psi(k) = mean(d_(1..k)) / (k/N)^1.5, k from
+//               min(N, max(4, N/10)) to N, and the direction's term is that least psi (Chetverikov's
+//               trimmed ICP criterion e(xi) / xi^(1 + lambda), lambda = 2, on distances instead of their
+//               squares). The matched fraction xi = k/N is thus estimated, not given: an unknown overlap.
+//               psi(N) is the paper's mean, so a fully overlapping pair costs what eq. 3 gives.
 // Points that h sends to (or beyond) the line at infinity count as the largest distance (see cap()).
 #pragma once
 #include <Eigen/Core>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tpkit {
@@ -21,7 +29,16 @@ namespace tpkit {
 struct CostOptions {
   double trim = 0;      // fraction in [0, 1) of the largest distances left out in each direction
   double truncate = 0;  // pixels; 0 = no truncation
+  bool trim_from_data = false;  // each direction's trim estimated per h (see above); needs trim = truncate = 0
 };
+
+// The data-chosen trim of one direction: how many of the distances d (any order; reordered) psi keeps,
+// and psi itself (pixels). d must not be empty.
+struct DataTrim {
+  size_t keep;
+  double psi;
+};
+DataTrim data_trim(std::vector<double>& d);
 
 // One nearest-neighbour pair under h: point ia of A and ib of B; d is the distance in pixels measured
 // in the image of the query (forward: |h(A_ia) - B_ib| in image 2; backward: |h^-1(B_ib) - A_ia|).
@@ -46,6 +63,8 @@ class ClusterCost {
   // a null subset means all points.
   double cost(const Eigen::Matrix3d& H, const CostOptions& opt, const std::vector<int>* sub_a,
               const std::vector<int>* sub_b) const;
+  // The fractions of A's and B's points that the data-chosen trim keeps under H (trim_from_data).
+  std::pair<double, double> kept_fractions(const Eigen::Matrix3d& H) const;
   // Every nearest-neighbour pair of both directions under H (n forward then m backward).
   std::vector<NnPair> pairs(const Eigen::Matrix3d& H) const;
   // Forward-only mean of min(d, tol) over a subset of A (indices), for quick hypothesis scoring.
@@ -67,6 +86,10 @@ class ClusterCost {
 
  private:
   struct Trees;
+  // Nearest-neighbour distances of both directions under H (Hi its inverse), at their points' indices
+  // (or in the subsets' order); points sent to infinity get 10 cap().
+  void distances(const Eigen::Matrix3d& H, const Eigen::Matrix3d& Hi, const std::vector<int>* sub_a,
+                 const std::vector<int>* sub_b, std::vector<double>& da, std::vector<double>& db) const;
   Eigen::MatrixX2d A_, B_;
   CostOptions opt_;
   double cap_ = 1;
@@ -90,5 +113,8 @@ void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source);
 // Largest distance between h and a reference homography over the points of `pts` (image 1), in
 // image-2 pixels (used for "h within 0.5 px of the truth over the cluster's extent").
 double homography_max_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d& ref, const Eigen::MatrixX2d& pts);
+// The same as a root mean square over the points (issue 15's "h within 0.5 px RMS of the truth over A's
+// extent", with pts = extent_grid(A)); +inf if a point goes to infinity under either.
+double homography_rms_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d& ref, const Eigen::MatrixX2d& pts);
 
 }  // namespace tpkit

@@ -13,7 +13,9 @@
 //             refinement of H on the nearest-neighbour pairs (refine_on_pairs) until the pairs stop
 //             changing; when that does not reach the target, the correspondence-free search
 //             (cluster_search.hpp) supplies more starting points (refined by refine_growing), then
-//             up to 5 more evolution rounds from the start; the best result is kept. For dense clusters
+//             up to 5 more evolution rounds from the start; the best result is kept. Each stage stops at
+//             the target cost or as soon as the verdict (cluster_verdict.hpp) accepts the best h with log10
+//             odds >= 10. Steps of the evolution strategy to a degenerate h (MapCheck) are refused. For dense clusters
 //             (> 2000 points) the search goes first: the cost is flat beyond the point spacing.
 //   none      evaluates the start only.
 // Deterministic for a seed.
@@ -66,7 +68,8 @@ struct OptimizeResult {
 OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& start, const OptimizeOptions& opt);
 
 // Local refinement of H on nearest-neighbour pairs (both directions, residual h(A_i) - B_j in image-2
-// pixels) with a Cauchy loss of scale max(1.4826 median distance, 0.1 px), solved by Ceres (LM) on the
+// pixels) with a Cauchy loss of scale max(1.4826 median distance, 0.1 px) (with the cost's trim_from_data,
+// the median of the distances the data-chosen trim keeps, data_trim()), solved by Ceres (LM) on the
 // 8 coefficients of H in normalized coordinates (at most 3000 pairs per round, evenly strided);
 // repeated until the pair set stops changing (or max_rounds). Without a region, keeps the best H by
 // the cost. With a region (centre in image 1 pixels, radius), only pairs whose A point lies in it are

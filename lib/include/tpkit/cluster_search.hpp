@@ -8,8 +8,9 @@
 // divided by the largest, sorted, are an affine invariant (2 degrees of freedom); sorting them also
 // orders the four points. Quadruples of A are matched to those of B by nearest descriptors (nanoflann
 // KD-tree in descriptor space); each match gives an affine hypothesis (least squares on the four
-// points), scored by the forward truncated distance of the anchor's `local` nearest neighbours in A,
-// and the best are kept; they start the region-growing refinement (cluster_optimize.hpp). A mildly projective map (the paper's eq. 4) is locally affine, so the hypotheses start the
+// points), gated by the forward truncated distance of the anchor's 8 nearest neighbours in A and scored
+// by the forward distance truncated at a third of the gate of the anchor's `local` nearest neighbours
+// in A other than the quadruple's own four (which every hypothesis fits), and the best are kept; they start the region-growing refinement (cluster_optimize.hpp). A mildly projective map (the paper's eq. 4) is locally affine, so the hypotheses start the
 // local refinement (cluster_optimize.hpp) inside its basin. Handles any rotation and scale and
 // anisotropy; orientation-reversing maps (mirror images) too when allow_reflection is set.
 // Deterministic for a seed.
@@ -27,7 +28,7 @@ struct SearchOptions {
   int k_b = 8;               // neighbours of an anchor in B
   int max_anchors_a = 150;   // anchors of A used (random subset beyond that)
   int max_anchors_b = 4000;  // anchors of B used
-  int matches_per_quad = 2;  // nearest descriptors of B tried per quadruple of A
+  int matches_per_quad = 8;  // nearest descriptors of B tried per quadruple of A
   int keep = 12;             // hypotheses returned (best first)
   int local = 30;            // neighbours of the anchor that score a hypothesis
   bool allow_reflection = false;

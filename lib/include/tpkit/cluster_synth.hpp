@@ -23,6 +23,12 @@ struct ClusterPair {
 };
 ClusterPair synth_cluster_pair(const Eigen::Matrix3d& H, const ClusterSynthOptions& o);
 
+// The star-field families of issue 15 (the benchmark's and the tests'): x_B ~ H x_A with H = a
+// similarity of any rotation and of scale 0.3..3 (log-uniform) about the centre of [0, extent]^2, then
+// anisotropy (x scale / y scale) uniform in [1, aniso], projective terms h31, h32 uniform in
+// +-proj / extent, and the centre taken to (1000, 1000). Deterministic for a seed.
+Eigen::Matrix3d random_family_homography(double aniso, double proj, double extent, uint64_t seed);
+
 // A 5 x 5 grid over the bounding box of pts, where two homographies are compared.
 Eigen::MatrixX2d extent_grid(const Eigen::MatrixX2d& pts);
 

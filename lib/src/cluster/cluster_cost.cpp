@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <nanoflann.hpp>
+#include <stdexcept>
 
 #include "tpkit/error.hpp"
 
@@ -31,6 +32,7 @@ double diag(const Eigen::MatrixX2d& m) {
 // Mean of the (robust) distances of one direction.
 double robust_mean(std::vector<double>& d, const CostOptions& o) {
   if (d.empty()) return 0;
+  if (o.trim_from_data) return data_trim(d).psi;
   if (o.truncate > 0)
     for (double& x : d) x = std::min(x, o.truncate);
   size_t keep = d.size();
@@ -44,6 +46,24 @@ double robust_mean(std::vector<double>& d, const CostOptions& o) {
   return s / static_cast<double>(keep);
 }
 }  // namespace
+
+DataTrim data_trim(std::vector<double>& d) {
+  const size_t n = d.size();
+  if (n == 0) throw std::invalid_argument("data_trim: no distances");
+  std::sort(d.begin(), d.end());
+  const size_t k0 = std::min(n, std::max<size_t>(4, n / 10));
+  double s = 0;
+  for (size_t i = 0; i + 1 < k0; ++i) s += d[i];
+  DataTrim best{n, std::numeric_limits<double>::infinity()};
+  const double N = static_cast<double>(n);
+  for (size_t k = k0; k <= n; ++k) {
+    s += d[k - 1];
+    const double xi = static_cast<double>(k) / N;
+    const double psi = s / static_cast<double>(k) / (xi * std::sqrt(xi));
+    if (psi < best.psi) best = {k, psi};
+  }
+  return best;
+}
 
 struct ClusterCost::Trees {
   Cloud ca, cb;
@@ -62,6 +82,8 @@ ClusterCost::ClusterCost(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B, C
   if (!A_.allFinite() || !B_.allFinite()) throw InputError("a cluster has a non-finite coordinate");
   if (!(opt.trim >= 0 && opt.trim < 1)) throw UsageError("trim must be in [0, 1)");
   if (!(opt.truncate >= 0)) throw UsageError("truncate must be >= 0");
+  if (opt.trim_from_data && (opt.trim > 0 || opt.truncate > 0))
+    throw UsageError("a trim from the data excludes a given trim or truncation");
   cap_ = std::max(diag(A_), diag(B_));
   trees_ = std::make_unique<Trees>(A_, B_);
   // The trees' point order (leaf by leaf): neighbours in space are neighbours in it.
@@ -109,13 +131,10 @@ double ClusterCost::operator()(const Eigen::Matrix3d& H) const { return cost(H, 
 
 double ClusterCost::cost(const Eigen::Matrix3d& H, const CostOptions& opt) const { return cost(H, opt, nullptr, nullptr); }
 
-double ClusterCost::cost(const Eigen::Matrix3d& H, const CostOptions& opt, const std::vector<int>* sub_a,
-                         const std::vector<int>* sub_b) const {
-  Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
-  if (!H.allFinite() || !lu.isInvertible()) return std::numeric_limits<double>::infinity();
-  Eigen::Matrix3d Hi = lu.inverse();
-  // Distances are stored at their point's index whatever the order of the queries, so the sums below
-  // are those of the index order; the queries of whole clusters go in the KD-tree order (see order_a()).
+void ClusterCost::distances(const Eigen::Matrix3d& H, const Eigen::Matrix3d& Hi, const std::vector<int>* sub_a,
+                            const std::vector<int>* sub_b, std::vector<double>& da, std::vector<double>& db) const {
+  // Distances are stored at their point's index whatever the order of the queries, so the sums made of
+  // them are those of the index order; the queries of whole clusters go in the KD-tree order (order_a()).
   auto dist = [&](const Eigen::Matrix3d& M, double x, double y, bool fwd) {
     double q[2], d2;
     if (!map_point(M, x, y, q)) return cap_ * 10;
@@ -125,25 +144,40 @@ double ClusterCost::cost(const Eigen::Matrix3d& H, const CostOptions& opt, const
       nearest_a(q, &d2);
     return std::min(std::sqrt(d2), cap_ * 10);
   };
-  std::vector<double> d;
-  d.reserve(static_cast<size_t>(std::max(A_.rows(), B_.rows())));
+  da.clear();
   if (sub_a) {
-    for (int i : *sub_a) d.push_back(dist(H, A_(i, 0), A_(i, 1), true));
+    for (int i : *sub_a) da.push_back(dist(H, A_(i, 0), A_(i, 1), true));
   } else {
-    d.resize(static_cast<size_t>(A_.rows()));
+    da.resize(static_cast<size_t>(A_.rows()));
     for (size_t k = 0; k < order_a_.size(); ++k)
-      d[static_cast<size_t>(order_a_[k])] = dist(H, xy_a_[2 * k], xy_a_[2 * k + 1], true);
+      da[static_cast<size_t>(order_a_[k])] = dist(H, xy_a_[2 * k], xy_a_[2 * k + 1], true);
   }
-  double c = robust_mean(d, opt);
-  d.clear();
+  db.clear();
   if (sub_b) {
-    for (int j : *sub_b) d.push_back(dist(Hi, B_(j, 0), B_(j, 1), false));
+    for (int j : *sub_b) db.push_back(dist(Hi, B_(j, 0), B_(j, 1), false));
   } else {
-    d.resize(static_cast<size_t>(B_.rows()));
+    db.resize(static_cast<size_t>(B_.rows()));
     for (size_t k = 0; k < order_b_.size(); ++k)
-      d[static_cast<size_t>(order_b_[k])] = dist(Hi, xy_b_[2 * k], xy_b_[2 * k + 1], false);
+      db[static_cast<size_t>(order_b_[k])] = dist(Hi, xy_b_[2 * k], xy_b_[2 * k + 1], false);
   }
-  return c + robust_mean(d, opt);
+}
+
+double ClusterCost::cost(const Eigen::Matrix3d& H, const CostOptions& opt, const std::vector<int>* sub_a,
+                         const std::vector<int>* sub_b) const {
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
+  if (!H.allFinite() || !lu.isInvertible()) return std::numeric_limits<double>::infinity();
+  std::vector<double> da, db;
+  distances(H, lu.inverse(), sub_a, sub_b, da, db);
+  return robust_mean(da, opt) + robust_mean(db, opt);
+}
+
+std::pair<double, double> ClusterCost::kept_fractions(const Eigen::Matrix3d& H) const {
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
+  if (!H.allFinite() || !lu.isInvertible()) return {0, 0};
+  std::vector<double> da, db;
+  distances(H, lu.inverse(), nullptr, nullptr, da, db);
+  const double na = static_cast<double>(da.size()), nb = static_cast<double>(db.size());
+  return {static_cast<double>(data_trim(da).keep) / na, static_cast<double>(data_trim(db).keep) / nb};
 }
 
 double ClusterCost::forward_truncated(const Eigen::Matrix3d& H, const std::vector<int>& subset, double tol) const {
@@ -219,6 +253,16 @@ double homography_max_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d
     worst = std::max(worst, e);
   }
   return worst;
+}
+
+double homography_rms_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d& ref, const Eigen::MatrixX2d& pts) {
+  double ss = 0;
+  for (Eigen::Index i = 0; i < pts.rows(); ++i) {
+    const Eigen::Vector3d x(pts(i, 0), pts(i, 1), 1.0), a = H * x, b = ref * x;
+    ss += (a.head<2>() / a.z() - b.head<2>() / b.z()).squaredNorm();
+  }
+  const double rms = std::sqrt(ss / static_cast<double>(std::max<Eigen::Index>(1, pts.rows())));
+  return std::isfinite(rms) ? rms : std::numeric_limits<double>::infinity();
 }
 
 std::vector<MutualPair> mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H) {

@@ -32,6 +32,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+constexpr double kEarlyAcceptOdds = 10;  // log10 odds of the verdict that end the search early
+
 // The free parameters of one parameterization and the map to H.
 struct Space {
   Parameterization param;
@@ -263,6 +265,9 @@ Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& 
     prev = key;
     std::vector<double> d;
     for (const auto& p : pairs) d.push_back(p.d);
+    // the loss's scale: from the median distance, or with an unknown overlap (trim_from_data) from the
+    // median of the distances the data-chosen trim keeps (the unmatched points' pairs would inflate it)
+    if (cost.options().trim_from_data) d.resize(data_trim(d).keep);  // data_trim sorts d
     std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
     double scale = std::max(1.4826 * d[d.size() / 2], 0.1);
     Eigen::Matrix3d Hn = TB * H * TA.inverse();
@@ -376,18 +381,21 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
   } else if (opt.optimizer == OptimizerKind::Default) {
     std::vector<int> sa = subset(cost.a().rows(), 400, rng), sb = subset(cost.b().rows(), 400, rng);
     bool sub = sa.size() < static_cast<size_t>(cost.a().rows()) || sb.size() < static_cast<size_t>(cost.b().rows());
+    // Candidates that tear a cluster apart or collapse it are not answers (cluster_verdict.hpp): the
+    // evolution strategy refuses them at every step, the refinements' results are checked too.
+    const MapCheck map_check(cost.a(), cost.b());
+    auto usable = [&](const Eigen::Matrix3d& H) { return map_check(H).empty(); };
     auto quick = [&](const Eigen::VectorXd& y) {
       ++evals;
       if (!sp.valid(y)) return std::numeric_limits<double>::infinity();
-      return sub ? cost.cost(sp.H(y), cost.options(), &sa, &sb) : cost(sp.H(y));
+      const Eigen::Matrix3d H = sp.H(y);
+      if (!usable(H)) return std::numeric_limits<double>::infinity();
+      return sub ? cost.cost(H, cost.options(), &sa, &sb) : cost(H);
     };
     std::normal_distribution<double> g(0, 1);
     long budget = std::min<long>(opt.max_iterations, 3000), used = 0;
     Eigen::VectorXd xs = x;
     double cs = have_start ? quick(xs) : 0;
-    // Candidates that tear a cluster apart or collapse it are not answers (cluster_verdict.hpp).
-    const MapCheck map_check(cost.a(), cost.b());
-    auto usable = [&](const Eigen::Matrix3d& H) { return map_check(H).empty(); };
     // One round of (1+1)-ES from the current point, followed by the local refinement.
     auto es_round = [&](int round) {
       double s = 1.0;
@@ -427,7 +435,24 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
     // goes first.
     bool dense = cost.a().rows() > 2000 || cost.b().rows() > 2000;
     if (have_start && (!dense || !opt.search_fallback)) es_round(0);
-    if (best > opt.target && opt.search_fallback) {
+    // Done when the cost reaches the target or the verdict already accepts the best h far beyond its
+    // own threshold (log10 odds >= kEarlyAcceptOdds): with unmatched points (an unknown overlap) the
+    // cost of the right h stays above any fixed target, while the verdict recognizes it
+    // (cluster_verdict.hpp). A marginal acceptance does not stop the search: a map right on part of
+    // the clusters can pass the verdict narrowly while the search would still find the whole one.
+    bool judged = false, accepted = false;  // the verdict on the current best (judged once per best)
+    auto done = [&]() {
+      if (best <= opt.target) return true;
+      if (!judged && std::isfinite(best)) {
+        VerdictOptions vo;
+        vo.hypotheses = std::max(1L, evals);
+        vo.min_log10_odds = kEarlyAcceptOdds;
+        accepted = judge_homography(cost, bestH, vo).accepted;
+        judged = true;
+      }
+      return accepted;
+    };
+    if (!(have_start && done()) && opt.search_fallback) {
       SearchOptions so;
       so.seed = opt.seed;
       so.allow_reflection = opt.allow_reflection;
@@ -441,13 +466,16 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
         double cr = cost(Hr);
         ++evals;
         if (cr < best && usable(Hr)) {  // a degenerate map is no candidate, however low its cost
-          best = cr, bestH = Hr;
+          best = cr, bestH = Hr, judged = false;
           res.method = "search+local";
         }
-        if (best <= opt.target) break;
+        if (done()) break;
       }
     }
-    for (int round = (dense && opt.search_fallback) ? 0 : 1; have_start && round < 6 && used < budget && best > opt.target; ++round) es_round(round);
+    for (int round = (dense && opt.search_fallback) ? 0 : 1; have_start && round < 6 && used < budget && !done(); ++round) {
+      es_round(round);
+      judged = false;  // a new best, perhaps
+    }
     if (res.method.empty()) res.method = have_start ? "global+local" : "search+local";
     if (!std::isfinite(best)) throw NumericalError("no homography found: every hypothesis failed");
     // Partial overlap: the untrimmed cost stays high whatever h, so the refinement above (which keeps a

@@ -199,7 +199,13 @@ std::vector<SearchHypothesis> search_hypotheses(const ClusterCost& cost, const S
         std::vector<int> quick(loc.first.begin(), loc.first.begin() + std::min<size_t>(8, loc.first.size()));
         double s = cost.forward_truncated(H, quick, tol);
         if (s > 0.6 * tol) continue;
-        s = cost.forward_truncated(H, loc.first, tol);
+        // The score leaves out the quadruple's own points (any hypothesis fits them) and truncates at a
+        // third of the gate: with many unmatched points, the few true matches among the neighbours lie
+        // at the noise level while a wrong map's chance neighbours are spread over the gate.
+        std::vector<int> others;
+        for (int i : loc.first)
+          if (std::find(q.idx.begin(), q.idx.end(), i) == q.idx.end()) others.push_back(i);
+        s = cost.forward_truncated(H, others, tol / 3);
         all.push_back({H, s, A.row(q.anchor).transpose(), loc.second});
       }
     }

@@ -2,6 +2,7 @@
 #include "tpkit/cluster_synth.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -40,6 +41,21 @@ ClusterPair synth_cluster_pair(const Eigen::Matrix3d& H, const ClusterSynthOptio
   r.B = add_extra_and_shuffle(b, extra, rng);
   r.truth = H;
   return r;
+}
+
+Eigen::Matrix3d random_family_homography(double aniso, double proj, double extent, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(0, 1);
+  const double th = 2 * 3.14159265358979323846 * U(rng), sc = 0.3 * std::pow(10.0, U(rng));
+  const double an = 1 + (aniso - 1) * U(rng);
+  Eigen::Matrix3d S = Eigen::Matrix3d::Identity(), R = Eigen::Matrix3d::Identity(), P = Eigen::Matrix3d::Identity(),
+                  C = Eigen::Matrix3d::Identity(), D = Eigen::Matrix3d::Identity();
+  C(0, 2) = C(1, 2) = -extent / 2;  // about A's centre, then into B's frame at (1000, 1000)
+  D(0, 2) = D(1, 2) = 1000;
+  R << std::cos(th), -std::sin(th), 0, std::sin(th), std::cos(th), 0, 0, 0, 1;
+  S(0, 0) = sc * std::sqrt(an), S(1, 1) = sc / std::sqrt(an);
+  P(2, 0) = proj * (2 * U(rng) - 1) / extent, P(2, 1) = proj * (2 * U(rng) - 1) / extent;
+  return D * P * R * S * C;
 }
 
 Eigen::MatrixX2d extent_grid(const Eigen::MatrixX2d& pts) {

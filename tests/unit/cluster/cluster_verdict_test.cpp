@@ -20,7 +20,7 @@ TEST(ClusterVerdict, TruePairAcceptedEvenWithExtraAndMissingPoints) {
   ClusterSynthOptions o;
   o.noise = 0.1, o.extra = 0.3, o.missing = 0.4, o.seed = 11;
   const ClusterPair cp = synth_cluster_pair(truth(), o);
-  for (CostOptions co : {CostOptions{}, CostOptions{0.45, 0}, CostOptions{0, 0.5}}) {
+  for (CostOptions co : {CostOptions{}, CostOptions{0.45, 0}, CostOptions{0, 0.5}, CostOptions{0, 0, true}}) {
     ClusterCost cost(cp.A, cp.B, co);
     VerdictOptions vo;
     vo.hypotheses = 100000;
