@@ -10,8 +10,10 @@
 // Records: id1 x1 y1 id2 x2 y2 kx2 ky2 [sigma corr] -- (kx2, ky2) is image 2's keypoint position,
 // sigma the LSM standard deviation of (x2, y2) in pixels, corr the final correlation.
 #pragma once
+#include <array>
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "tpkit/formats.hpp"
@@ -45,6 +47,10 @@ struct PairMatchOptions {
   bool refine = true;
   LsmOptions lsm;
   std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
+  // Region runs (match_region.hpp): only the verified matches whose image-1 keypoint lies in this
+  // window [x0, x1) x [y0, y1) (pixel-centre coordinates) are refined and returned; the others gave
+  // them their context (ratio test, mutual check, RANSAC) and are dropped before refinement.
+  std::optional<std::array<double, 4>> window;
   long refine_tile = 256;         // rows of the image-1 bands refined one after the other (bounded memory)
   int threads = 1;
   // When set, refinement takes its current value for each band instead of `threads`: a pair matched
@@ -55,6 +61,7 @@ struct PairMatchOptions {
 
 struct PairMatchStats {
   long keypoints1 = 0, keypoints2 = 0, putative = 0, verified = 0, gridded = 0, refined = 0;
+  long in_window = 0;                          // of the gridded ones, those in PairMatchOptions::window (all without one)
   double ransac_rms = 0;
   bool cached1 = false, cached2 = false;       // keypoints read from the cache
   bool guided = false;                         // the guided search ran (else the global one)

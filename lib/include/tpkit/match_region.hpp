@@ -7,7 +7,7 @@
 //   `margin` pixels are detected with the whole image's stretch (from the pair geometry): keypoints
 //   and ids are exactly those of a whole run. The keypoints of the grown window are all matched, so
 //   that the ratio test, the mutual check and RANSAC see the same neighbourhood as a whole run for the
-//   keypoints of the window; only those in the window are written.
+//   keypoints of the window; only those in the window are refined and written.
 // - Image 2: only the tiles that meet image2_window() of the grown window (the coarse map of the pair
 //   geometry, grown by its spread and `margin`) are read and detected.
 // - Then the pipeline of match_keypoints() (guided search with its own coarse stage on these keypoints,
@@ -33,14 +33,11 @@ struct RegionStats {
   long tiles1 = 0, tiles2 = 0;          // detection tiles read
   long cached_tiles1 = 0, cached_tiles2 = 0;
   std::array<double, 4> window2{0, 0, 0, 0};  // image-2 window x0 y0 x1 y1, clipped
-  long matched = 0;                     // matches of the grown window, before keeping those of the window
+  long matched = 0;                     // verified matches of the grown window, before keeping those of the window
 };
 
 // Throws UsageError when the window is empty or outside image 1.
 Matches match_region(const ImageSource& a, const ImageSource& b, const PairGeometry& G, const PairMatchOptions& o,
                      const RegionOptions& r, PairMatchStats* stats = nullptr, RegionStats* rstats = nullptr);
-
-// The records of M whose image-1 position lies in the window (the rule above).
-Matches matches_in_window(const Matches& M, const std::array<long, 4>& window);
 
 }  // namespace tpkit

@@ -50,35 +50,22 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
   return M;
 }
 
-Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
-                        PairMatchStats* stats) {
-  PairMatchStats st;
-  Matches M;
-  M.image1 = {a.path, a.info.width, a.info.height};
-  M.image2 = {b.path, b.info.width, b.info.height};
+// The stages of match_keypoints(). Conventions: image 1 is the template side; a DescriptorMatch
+// holds indices into K1 (i1) and K2 (i2); positions are pixel-centre coordinates (x = column, y = row);
+// `ver` lists indices into the putative matches.
+namespace {
 
-  auto clock = std::chrono::steady_clock::now();
-  auto lap = [&clock](double& out) {
-    auto now = std::chrono::steady_clock::now();
-    out = std::chrono::duration<double>(now - clock).count();
-    clock = now;
-  };
-  st.keypoints1 = static_cast<long>(K1.kp.size());
-  st.keypoints2 = static_cast<long>(K2.kp.size());
-
-  // 2. putative matches
+// 2. Putative matches: along the RPC epipolar curves when both models are given, else (or when the
+// curves held no geometry and the caller allows it) along the coarse stage's epipolar band, else over
+// all descriptors.
+std::vector<DescriptorMatch> putative_matches(const ImageSource& a, const Keypoints& K1, const Keypoints& K2,
+                                              const PairMatchOptions& o, const AffineFundamentalRansac& cr, PairMatchStats& st) {
   std::vector<DescriptorMatch> put;
-  AffineFundamentalRansac cr;
-  cr.threshold = o.ransac_threshold;
-  cr.max_iterations = o.ransac_iterations;
-  cr.seed = o.seed;
   if (o.rpc1 && o.rpc2) {
     put = rpc_guided_match(K1, K2, a.info.width, a.info.height, *o.rpc1, *o.rpc2, o.desc, o.guide, o.rpc_guide, cr,
                            o.min_inliers, o.threads, &st.rpc);
     st.rpc_guided = true;
   }
-  // the coarse stage on the images: without models, or when the models' curves held no geometry
-  // (models off by more than the margin) and the caller allows it
   const bool rpc_failed = st.rpc_guided && !st.rpc.narrowed;
   if (o.guided && (!st.rpc_guided || (rpc_failed && !o.rpc_only))) {
     GuidedMatchResult g = guided_match(K1, K2, a.info.width, a.info.height, o.desc, o.guide, cr, o.min_inliers, o.threads);
@@ -93,11 +80,14 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   }
   if (!st.guided && !st.rpc_guided) put = match_descriptors(K1.desc, K2.desc, o.desc);
   st.putative = static_cast<long>(put.size());
-  K1.desc.release();
-  K2.desc.release();
+  return put;
+}
 
-  lap(st.seconds[1]);
-  // 3. affine F RANSAC
+// 3. Verification by the affine F (RANSAC); when that finds no model, by a 2-D affine map (zero
+// parallax: views that are identical or nearly so map onto each other by a plane affinity, and every
+// affine F that contains it fits them). Returns the verified putative indices; `rr` is the F fit.
+std::vector<size_t> verify_matches(const std::vector<DescriptorMatch>& put, const Keypoints& K1, const Keypoints& K2,
+                                   const PairMatchOptions& o, AffineFundamentalResult& rr, PairMatchStats& st) {
   Eigen::MatrixX4d xy(put.size(), 4);
   for (size_t i = 0; i < put.size(); ++i) {
     const auto &k1 = K1.kp[put[i].i1], &k2 = K2.kp[put[i].i2];
@@ -107,14 +97,11 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   ro.threshold = o.ransac_threshold;
   ro.max_iterations = o.ransac_iterations;
   ro.seed = o.seed;
-  AffineFundamentalResult rr = ransac_affine_fundamental(xy, ro);
+  rr = ransac_affine_fundamental(xy, ro);
   std::vector<size_t> ver;
   if (rr.ok && rr.inliers >= o.min_inliers)
     for (size_t i = 0; i < put.size(); ++i)
       if (rr.inlier[i]) ver.push_back(i);
-  // 3b. zero parallax: views that are identical or nearly so (the same image twice, or no base) map
-  // onto each other by a plane affinity, and every affine F that contains it fits them, so the F RANSAC
-  // finds no model. Verify such a pair by the 2-D affine map instead (OpenCV's RANSAC), and say so.
   if (ver.empty() && put.size() >= 3) {
     std::vector<cv::Point2f> p1(put.size()), p2(put.size());
     for (size_t i = 0; i < put.size(); ++i) p1[i] = K1.kp[put[i].i1].pt, p2[i] = K2.kp[put[i].i2].pt;
@@ -138,105 +125,108 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   st.verified = static_cast<long>(ver.size());
   if (!st.no_parallax) st.ransac_rms = rr.ok ? rr.rms : 0;
   if (ver.empty()) st.overlap = false;
+  return ver;
+}
 
-  // 4. grid thinning
-  if (o.grid > 0 && !ver.empty()) {
-    std::vector<cv::Point2f> pts;
-    std::vector<float> score;
-    for (size_t i : ver) {
-      pts.push_back(K1.kp[put[i].i1].pt);
-      score.push_back(put[i].ratio);
-    }
-    std::vector<size_t> keep = grid_select(pts, score, a.info.width, a.info.height, o.grid, o.per_cell);
-    std::vector<size_t> v2;
-    for (size_t k : keep) v2.push_back(ver[k]);
-    ver.swap(v2);
+// 4. Grid thinning: the best-ratio matches of each cell of a grid over image 1.
+void thin_to_grid(std::vector<size_t>& ver, const std::vector<DescriptorMatch>& put, const Keypoints& K1, const ImageSource& a,
+                  const PairMatchOptions& o) {
+  if (o.grid <= 0 || ver.empty()) return;
+  std::vector<cv::Point2f> pts;
+  std::vector<float> score;
+  for (size_t i : ver) {
+    pts.push_back(K1.kp[put[i].i1].pt);
+    score.push_back(put[i].ratio);
   }
-  st.gridded = static_cast<long>(ver.size());
+  std::vector<size_t> keep = grid_select(pts, score, a.info.width, a.info.height, o.grid, o.per_cell);
+  std::vector<size_t> v2;
+  for (size_t k : keep) v2.push_back(ver[k]);
+  ver.swap(v2);
+}
 
-  lap(st.seconds[2]);
-  // 5. least-squares matching, image-1 region by region
-  struct Rec {
-    long long id1, id2;
-    double x1, y1, x2, y2, kx2, ky2, sigma, corr;
-    bool ok;
-    LsmStatus status;
-  };
-  std::vector<Rec> recs(ver.size());
-  const bool lsm_epipolar = o.lsm.epipolar_curvature && rr.ok;  // the quadratic stage bends along F's epipolar lines
-  for (size_t j = 0; j < ver.size(); ++j) {
-    const auto& m = put[ver[j]];
-    const auto &k1 = K1.kp[m.i1], &k2 = K2.kp[m.i2];
-    recs[j] = {K1.id[m.i1], K2.id[m.i2], k1.pt.x, k1.pt.y, k2.pt.x, k2.pt.y, k2.pt.x, k2.pt.y, 0, 0, true, LsmStatus::Ok};
+// 4b. Region runs: only the matches whose image-1 keypoint lies in the window go on (the others
+// gave the window's matches their context and are not refined).
+void keep_in_window(std::vector<size_t>& ver, const std::vector<DescriptorMatch>& put, const Keypoints& K1,
+                    const std::array<double, 4>& w) {
+  std::vector<size_t> v2;
+  for (size_t i : ver) {
+    const cv::Point2f p = K1.kp[put[i].i1].pt;
+    if (p.x >= w[0] && p.x < w[2] && p.y >= w[1] && p.y < w[3]) v2.push_back(i);
   }
-  if (o.refine && !recs.empty()) {
-    // Image 1 in bands of refine_tile rows, one after the other: each band's region of image 1 and the
-    // region of image 2 its windows reach are read once (a strip-stored file is decoded about once in
-    // all), and the band's points are refined in parallel. A band whose image-2 region would be too
-    // large (strong rotation between the images) is split along x until it fits.
-    std::vector<Eigen::Matrix2d> A0(recs.size());
-    for (size_t j = 0; j < recs.size(); ++j) {
-      const auto& m = put[ver[j]];
-      A0[j] = keypoint_affine(K1.kp[m.i1].size, K1.kp[m.i1].angle, K2.kp[m.i2].size, K2.kp[m.i2].angle);
+  ver.swap(v2);
+}
+
+struct Rec {
+  long long id1, id2;
+  double x1, y1, x2, y2, kx2, ky2, sigma, corr;
+  bool ok;
+  LsmStatus status;
+};
+
+// 5. Least-squares matching of every record, image 1 in bands of refine_tile rows, one after the
+// other: each band's region of image 1 and the region of image 2 its windows reach are read once (a
+// strip-stored file is decoded about once in all), and the band's points are refined in parallel. A
+// band whose image-2 region would be too large (strong rotation between the images) is split along x
+// until it fits. A0 holds each record's initial local map (keypoint_affine).
+void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
+                    const LsmOptions& lsm, const PairMatchOptions& o) {
+  const long B = std::max(16L, o.refine_tile);
+  std::vector<std::vector<size_t>> bands(static_cast<size_t>((a.info.height + B - 1) / B) + 1);
+  for (size_t j = 0; j < recs.size(); ++j)
+    bands[std::clamp<size_t>(static_cast<size_t>(std::max(0.0, recs[j].y1 + 0.5) / B), 0, bands.size() - 1)].push_back(j);
+  std::unique_ptr<Progress> pr;
+  if (o.progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
+  const int h = o.lsm.window / 2;
+  const double max_area = 64.0 * 1024 * 1024;  // pixels of an image-2 region (256 MB as float)
+  std::function<void(std::vector<size_t>&)> refine_group = [&](std::vector<size_t>& js) {
+    if (js.empty()) return;
+    // regions that hold every window (plus the interpolation support and the allowed drift)
+    double ax0 = 1e300, ay0 = 1e300, ax1 = -1e300, ay1 = -1e300, bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
+    for (size_t j : js) {
+      const Rec& r = recs[j];
+      const double ext1 = h * std::sqrt(2.0) + 3;
+      const double ext2 = h * std::sqrt(2.0) * A0[j].norm() * 1.5 + o.lsm.max_shift * 3 + 6;
+      ax0 = std::min(ax0, r.x1 - ext1), ax1 = std::max(ax1, r.x1 + ext1);
+      ay0 = std::min(ay0, r.y1 - ext1), ay1 = std::max(ay1, r.y1 + ext1);
+      bx0 = std::min(bx0, r.kx2 - ext2), bx1 = std::max(bx1, r.kx2 + ext2);
+      by0 = std::min(by0, r.ky2 - ext2), by1 = std::max(by1, r.ky2 + ext2);
     }
-    const long B = std::max(16L, o.refine_tile);
-    std::vector<std::vector<size_t>> bands(static_cast<size_t>((a.info.height + B - 1) / B) + 1);
-    for (size_t j = 0; j < recs.size(); ++j)
-      bands[std::clamp<size_t>(static_cast<size_t>(std::max(0.0, recs[j].y1 + 0.5) / B), 0, bands.size() - 1)].push_back(j);
-    std::unique_ptr<Progress> pr;
-    if (o.progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
-    const int h = o.lsm.window / 2;
-    LsmOptions lsm = o.lsm;
-    // epipolar lines of image 2 run along (-b, a): the direction in which the map bends with the terrain
-    if (lsm_epipolar) lsm.epipolar_dir = Eigen::Vector2d(-rr.F.n(1), rr.F.n(0));
-    const double max_area = 64.0 * 1024 * 1024;  // pixels of an image-2 region (256 MB as float)
-    std::function<void(std::vector<size_t>&)> refine_group = [&](std::vector<size_t>& js) {
-      if (js.empty()) return;
-      // regions that hold every window (plus the interpolation support and the allowed drift)
-      double ax0 = 1e300, ay0 = 1e300, ax1 = -1e300, ay1 = -1e300, bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
-      for (size_t j : js) {
-        const Rec& r = recs[j];
-        const double ext1 = h * std::sqrt(2.0) + 3;
-        const double ext2 = h * std::sqrt(2.0) * A0[j].norm() * 1.5 + o.lsm.max_shift * 3 + 6;
-        ax0 = std::min(ax0, r.x1 - ext1), ax1 = std::max(ax1, r.x1 + ext1);
-        ay0 = std::min(ay0, r.y1 - ext1), ay1 = std::max(ay1, r.y1 + ext1);
-        bx0 = std::min(bx0, r.kx2 - ext2), bx1 = std::max(bx1, r.kx2 + ext2);
-        by0 = std::min(by0, r.ky2 - ext2), by1 = std::max(by1, r.ky2 + ext2);
-      }
-      if ((bx1 - bx0) * (by1 - by0) > max_area && js.size() > 1) {
-        std::sort(js.begin(), js.end(), [&](size_t p, size_t q) { return recs[p].x1 < recs[q].x1 || (recs[p].x1 == recs[q].x1 && p < q); });
-        std::vector<size_t> lo(js.begin(), js.begin() + static_cast<long>(js.size() / 2)), hi(js.begin() + static_cast<long>(js.size() / 2), js.end());
-        refine_group(lo);
-        refine_group(hi);
-        return;
-      }
-      const Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
-                                          (long)std::ceil(ay1 - ay0) + 2);
-      const Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
-                                          (long)std::ceil(by1 - by0) + 2);
-      const size_t chunk = 64;
-      const int threads = o.live_threads ? std::max(1, o.live_threads->load()) : o.threads;
-      parallel_for((js.size() + chunk - 1) / chunk, threads, [&](size_t c) {
-        for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
-          Rec& r = recs[js[q]];
-          LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], lsm);
-          r.ok = L.ok();
-          r.status = L.status;
-          if (r.ok) {
-            r.x2 = L.p2.x();
-            r.y2 = L.p2.y();
-            r.sigma = L.sigma;
-            r.corr = L.corr;
-          }
+    if ((bx1 - bx0) * (by1 - by0) > max_area && js.size() > 1) {
+      std::sort(js.begin(), js.end(), [&](size_t p, size_t q) { return recs[p].x1 < recs[q].x1 || (recs[p].x1 == recs[q].x1 && p < q); });
+      std::vector<size_t> lo(js.begin(), js.begin() + static_cast<long>(js.size() / 2)), hi(js.begin() + static_cast<long>(js.size() / 2), js.end());
+      refine_group(lo);
+      refine_group(hi);
+      return;
+    }
+    const Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
+                                        (long)std::ceil(ay1 - ay0) + 2);
+    const Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
+                                        (long)std::ceil(by1 - by0) + 2);
+    const size_t chunk = 64;
+    const int threads = o.live_threads ? std::max(1, o.live_threads->load()) : o.threads;
+    parallel_for((js.size() + chunk - 1) / chunk, threads, [&](size_t c) {
+      for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
+        Rec& r = recs[js[q]];
+        LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], lsm);
+        r.ok = L.ok();
+        r.status = L.status;
+        if (r.ok) {
+          r.x2 = L.p2.x();
+          r.y2 = L.p2.y();
+          r.sigma = L.sigma;
+          r.corr = L.corr;
         }
-      });
-      if (pr) pr->add(static_cast<long>(js.size()));
-    };
-    for (auto& js : bands) refine_group(js);
-    if (pr) pr->done();
-  }
+      }
+    });
+    if (pr) pr->add(static_cast<long>(js.size()));
+  };
+  for (auto& js : bands) refine_group(js);
+  if (pr) pr->done();
+}
 
-  lap(st.seconds[3]);
+// 6. The records that converged (all of them without refinement), in order.
+Matches assemble_matches(const std::vector<Rec>& recs, const PairMatchOptions& o, PairMatchStats& st) {
+  Matches M;
   size_t nout = 0;
   for (const Rec& r : recs) {
     if (r.ok) ++nout;
@@ -250,7 +240,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     M.extra.names.push_back("corr");
   }
   M.extra.values.resize(static_cast<Eigen::Index>(nout), static_cast<Eigen::Index>(M.extra.names.size()));
-  size_t k = 0;
+  Eigen::Index k = 0;
   for (const Rec& r : recs) {
     if (!r.ok) continue;
     M.id1.push_back(r.id1);
@@ -264,9 +254,11 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     }
     ++k;
   }
-  meta_set(M.meta, "detector1", detector_tag(o.sift, a));
-  meta_set(M.meta, "detector2", detector_tag(o.sift, b));
-  meta_set(M.meta, "keypoints", std::to_string(st.keypoints1) + " " + std::to_string(st.keypoints2));
+  return M;
+}
+
+// The header's account of the descriptor search.
+std::string search_description(const PairMatchStats& st, const PairMatchOptions& o) {
   std::string search = "global";
   if (st.rpc_guided) {
     auto h = [](double v) { return format_number(std::round(v * 10) / 10); };
@@ -294,8 +286,17 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   } else if (o.guided) {
     search = "global (the guided search found no coarse geometry)";
   }
+  return search;
+}
+
+// The header lines that say how the records were made.
+void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const PairMatchOptions& o, const PairMatchStats& st,
+                  bool lsm_epipolar) {
+  meta_set(M.meta, "detector1", detector_tag(o.sift, a));
+  meta_set(M.meta, "detector2", detector_tag(o.sift, b));
+  meta_set(M.meta, "keypoints", std::to_string(st.keypoints1) + " " + std::to_string(st.keypoints2));
   meta_set(M.meta, "putative", std::to_string(st.putative) + " (ratio " + format_number(o.desc.ratio) +
-                                   (o.desc.mutual ? ", mutual" : "") + "; " + search + ")");
+                                   (o.desc.mutual ? ", mutual" : "") + "; " + search_description(st, o) + ")");
   meta_set(M.meta, "verified", std::to_string(st.verified) + (st.no_parallax ? " (no parallax: 2-D affine map RANSAC" : " (affine F RANSAC") +
                                    ", threshold " + format_number(o.ransac_threshold) +
                                    " px, seed " + std::to_string(o.seed) + ", inlier rms " + format_number(std::round(st.ransac_rms * 1e4) / 1e4) + " px)");
@@ -308,6 +309,63 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   else
     meta_set(M.meta, "refinement", "none (raw SIFT positions)");
   meta_set(M.meta, "positions", "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2; kx2 ky2 keypoint of image2");
+}
+
+}  // namespace
+
+Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
+                        PairMatchStats* stats) {
+  PairMatchStats st;
+  auto clock = std::chrono::steady_clock::now();
+  auto lap = [&clock](double& out) {
+    auto now = std::chrono::steady_clock::now();
+    out = std::chrono::duration<double>(now - clock).count();
+    clock = now;
+  };
+  st.keypoints1 = static_cast<long>(K1.kp.size());
+  st.keypoints2 = static_cast<long>(K2.kp.size());
+
+  AffineFundamentalRansac cr;  // the coarse stages' RANSAC
+  cr.threshold = o.ransac_threshold;
+  cr.max_iterations = o.ransac_iterations;
+  cr.seed = o.seed;
+  const std::vector<DescriptorMatch> put = putative_matches(a, K1, K2, o, cr, st);
+  K1.desc.release();
+  K2.desc.release();
+  lap(st.seconds[1]);
+
+  AffineFundamentalResult rr;
+  std::vector<size_t> ver = verify_matches(put, K1, K2, o, rr, st);
+  thin_to_grid(ver, put, K1, a, o);
+  st.gridded = static_cast<long>(ver.size());
+  if (o.window) keep_in_window(ver, put, K1, *o.window);
+  st.in_window = static_cast<long>(ver.size());
+  lap(st.seconds[2]);
+
+  std::vector<Rec> recs(ver.size());
+  for (size_t j = 0; j < ver.size(); ++j) {
+    const auto& m = put[ver[j]];
+    const auto &k1 = K1.kp[m.i1], &k2 = K2.kp[m.i2];
+    recs[j] = {K1.id[m.i1], K2.id[m.i2], k1.pt.x, k1.pt.y, k2.pt.x, k2.pt.y, k2.pt.x, k2.pt.y, 0, 0, true, LsmStatus::Ok};
+  }
+  const bool lsm_epipolar = o.lsm.epipolar_curvature && rr.ok;  // the quadratic stage bends along F's epipolar lines
+  if (o.refine && !recs.empty()) {
+    std::vector<Eigen::Matrix2d> A0(recs.size());
+    for (size_t j = 0; j < recs.size(); ++j) {
+      const auto& m = put[ver[j]];
+      A0[j] = keypoint_affine(K1.kp[m.i1].size, K1.kp[m.i1].angle, K2.kp[m.i2].size, K2.kp[m.i2].angle);
+    }
+    LsmOptions lsm = o.lsm;
+    // epipolar lines of image 2 run along (-b, a): the direction in which the map bends with the terrain
+    if (lsm_epipolar) lsm.epipolar_dir = Eigen::Vector2d(-rr.F.n(1), rr.F.n(0));
+    refine_records(a, b, recs, A0, lsm, o);
+  }
+  lap(st.seconds[3]);
+
+  Matches M = assemble_matches(recs, o, st);
+  M.image1 = {a.path, a.info.width, a.info.height};
+  M.image2 = {b.path, b.info.width, b.info.height};
+  describe_run(M, a, b, o, st, lsm_epipolar);
   if (stats) *stats = st;
   return M;
 }

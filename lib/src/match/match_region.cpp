@@ -46,28 +46,6 @@ Keypoints window_keypoints(const ImageSource& s, const PairMatchOptions& o, cons
 
 }  // namespace
 
-Matches matches_in_window(const Matches& M, const std::array<long, 4>& win) {
-  const double x0 = win[0] - 0.5, y0 = win[1] - 0.5, x1 = x0 + win[2], y1 = y0 + win[3];
-  std::vector<Eigen::Index> keep;
-  for (Eigen::Index k = 0; k < M.xy.rows(); ++k)
-    if (M.xy(k, 0) >= x0 && M.xy(k, 0) < x1 && M.xy(k, 1) >= y0 && M.xy(k, 1) < y1) keep.push_back(k);
-  Matches out = M;
-  out.id1.clear();
-  out.id2.clear();
-  out.line.clear();
-  out.xy.resize(static_cast<Eigen::Index>(keep.size()), 4);
-  out.extra.values.resize(static_cast<Eigen::Index>(keep.size()), M.extra.values.cols());
-  for (size_t j = 0; j < keep.size(); ++j) {
-    const Eigen::Index k = keep[j], r = static_cast<Eigen::Index>(j);
-    out.id1.push_back(M.id1[static_cast<size_t>(k)]);
-    out.id2.push_back(M.id2[static_cast<size_t>(k)]);
-    out.xy.row(r) = M.xy.row(k);
-    if (M.extra.values.cols() > 0) out.extra.values.row(r) = M.extra.values.row(k);
-    if (!M.line.empty()) out.line.push_back(M.line[static_cast<size_t>(k)]);
-  }
-  return out;
-}
-
 Matches match_region(const ImageSource& a, const ImageSource& b, const PairGeometry& G, const PairMatchOptions& o,
                      const RegionOptions& r, PairMatchStats* stats, RegionStats* rstats) {
   const auto& w = r.window;
@@ -87,16 +65,17 @@ Matches match_region(const ImageSource& a, const ImageSource& b, const PairGeome
   if (rs.window2[0] < rs.window2[2] && rs.window2[1] < rs.window2[3])
     K2 = window_keypoints(b, o, G.stretch2, rs.window2, &rs.tiles2, &rs.cached_tiles2);
   const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  Matches all = match_keypoints(a, b, std::move(K1), std::move(K2), o, &st);
-  rs.matched = static_cast<long>(all.size());
-  Matches M = matches_in_window(all, w);
+  PairMatchOptions ow = o;
+  ow.window = {w[0] - 0.5, w[1] - 0.5, w[0] + w[2] - 0.5, w[1] + w[3] - 0.5};
+  Matches M = match_keypoints(a, b, std::move(K1), std::move(K2), ow, &st);
+  rs.matched = st.gridded;
   st.seconds[0] = detect_s;
   st.cached1 = rs.tiles1 > 0 && rs.cached_tiles1 == rs.tiles1;
   st.cached2 = rs.tiles2 > 0 && rs.cached_tiles2 == rs.tiles2;
   meta_set(M.meta, "region", std::to_string(w[0]) + " " + std::to_string(w[1]) + " " + std::to_string(w[2]) + " " +
                                  std::to_string(w[3]) + " (x0 y0 width height, image1 pixels; margin " + format_number(r.margin) +
-                                 " px: " + std::to_string(rs.matched) + " matches of the grown window, " +
-                                 std::to_string(M.size()) + " in the region)");
+                                 " px: " + std::to_string(rs.matched) + " verified matches in the grown window, " +
+                                 std::to_string(st.in_window) + " in the region, " + std::to_string(M.size()) + " refined)");
   meta_set(M.meta, "region-read", std::to_string(rs.tiles1) + " detection tiles of image1, " + std::to_string(rs.tiles2) +
                                       " of image2 in x " + format_number(std::round(rs.window2[0])) + ".." +
                                       format_number(std::round(rs.window2[2])) + " y " + format_number(std::round(rs.window2[1])) +
