@@ -4,11 +4,17 @@
 #   bench/scale_out.sh BIN SCENE10K [SCENE2]   (SCENE2: a scene of another size, e.g. 20000 or 5000)
 # BIN: folder of the tools; SCENEnK: tp-synth folders (view1.tif, view2.tif), e.g.
 #   tp-synth --out s10k --size 10000 --seed 1 --supersample 1
-# Prints: the whole run's wall / CPU time and peak memory; per region job peak memory (max) and CPU
-# time; total CPU of geometry + regions + merge against the whole run's; the array's wall time; the
-# share of the whole run's matches found with the same ids and positions (1e-6 px); and one job's
-# memory and time for regions of 2000 and 4000 pixels in each scene given.
+# Prints: the whole run's wall / CPU time and peak memory, with the plan's detection tile (tp-plan
+# --detect-tile, default 768: keypoint ids depend on it) and with tp-match's default (1024); per job
+# of the plan (geometry, detection, regions) peak memory and CPU time; total CPU of all jobs against
+# the whole run's; the array's wall time; the share of the whole run's matches found with the same ids
+# and positions (1e-6 px); and for regions of 2000 and 4000 pixels in each scene given, the memory and
+# time of a detection job on such a block, of a region job that detects its own tiles, and of the same
+# region job once the cache holds them (as in a plan); these with --no-rpc, so that a scene with RPC
+# sidecars (tp-synth writes them) is searched as one without.
 # Every job runs with one thread (--threads 1; the whole run with 2, its CPU time is what compares).
+# DETECT_TILE (default 768) sets the detection tile; WHOLE_MATCHES and WHOLE_TIME ("wall user sys
+# maxrss_kB") reuse a whole run made with it; SKIP_DEFAULT_TILE=1 skips the run at 1024.
 set -euo pipefail
 BIN=$(cd "$1" && pwd)
 S10=$(cd "$2" && pwd)
@@ -31,7 +37,7 @@ mkdir -p "$T/timed" "$T/times"
 for t in tp-match tp-merge tp-chain; do
   cat > "$T/timed/$t" <<WRAP
 #!/bin/bash
-exec /usr/bin/time -f "$t %e %U %S %M" -o "$T/times/\$(date +%s%N).\$\$" "$BIN/$t" "\$@"
+exec /usr/bin/time -f "$t %e %U %S %M %C" -o "$T/times/\$(date +%s%N).\$\$" "$BIN/$t" "\$@"
 WRAP
   chmod +x "$T/timed/$t"
 done
@@ -41,34 +47,42 @@ timed() {  # LABEL CMD...: runs CMD under /usr/bin/time, prints "LABEL wall user
   cat "$T/one.time"
 }
 
+DT=${DETECT_TILE:-768}
 V1=$S10/view1.tif
 V2=$S10/view2.tif
-echo "== whole run (tp-match --threads 2) of $V1 and $V2"
+echo "== whole run (tp-match --threads 2 --tile $DT) of $V1 and $V2"
 if [ -n "${WHOLE_MATCHES:-}" ]; then
   cp "$WHOLE_MATCHES" "$T/whole.matches"
   echo "whole (from WHOLE_MATCHES, WHOLE_TIME: wall user sys maxrss_kB) ${WHOLE_TIME:-unknown}"
   read -r _ ww wu wsys wrss <<< "whole ${WHOLE_TIME:-0 0 0 0}"
 else
-  read -r _ ww wu wsys wrss < <(timed whole "$BIN/tp-match" --threads 2 -q "$V1" "$V2" -o "$T/whole.matches")
-  echo "whole wall ${ww} s, cpu $(awk -v a="$wu" -v b="$wsys" "BEGIN { print a + b }") s, peak ${wrss} kB"
+  read -r _ ww wu wsys wrss < <(timed whole "$BIN/tp-match" --threads 2 --tile "$DT" -q "$V1" "$V2" -o "$T/whole.matches")
+fi
+echo "whole, tile $DT: wall ${ww} s, cpu $(awk -v a="$wu" -v b="$wsys" "BEGIN { print a + b }") s, peak $(( wrss / 1024 )) MB"
+if [ "${SKIP_DEFAULT_TILE:-0}" != 1 ]; then
+  read -r _ dw du dsys drss < <(timed whole "$BIN/tp-match" --threads 2 -q "$V1" "$V2" -o "$T/whole-1024.matches")
+  echo "whole, tile 1024 (tp-match's default): wall ${dw} s, cpu $(awk -v a="$du" -v b="$dsys" "BEGIN { print a + b }") s, peak $(( drss / 1024 )) MB"
+  rm -f "$T/whole-1024.matches"
 fi
 
 echo "== 16 regions through a Slurm job array"
 width=$(awk '/^# image1:/ { print $(NF - 1); exit }' "$T/whole.matches")
 tile=$(( (width + 3) / 4 ))
-"$BIN/tp-plan" -q -o "$T/work" --tile "$tile" --threads 1 --bin "$T/timed" "$V1" "$V2"
-echo "regions: $(wc -l < "$T/work/jobs/tiles.jobs") of ${tile} px"
+"$BIN/tp-plan" -q -o "$T/work" --tile "$tile" --detect-tile "$DT" --threads 1 --bin "$T/timed" "$V1" "$V2"
+echo "regions: $(wc -l < "$T/work/jobs/tiles.jobs") of ${tile} px; detection jobs: $(wc -l < "$T/work/jobs/detect.jobs")"
 start_slurm
 t0=$(date +%s.%N)
 bash "$T/work/submit-slurm.sh" --wait >/dev/null
 t1=$(date +%s.%N)
-echo "slurm array wall (geometry, 16 regions, merge, chain; 2 jobs at a time): $(awk -v a="$t0" -v b="$t1" "BEGIN { printf \"%.1f\", b - a }") s"
+echo "slurm array wall (geometry, detection, 16 regions, merge, chain; 2 jobs at a time): $(awk -v a="$t0" -v b="$t1" "BEGIN { printf \"%.1f\", b - a }") s"
 cat "$T"/times/* > "$T/all.times"
 awk -v wu="$wu" -v ws="$wsys" '
-  { cpu = $3 + $4; total += cpu; if ($1 == "tp-match" && cpu > 0) { n[$1]++ } }
-  $1 == "tp-match" { if ($5 > rss) rss = $5; jobs++; if (cpu > maxcpu) maxcpu = cpu; if (cpu < mincpu || mincpu == 0) mincpu = cpu }
+  { cpu = $3 + $4; total += cpu
+    k = $1; if ($0 ~ /--write-geometry/) k = "geometry"; else if ($0 ~ /--detect/) k = "detect"; else if ($0 ~ /--region/) k = "region"
+    n[k]++; c[k] += cpu; if ($5 > rss[k]) rss[k] = $5; if ($5 > peak) peak = $5; if (cpu > mx[k]) mx[k] = cpu }
   END {
-    printf "tp-match jobs %d (geometry + regions): peak memory max %.0f MB, cpu per job %.1f..%.1f s\n", jobs, rss / 1024, mincpu, maxcpu
+    for (k in n) printf "%-9s jobs %3d: cpu %7.1f s (largest job %.1f s), peak memory %4.0f MB\n", k, n[k], c[k], mx[k], rss[k] / 1024
+    printf "peak memory of any job %.0f MB\n", peak / 1024
     printf "total cpu of the tiled run %.1f s, whole run %.1f s: %+.1f%%\n", total, wu + ws, 100 * (total / (wu + ws) - 1)
   }' "$T/all.times"
 awk 'FNR == 1 { f++ } /^#/ { next }
@@ -79,14 +93,19 @@ awk 'FNR == 1 { f++ } /^#/ { next }
   END { printf "whole-run matches %d, tiled %d, same ids and positions %d (%.2f%%)\n", n, m, s, 100 * s / n }' \
   "$T/whole.matches" "$T/work/pairs/pair-1-2.matches"
 
-echo "== one region job (--threads 1) by region size and scene size"
+echo "== one job (--threads 1) by region size and scene size"
 for scene in "$S10" ${S20:+"$S20"}; do
   g="$T/$(basename "$scene").geometry"
-  timed "geometry $(basename "$scene")" "$BIN/tp-match" -q --threads 1 --write-geometry "$g" "$scene/view1.tif" "$scene/view2.tif"
+  timed "geometry $(basename "$scene")" "$BIN/tp-match" -q --threads 1 --tile "$DT" --write-geometry "$g" "$scene/view1.tif" "$scene/view2.tif"
   w=$(awk '/^# image1:/ { print $(NF - 1); exit }' "$g")
   for r in 2000 4000; do
     x=$(( (w - r) / 2 ))
-    timed "region ${r} in $(basename "$scene") (${w} px)" "$BIN/tp-match" -q --threads 1 --geometry "$g" --region "$x" "$x" "$r" "$r" \
-      "$scene/view1.tif" "$scene/view2.tif" -o "$T/r.matches"
+    rm -rf "$T/c1" "$T/c2"
+    timed "detection job, block ${r} in $(basename "$scene") (${w} px)" "$BIN/tp-match" -q --threads 1 --tile "$DT" --geometry "$g" \
+      --detect 1 --region "$x" "$x" "$r" "$r" --cache "$T/c1" "$scene/view1.tif" "$scene/view2.tif" -o "$T/d.detection"
+    timed "region job ${r}, detecting its tiles, in $(basename "$scene") (${w} px)" "$BIN/tp-match" -q --threads 1 --tile "$DT" \
+      --no-rpc --geometry "$g" --region "$x" "$x" "$r" "$r" --cache "$T/c2" "$scene/view1.tif" "$scene/view2.tif" -o "$T/r.matches"
+    timed "region job ${r}, keypoints from the cache, in $(basename "$scene") (${w} px)" "$BIN/tp-match" -q --threads 1 --tile "$DT" \
+      --no-rpc --geometry "$g" --region "$x" "$x" "$r" "$r" --cache "$T/c2" "$scene/view1.tif" "$scene/view2.tif" -o "$T/r.matches"
   done
 done | awk '{ rss = $NF; sys = $(NF - 1); usr = $(NF - 2); wall = $(NF - 3); NF -= 4; printf "%s: wall %.1f s, cpu %.1f s, peak %.0f MB\n", $0, wall, usr + sys, rss / 1024 }'

@@ -10,6 +10,7 @@
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/formats.hpp"
+#include "tpkit/keypoint_cache.hpp"
 #include "tpkit/match_every_pair.hpp"
 #include "tpkit/match_pair.hpp"
 #include "tpkit/match_region.hpp"
@@ -31,6 +32,7 @@ struct Opts {
   tpkit::PairMatchOptions p;
   std::vector<long> region;  // --region X0 Y0 W H
   double region_margin = 256;
+  int detect = 0;  // --detect N: image N's detection tiles into the cache
   std::string geometry, write_geometry;
   std::vector<std::string> rpc_files;  // --rpc IMG=FILE
   bool no_rpc = false, rpc_guided = false;
@@ -85,8 +87,29 @@ int region_or_geometry_run(const Opts& o, const std::vector<tpkit::ImageSource>&
   if (!o.geometry.empty()) {
     G = tpkit::read_pair_geometry(o.geometry);
     tpkit::check_pair_geometry(G, o.geometry, src[0], src[1], o.p.sift);
+  } else if (o.detect > 0) {  // the stretch is all a detection job needs
+    G.stretch1 = tpkit::percentile_stretch(src[0], o.p.sift.stretch_lo, o.p.sift.stretch_hi);
+    G.stretch2 = tpkit::percentile_stretch(src[1], o.p.sift.stretch_lo, o.p.sift.stretch_hi);
   } else {
     G = tpkit::estimate_pair_geometry(src[0], src[1], o.p.sift, {});
+  }
+  if (o.detect > 0) {  // a detection job: image N's tiles that start in the window, into the cache
+    const tpkit::ImageSource& s = src[static_cast<size_t>(o.detect - 1)];
+    const auto grid = tpkit::tile_grid(s.info.width, s.info.height, o.p.sift.tile, o.p.sift.overlap);
+    const auto tiles = tpkit::tiles_starting_in(grid, o.region[0], o.region[1], o.region[2], o.region[3]);
+    if (tiles.empty())
+      throw tpkit::UsageError("--detect " + std::to_string(o.detect) + " --region: no detection tile of " + s.path +
+                              " starts in the window");
+    const auto entries = tpkit::cache_detection_tiles(s, o.p.sift, o.detect == 1 ? G.stretch1 : G.stretch2, tiles,
+                                                      o.p.threads, o.p.cache_dir);
+    tpkit::save_detection_report(o.out, s, o.p.sift, o.p.cache_dir, entries);
+    if (!o.quiet) {
+      long k = 0, c = 0;
+      for (const auto& e : entries) k += e.keypoints, c += e.cached ? 1 : 0;
+      std::cerr << "tp-match: " << s.path << ": " << entries.size() << " detection tiles (" << c << " already cached), " << k
+                << " keypoints\n";
+    }
+    return 0;
   }
   tpkit::RegionOptions r;
   r.window = {o.region[0], o.region[1], o.region[2], o.region[3]};
@@ -165,6 +188,9 @@ int main(int argc, char** argv) {
         }, "X0 Y0 W H: match only image-1 keypoints in this window, image-1 pixels")->expected(4);
         app.add_option("--region-margin", o->region_margin, "with --region: pixels matched beyond the window for context")
             ->check(tpkit::NonNegative);
+        app.add_option("--detect", o->detect, "N (1 or 2), with --region and --cache: detect image N's tiles that start in the window "
+                                              "(image-N pixels) into the cache, write a detection report, and stop")
+            ->check(CLI::Range(1, 2));
         app.add_option("--geometry", o->geometry, "with --region: pair geometry file written by --write-geometry");
         app.add_option("--write-geometry", o->write_geometry, "write the pair geometry file (coarse map, stretches) and stop");
         app.add_option("--rpc", o->rpc_files, "IMG=FILE: the RPC model of IMG (txt, RPB, DIMAP XML or TIFF tag)");
@@ -195,6 +221,11 @@ int main(int argc, char** argv) {
           if ((!o->region.empty() || !o->write_geometry.empty()) && n != 2)
             throw tpkit::UsageError("--region and --write-geometry take two images");
           if (!o->geometry.empty() && o->region.empty()) throw tpkit::UsageError("--geometry goes with --region");
+          if (o->detect > 0 && (o->region.empty() || o->p.cache_dir.empty()))
+            throw tpkit::UsageError("--detect needs --region (the window of image " + std::to_string(o->detect) + ") and --cache");
+          if (o->detect > 0 && !o->write_geometry.empty()) throw tpkit::UsageError("--detect and --write-geometry are separate runs");
+          if (o->detect > 0 && (o->out == "-" || o->out.empty()))
+            throw tpkit::UsageError("--detect writes its report to the file named by -o");
           if (!o->write_geometry.empty() && !o->region.empty()) throw tpkit::UsageError("--write-geometry and --region are separate runs");
           if (o->no_rpc && o->rpc_guided) throw tpkit::UsageError("--no-rpc and --rpc-guided exclude each other");
           if (o->global && o->rpc_guided) throw tpkit::UsageError("--global and --rpc-guided exclude each other");

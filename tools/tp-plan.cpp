@@ -46,6 +46,8 @@ int main(int argc, char** argv) {
         app.add_option("-o,--work", o->p.work, "work folder shared by every machine: plan, cache, outputs")->required();
         app.add_option("--tile", o->p.tile, "region size, image-1 pixels")->check(CLI::Range(256L, 1L << 30));
         app.add_option("--overlap", o->p.overlap, "regions grown by this on every side, pixels")->check(tpkit::NonNegative);
+        app.add_option("--detect-tile", o->p.detect_tile, "tp-match --tile (detection tile, pixels) of every job; 0 = tp-match's default")
+            ->check(tpkit::NonNegative);
         app.add_option("--threads", o->p.threads, "threads of each tp-match job (Slurm --cpus-per-task)")->check(CLI::Range(1, 1024));
         app.add_option("--bin", o->p.bin, "folder of the tpkit tools on the machines (default: on PATH)");
         app.add_option("--match-options", o->match_options, "more tp-match options for every match job, space separated");
@@ -55,7 +57,11 @@ int main(int argc, char** argv) {
           if (!o->list.empty())
             for (const auto& p : read_list(o->list)) paths.push_back(p);
           std::istringstream mo(o->match_options);
-          for (std::string a; mo >> a;) o->p.match_args.push_back(a);
+          for (std::string a; mo >> a;) {
+            if (o->p.detect_tile > 0 && (a == "--tile" || a.rfind("--tile=", 0) == 0))
+              throw tpkit::UsageError("--match-options: the detection tile is tp-plan's --detect-tile");
+            o->p.match_args.push_back(a);
+          }
           o->p.work = std::filesystem::absolute(o->p.work).lexically_normal().string();
           if (!o->p.bin.empty()) o->p.bin = std::filesystem::absolute(o->p.bin).lexically_normal().string();
           tpkit::shell_quote(o->p.work);
@@ -63,8 +69,8 @@ int main(int argc, char** argv) {
           const tpkit::Plan plan = tpkit::make_plan(images, o->p);
           tpkit::write_plan(plan, o->p);
           if (!o->quiet)
-            std::cerr << "tp-plan: " << images.size() << " images, " << plan.pairs.size() << " pairs, " << plan.tiles.size()
-                      << " region jobs; make -C " << tpkit::shell_quote(o->p.work) << " -f plan.mk -j N, or bash "
+            std::cerr << "tp-plan: " << images.size() << " images, " << plan.pairs.size() << " pairs, " << plan.detect.size()
+                      << " detection jobs, " << plan.tiles.size() << " region jobs; make -C " << tpkit::shell_quote(o->p.work) << " -f plan.mk -j N, or bash "
                       << tpkit::shell_quote(o->p.work + "/run-parallel.sh") << " -j N, or bash "
                       << tpkit::shell_quote(o->p.work + "/submit-slurm.sh") << "\n";
           return 0;

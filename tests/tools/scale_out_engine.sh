@@ -55,21 +55,31 @@ run_plan() {
 mkdir -p "$T/images"
 for k in 1 2 3; do cp "$T/scene/view$k.tif" "$T/images/view $k.tif"; done
 V=("$T/images/view 1.tif" "$T/images/view 2.tif" "$T/images/view 3.tif")
-# the single-process reference
+# the single-process reference, with the plan's detection tile (--detect-tile: ids depend on it)
 mkdir -p "$T/whole"
-"$BIN/tp-match" -q --threads 2 "${V[0]}" "${V[1]}" -o "$T/whole/12.matches"
-"$BIN/tp-match" -q --threads 2 "${V[0]}" "${V[2]}" -o "$T/whole/13.matches"
-"$BIN/tp-match" -q --threads 2 "${V[1]}" "${V[2]}" -o "$T/whole/23.matches"
+"$BIN/tp-match" -q --threads 2 --tile 512 "${V[0]}" "${V[1]}" -o "$T/whole/12.matches"
+"$BIN/tp-match" -q --threads 2 --tile 512 "${V[0]}" "${V[2]}" -o "$T/whole/13.matches"
+"$BIN/tp-match" -q --threads 2 --tile 512 "${V[1]}" "${V[2]}" -o "$T/whole/23.matches"
 "$BIN/tp-chain" -q --images "${V[@]}" -o "$T/whole.tracks" "$T/whole/12.matches" "$T/whole/13.matches" "$T/whole/23.matches"
 
-"$BIN/tp-plan" -q -o "$T/work" --tile 512 --bin "$BIN" "${V[@]}"
+"$BIN/tp-plan" -q -o "$T/work" --tile 512 --detect-tile 512 --bin "$BIN" "${V[@]}"
 [ "$(wc -l < "$T/work/jobs/tiles.jobs")" -eq 12 ] || { echo "FAIL: expected 12 region jobs" >&2; exit 1; }
+[ "$(wc -l < "$T/work/jobs/detect.jobs")" -eq 12 ] || { echo "FAIL: expected 12 detection jobs (3 images x 4 blocks)" >&2; exit 1; }
 run_plan
 [ -s "$T/work/tracks.tracks" ] || { echo "FAIL: the $engine run wrote no tracks" >&2; exit 1; }
 for p in pair-1-2 pair-1-3 pair-2-3; do
   [ "$(ls "$T/work/tiles/$p" | wc -l)" -eq 4 ] || { echo "FAIL: $p lacks region files" >&2; exit 1; }
   [ -s "$T/work/pairs/$p.matches" ] || { echo "FAIL: $p was not merged" >&2; exit 1; }
 done
+
+# every detection tile was detected once, by the detect stage: each tile is in one report, none was
+# found in the cache there, and the region jobs added no cache entry (they read them all)
+reports=$(cat "$T"/work/detect/image-*/*.detection | grep -vc '^#')
+detected=$(cat "$T"/work/detect/image-*/*.detection | awk '!/^#/ && $7 == 0' | wc -l)
+entries=$(find "$T/work/cache" -name '*.sift' | wc -l)
+echo "$engine: $reports detection tiles in the reports, $detected detected, $entries cache entries"
+[ "$reports" -gt 0 ] && [ "$reports" -eq "$detected" ] && [ "$entries" -eq "$reports" ] ||
+  { echo "FAIL: detection tiles not detected exactly once by the detect stage" >&2; exit 1; }
 
 # compare: tracks by reference keypoint id (last column), positions within 1e-6 px
 awk -v engine="$engine" '

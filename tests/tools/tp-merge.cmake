@@ -32,3 +32,22 @@ tpkit_tool_test(tp-match.geometry-without-region
 tpkit_tool_test(tp-match.geometry-file
   COMMAND "${_scene} && tp-match -q --write-geometry g s/view1.tif s/view2.tif"
   CHECK_FILE g FILE_MATCH "^# tpkit geometry 1\n.*# image1: s/view1.tif 640 640\n.*# columns: a11 a12 a13 a21 a22 a23 spread lo1 hi1 lo2 hi2\n[-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+ [-0-9.e]+\n$")
+# tp-match --detect: a detection job fills the cache with the tiles that start in its window, writes
+# its report, and the region run then reads every keypoint from the cache, with the same records as a
+# region run that detects them itself
+tpkit_tool_test(tp-match.detect-then-region
+  COMMAND "${_scene} && tp-match -q --tile 256 --write-geometry g s/view1.tif s/view2.tif && tp-match -q --tile 256 --geometry g --region 0 0 200 640 s/view1.tif s/view2.tif -o self.m && tp-match -q --tile 256 --geometry g --detect 1 --region 0 0 213 640 --cache c -o d1a s/view1.tif s/view2.tif && tp-match -q --tile 256 --geometry g --detect 1 --region 213 0 427 640 --cache c -o d1b s/view1.tif s/view2.tif && tp-match -q --tile 256 --geometry g --detect 2 --region 0 0 640 640 --cache c -o d2 s/view1.tif s/view2.tif && ls c | wc -l && tp-match --tile 256 --geometry g --region 0 0 200 640 --cache c s/view1.tif s/view2.tif -o cached.m && grep -v '^# written-by' self.m > a && grep -v '^# written-by' cached.m > b && cmp a b && cat d1a"
+  STDOUT_MATCH "^18\n# tpkit detection 1\n.*# image1: s/view1.tif 640 640\n.*# tiles: 3 detection tiles, 0 found in the cache, [0-9]+ keypoints\n.*# columns: tile x0 y0 x1 y1 keypoints cached\n0 0 0 213 213 [0-9]+ 0\n3 0 213 213 426 [0-9]+ 0\n6 0 426 213 640 [0-9]+ 0\n$"
+  STDERR_MATCH "keypoints [0-9]+ \\(cached\\) / [0-9]+ \\(cached\\)")
+tpkit_tool_test(tp-match.detect-again-cached
+  COMMAND "${_scene} && tp-match -q --tile 256 --write-geometry g s/view1.tif s/view2.tif && tp-match -q --tile 256 --geometry g --detect 2 --region 0 0 640 640 --cache c -o d s/view1.tif s/view2.tif && tp-match --tile 256 --geometry g --detect 2 --region 0 0 640 640 --cache c -o d s/view1.tif s/view2.tif"
+  STDERR_MATCH "9 detection tiles \\(9 already cached\\)")
+tpkit_tool_test(tp-match.detect-needs-cache
+  COMMAND "${_scene} && tp-match --detect 1 --region 0 0 100 100 s/view1.tif s/view2.tif -o d"
+  EXPECT_FAIL STDERR_MATCH "--detect needs --region \\(the window of image 1\\) and --cache" NO_FILE d)
+tpkit_tool_test(tp-match.detect-empty-window
+  COMMAND "${_scene} && tp-match --detect 2 --region 10 10 100 100 --cache c s/view1.tif s/view2.tif -o d"
+  EXPECT_FAIL STDERR_MATCH "no detection tile of s/view2.tif starts in the window" NO_FILE d)
+tpkit_tool_test(tp-match.detect-bad-image
+  COMMAND "${_scene} && tp-match --detect 3 --region 0 0 100 100 --cache c s/view1.tif s/view2.tif -o d"
+  EXPECT_FAIL STDERR_MATCH "--detect" NO_FILE d)

@@ -39,4 +39,23 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
 Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
                                    int threads, const std::string& dir, long* cached_tiles = nullptr);
 
+// Detection jobs of a scaled-out run (tp-match --detect, tp-plan's detect stage): each tile of `tiles`
+// is detected with the image's stretch `st` into its cache file (the files detect_sift_tiles_cached
+// reads), unless a valid one is there already; a row of tiles at a time, so that memory is one row's
+// band of the image and one tile's detector, whatever the number of tiles. Throws UsageError without
+// a folder.
+struct TileCacheEntry {
+  Tile tile;
+  std::string path;    // its cache file
+  long keypoints = 0;
+  bool cached = false;  // found valid in the cache (else detected now)
+};
+std::vector<TileCacheEntry> cache_detection_tiles(const ImageSource& src, const SiftOptions& o, const Stretch& st,
+                                                  const std::vector<Tile>& tiles, int threads, const std::string& dir);
+
+// The record of such a job (file kind `detection`, tpkit-formats(5)): one line per tile with its core,
+// its keypoint count and whether it was found in the cache.
+void save_detection_report(const std::string& path, const ImageSource& src, const SiftOptions& o, const std::string& dir,
+                           const std::vector<TileCacheEntry>& entries);
+
 }  // namespace tpkit

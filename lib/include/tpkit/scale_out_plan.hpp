@@ -5,11 +5,16 @@
 // Stages (every job is one shell command line; every path absolute and single-quoted, so names with
 // spaces or quotes are safe; outputs under the work folder, which must be shared by all machines):
 //   geometry  per pair:   tp-match --write-geometry WORK/geometry/pair-I-J.geometry IMG_I IMG_J
+//   detect    per image and region: tp-match --geometry (a pair of the image) --detect N --region
+//                         X0 Y0 W H --cache WORK/cache -o WORK/detect/image-I/block-K.detection IMG_I IMG_J
+//                         (the detection tiles that start in the region, each detected once in all)
 //   tiles     per region: tp-match --geometry ... --region X0 Y0 W H --cache WORK/cache
-//                         -o WORK/tiles/pair-I-J/tile-K.matches IMG_I IMG_J
+//                         -o WORK/tiles/pair-I-J/tile-K.matches IMG_I IMG_J (keypoints from the cache)
 //   merge     per pair:   tp-merge -o WORK/pairs/pair-I-J.matches WORK/tiles/pair-I-J/tile-*.matches
 //   chain     once:       tp-chain --images IMG... -o WORK/tracks.tracks WORK/pairs/*.matches
 // I, J, K count from 1 (I < J, in list order; regions row-major over image 1).
+// Every tp-match job gets --tile detect_tile: the memory of a job is bounded by one detection tile's
+// SIFT pyramid (about 480 MB at tp-match's default of 1024 pixels, 340 MB at 768, 250 MB at 512).
 //
 // Pairs: two images are paired when their footprints overlap. A footprint is the image's ground
 // outline (longitude, latitude in degrees); image_footprint() gives none today (the RPC footprints of
@@ -40,6 +45,7 @@ bool footprints_may_overlap(const PlanImage& a, const PlanImage& b);
 struct PlanOptions {
   long tile = 2048;                       // region size, image-1 pixels
   long overlap = 0;                       // regions grown by this on every side (duplicates merged)
+  long detect_tile = 768;                 // tp-match --tile of every job (0: tp-match's default)
   int threads = 1;                        // tp-match --threads of a job (and Slurm --cpus-per-task)
   std::string work;                       // shared work folder, absolute
   std::string bin;                        // folder of the tpkit tools; empty = found on PATH
@@ -54,7 +60,7 @@ struct PlanJob {
 
 struct Plan {
   std::vector<std::array<size_t, 2>> pairs;  // 0-based image indices
-  std::vector<PlanJob> geometry, tiles, merge, chain;
+  std::vector<PlanJob> geometry, detect, tiles, merge, chain;
 };
 
 // Image sizes read from the files; throws InputError for an unreadable image, UsageError for fewer
@@ -76,14 +82,14 @@ std::string plan_makefile(const Plan& p);
 std::string plan_job_file(const std::vector<PlanJob>& jobs);
 // The Slurm array job: runs line $SLURM_ARRAY_TASK_ID of the job file named by its argument.
 std::string plan_sbatch_script();
-// Submits the four stages as job arrays, each after the previous (afterok); --wait waits for the last.
+// Submits the five stages as job arrays, each after the previous (afterok); --wait waits for the last.
 std::string plan_slurm_submit(const Plan& p, const PlanOptions& o);
-// Runs the four job files with GNU parallel, stage after stage; arguments go to parallel.
+// Runs the five job files with GNU parallel, stage after stage; arguments go to parallel.
 std::string plan_parallel_runner(const PlanOptions& o);
 
-// Writes WORK/plan.mk, WORK/jobs/{geometry,tiles,merge,chain}.jobs, WORK/slurm-array.sbatch,
-// WORK/submit-slurm.sh, WORK/run-parallel.sh and the output folders (cache, geometry, tiles/pair-I-J,
-// pairs, logs), all in the run's output transaction.
+// Writes WORK/plan.mk, WORK/jobs/{geometry,detect,tiles,merge,chain}.jobs, WORK/slurm-array.sbatch,
+// WORK/submit-slurm.sh, WORK/run-parallel.sh and the output folders (cache, geometry, detect/image-I,
+// tiles/pair-I-J, pairs, logs), all in the run's output transaction.
 void write_plan(const Plan& p, const PlanOptions& o);
 
 }  // namespace tpkit

@@ -50,6 +50,9 @@ constexpr long long kIdsPerTile = 100000000;  // ids of tile t are t * kIdsPerTi
 
 // The tiles of `grid` whose core meets the window [x0, x1) x [y0, y1) (pixel-centre coordinates).
 std::vector<Tile> tiles_meeting(const std::vector<Tile>& grid, double x0, double y0, double x1, double y1);
+// The tiles of `grid` whose core starts (top-left pixel cx0, cy0) in the window [x0, x0 + w) x
+// [y0, y0 + h) of whole pixels: windows that partition an image partition its tiles.
+std::vector<Tile> tiles_starting_in(const std::vector<Tile>& grid, long x0, long y0, long w, long h);
 
 // Detection of some tiles of the global grid (tile_grid(width, height, o.tile, o.overlap)) with a given
 // stretch (percentile_stretch of the whole image, as detect_sift_tiles computes it): the keypoints and

@@ -159,6 +159,29 @@ void save_keypoints(const std::string& path, const std::string& identity, const 
   out.commit();
 }
 
+namespace {
+// The identity and the cache file of each tile of `tiles` (keypoint_cache.hpp: the image's identity
+// plus the stretch and the tile index).
+void tile_entries(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
+                  const std::string& dir, std::vector<std::string>& identity, std::vector<std::string>& path) {
+  const std::string base = keypoint_cache_identity(src, o) + " stretch=" + format_number(st.lo) + "," + format_number(st.hi);
+  identity.resize(tiles.size());
+  path.resize(tiles.size());
+  for (size_t t = 0; t < tiles.size(); ++t) {
+    identity[t] = base + " tile=" + std::to_string(tiles[t].index);
+    path[t] = cache_path_of(dir, src, identity[t]);
+  }
+}
+
+bool load_entry(const std::string& path, const std::string& identity, Keypoints& K) {
+  if (load_keypoints(path, identity, K)) return true;
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec))
+    warn(path + ": keypoint cache entry unusable (truncated, corrupt or of other options): detecting again");
+  return false;
+}
+}  // namespace
+
 Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int threads, const std::string& dir,
                              Progress* progress, bool* from_cache) {
   if (from_cache) *from_cache = false;
@@ -168,12 +191,10 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
   const std::string identity = keypoint_cache_identity(src, o);
   const std::string path = keypoint_cache_path(dir, src, o);
   Keypoints K;
-  if (load_keypoints(path, identity, K)) {
+  if (load_entry(path, identity, K)) {
     if (from_cache) *from_cache = true;
     return K;
   }
-  if (std::filesystem::exists(path, ec))
-    warn(path + ": keypoint cache entry unusable (truncated, corrupt or of other options): detecting again");
   K = detect_sift_tiles(src, o, threads, progress);
   save_keypoints(path, identity, K);
   return K;
@@ -184,21 +205,16 @@ Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o,
   if (cached_tiles) *cached_tiles = 0;
   if (dir.empty()) return detect_sift_tile_set(src, o, st, tiles, threads);
   create_cache_dir(dir);
-  const std::string base = keypoint_cache_identity(src, o) + " stretch=" + format_number(st.lo) + "," + format_number(st.hi);
+  std::vector<std::string> identity, path;
+  tile_entries(src, o, st, tiles, dir, identity, path);
   std::vector<Keypoints> per_tile(tiles.size());
   std::vector<Tile> missing;
   std::vector<size_t> missing_at;
-  std::vector<std::string> identity(tiles.size()), path(tiles.size());
   for (size_t t = 0; t < tiles.size(); ++t) {
-    identity[t] = base + " tile=" + std::to_string(tiles[t].index);
-    path[t] = cache_path_of(dir, src, identity[t]);
-    if (load_keypoints(path[t], identity[t], per_tile[t])) {
+    if (load_entry(path[t], identity[t], per_tile[t])) {
       if (cached_tiles) ++*cached_tiles;
       continue;
     }
-    std::error_code ec;
-    if (std::filesystem::exists(path[t], ec))
-      warn(path[t] + ": keypoint cache entry unusable (truncated, corrupt or of other options): detecting again");
     missing.push_back(tiles[t]);
     missing_at.push_back(t);
   }
@@ -208,6 +224,64 @@ Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o,
     per_tile[missing_at[k]] = std::move(found[k]);
   }
   return gather_tiles(std::move(per_tile), tiles, st);
+}
+
+std::vector<TileCacheEntry> cache_detection_tiles(const ImageSource& src, const SiftOptions& o, const Stretch& st,
+                                                  const std::vector<Tile>& tiles, int threads, const std::string& dir) {
+  if (dir.empty()) throw UsageError("detection into the cache needs a cache folder (--cache)");
+  create_cache_dir(dir);
+  std::vector<std::string> identity, path;
+  tile_entries(src, o, st, tiles, dir, identity, path);
+  std::vector<TileCacheEntry> out(tiles.size());
+  std::vector<Tile> missing;
+  std::vector<size_t> missing_at;
+  for (size_t t = 0; t < tiles.size(); ++t) {
+    out[t].tile = tiles[t];
+    out[t].path = path[t];
+    Keypoints K;
+    if (load_entry(path[t], identity[t], K)) {
+      out[t].keypoints = static_cast<long>(K.kp.size());
+      out[t].cached = true;
+    } else {
+      missing.push_back(tiles[t]);
+      missing_at.push_back(t);
+    }
+  }
+  // a row of tiles at a time (the rows of the grid share their band of the image): memory of one
+  // row's band, not of all the tiles' keypoints
+  for (size_t r0 = 0; r0 < missing.size();) {
+    size_t r1 = r0;
+    while (r1 < missing.size() && missing[r1].cy0 == missing[r0].cy0) ++r1;
+    const std::vector<Tile> row(missing.begin() + static_cast<long>(r0), missing.begin() + static_cast<long>(r1));
+    std::vector<Keypoints> found = detect_tiles_ranked(src, o, st, row, threads);
+    for (size_t k = 0; k < row.size(); ++k) {
+      const size_t t = missing_at[r0 + k];
+      save_keypoints(path[t], identity[t], found[k]);
+      out[t].keypoints = static_cast<long>(found[k].kp.size());
+    }
+    r0 = r1;
+  }
+  return out;
+}
+
+void save_detection_report(const std::string& path, const ImageSource& src, const SiftOptions& o, const std::string& dir,
+                           const std::vector<TileCacheEntry>& entries) {
+  AtomicOutput out(path);
+  Meta meta;
+  meta_set(meta, "detector", detector_tag(o, src));
+  meta_set(meta, "cache", dir);
+  long total = 0, cached = 0;
+  for (const auto& e : entries) total += e.keypoints, cached += e.cached ? 1 : 0;
+  meta_set(meta, "tiles", std::to_string(entries.size()) + " detection tiles, " + std::to_string(cached) +
+                              " found in the cache, " + std::to_string(total) + " keypoints");
+  meta_set(meta, "core", "x0 y0 x1 y1: the tile's core [x0, x1) x [y0, y1), pixels (its keypoints); cached: 1 = found valid in the cache, 0 = detected");
+  write_header(out.stream(), "detection", 1, {{src.path, src.info.width, src.info.height}}, meta,
+               {"tile", "x0", "y0", "x1", "y1", "keypoints", "cached"});
+  for (const auto& e : entries)
+    write_record(out.stream(), {static_cast<double>(e.tile.index), static_cast<double>(e.tile.cx0), static_cast<double>(e.tile.cy0),
+                                static_cast<double>(e.tile.cx1), static_cast<double>(e.tile.cy1), static_cast<double>(e.keypoints),
+                                e.cached ? 1.0 : 0.0});
+  out.commit();
 }
 
 }  // namespace tpkit

@@ -128,6 +128,13 @@ std::vector<Tile> tiles_meeting(const std::vector<Tile>& grid, double x0, double
   return out;
 }
 
+std::vector<Tile> tiles_starting_in(const std::vector<Tile>& grid, long x0, long y0, long w, long h) {
+  std::vector<Tile> out;
+  for (const Tile& t : grid)
+    if (t.cx0 >= x0 && t.cx0 < x0 + w && t.cy0 >= y0 && t.cy0 < y0 + h) out.push_back(t);
+  return out;
+}
+
 Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int threads, Progress* progress) {
   const Stretch st = percentile_stretch(src, o.stretch_lo, o.stretch_hi);
   return detect_sift_tile_set(src, o, st, tile_grid(src.info.width, src.info.height, o.tile, o.overlap), threads, progress);

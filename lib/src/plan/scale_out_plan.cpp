@@ -7,6 +7,7 @@
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/image_io.hpp"
+#include "tpkit/sift_tiles.hpp"
 
 namespace tpkit {
 
@@ -78,6 +79,7 @@ std::string in_work(const PlanOptions& o, const std::string& rel) { return shell
 
 std::string match_args(const PlanOptions& o) {
   std::string s = " --threads " + std::to_string(o.threads);
+  if (o.detect_tile > 0) s += " --tile " + std::to_string(o.detect_tile);
   for (const auto& a : o.match_args) s += " " + shell_quote(a);
   return s;
 }
@@ -87,6 +89,7 @@ std::string match_args(const PlanOptions& o) {
 Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
   if (o.tile < 256) throw UsageError("--tile must be at least 256 pixels");
   if (o.overlap < 0) throw UsageError("--overlap must be >= 0");
+  if (o.detect_tile != 0 && o.detect_tile < 256) throw UsageError("--detect-tile must be 0 or at least 256 pixels");
   Plan p;
   for (size_t i = 0; i < images.size(); ++i)
     for (size_t j = i + 1; j < images.size(); ++j)
@@ -114,6 +117,30 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
     pair_files.push_back(merge.target);
     p.merge.push_back(merge);
   }
+  // detection: every image of a pair once, through the geometry of its first pair (which holds its
+  // stretch), in the regions of its own pixels; the region jobs of every pair need all of it
+  std::vector<std::string> detect_files;
+  for (size_t i = 0; i < images.size(); ++i) {
+    const auto pr = std::find_if(p.pairs.begin(), p.pairs.end(), [&](const auto& q) { return q[0] == i || q[1] == i; });
+    if (pr == p.pairs.end()) continue;
+    const std::string geo = "geometry/" + pair_name(*pr) + ".geometry";
+    const std::string imgs = " " + shell_quote(images[(*pr)[0]].path) + " " + shell_quote(images[(*pr)[1]].path);
+    const auto regions = plan_regions(images[i].width, images[i].height, o.tile, 0);
+    const long dt = o.detect_tile > 0 ? o.detect_tile : SiftOptions{}.tile;
+    const auto grid = tile_grid(images[i].width, images[i].height, dt, 0);
+    for (size_t k = 0; k < regions.size(); ++k) {
+      const auto& r = regions[k];
+      if (tiles_starting_in(grid, r[0], r[1], r[2], r[3]).empty()) continue;  // a block without a tile of its own
+      const std::string out = "detect/image-" + std::to_string(i + 1) + "/block-" + std::to_string(k + 1) + ".detection";
+      p.detect.push_back({out, {geo},
+                          tool(o, "tp-match") + quiet + match_args(o) + " --geometry " + in_work(o, geo) + " --detect " +
+                              std::string((*pr)[0] == i ? "1" : "2") + " --region " + std::to_string(r[0]) + " " +
+                              std::to_string(r[1]) + " " + std::to_string(r[2]) + " " + std::to_string(r[3]) + " --cache " +
+                              in_work(o, "cache") + " -o " + in_work(o, out) + imgs});
+      detect_files.push_back(out);
+    }
+  }
+  for (PlanJob& t : p.tiles) t.depends.insert(t.depends.end(), detect_files.begin(), detect_files.end());
   PlanJob chain{"tracks.tracks", pair_files, tool(o, "tp-chain") + quiet + " --images"};
   for (const auto& im : images) chain.command += " " + shell_quote(im.path);
   chain.command += " -o " + in_work(o, "tracks.tracks");
@@ -134,7 +161,7 @@ std::string plan_makefile(const Plan& p) {
     for (char ch : c) r += ch == '$' ? std::string("$$") : std::string(1, ch);
     return r;
   };
-  for (const auto* stage : {&p.geometry, &p.tiles, &p.merge, &p.chain})
+  for (const auto* stage : {&p.geometry, &p.detect, &p.tiles, &p.merge, &p.chain})
     for (const PlanJob& j : *stage) {
       s << j.target << ":";
       for (const auto& d : j.depends) s << " " << d;
@@ -162,7 +189,7 @@ std::string plan_sbatch_script() {
 std::string plan_slurm_submit(const Plan& p, const PlanOptions& o) {
   std::ostringstream s;
   s << "#!/bin/bash\n"
-       "# tpkit plan (tp-plan): submits the stages geometry, tiles, merge, chain as Slurm job arrays, each\n"
+       "# tpkit plan (tp-plan): submits the stages geometry, detect, tiles, merge, chain as Slurm job arrays, each\n"
        "# after the previous one succeeded (afterok). Usage: bash submit-slurm.sh [--wait] [SBATCH OPTIONS...]\n"
        "# The sbatch options go to every stage; --wait returns when the last stage ends, with its status.\n"
        "# Prints each stage's job id.\n"
@@ -181,6 +208,7 @@ std::string plan_slurm_submit(const Plan& p, const PlanOptions& o) {
        "  dep=(--dependency=\"afterok:$id\")\n"
        "}\n"
     << "submit geometry " << p.geometry.size() << "\n"
+    << "submit detect " << p.detect.size() << "\n"
     << "submit tiles " << p.tiles.size() << "\n"
     << "submit merge " << p.merge.size() << "\n"
     << "submit chain " << p.chain.size() << " \"${wait[@]}\"\n";
@@ -195,17 +223,19 @@ std::string plan_parallel_runner(const PlanOptions& o) {
          "W=" +
          shell_quote(o.work) +
          "\n"
-         "for s in geometry tiles merge chain; do\n"
+         "for s in geometry detect tiles merge chain; do\n"
          "  parallel --halt now,fail=1 --joblog \"$W/logs/parallel-$s.joblog\" \"$@\" < \"$W/jobs/$s.jobs\"\n"
          "done\n";
 }
 
 void write_plan(const Plan& p, const PlanOptions& o) {
   const fs::path W(o.work);
-  for (const char* d : {"", "jobs", "cache", "geometry", "tiles", "pairs", "logs"}) create_output_dir((W / d).string());
+  for (const char* d : {"", "jobs", "cache", "geometry", "detect", "tiles", "pairs", "logs"}) create_output_dir((W / d).string());
+  for (const PlanJob& j : p.detect) create_output_dir((W / j.target).parent_path().string());
   for (const auto& pr : p.pairs) create_output_dir((W / "tiles" / pair_name(pr)).string());
   write_file_atomic((W / "plan.mk").string(), plan_makefile(p));
   write_file_atomic((W / "jobs/geometry.jobs").string(), plan_job_file(p.geometry));
+  write_file_atomic((W / "jobs/detect.jobs").string(), plan_job_file(p.detect));
   write_file_atomic((W / "jobs/tiles.jobs").string(), plan_job_file(p.tiles));
   write_file_atomic((W / "jobs/merge.jobs").string(), plan_job_file(p.merge));
   write_file_atomic((W / "jobs/chain.jobs").string(), plan_job_file(p.chain));
