@@ -126,6 +126,7 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
       uf.unite(u, v);
     }
   }
+  std::vector<std::unordered_map<long long, size_t>>().swap(node_of);  // not needed past here: memory back
   // same-position keypoints of one image are one point: every pair (p, q) of one image with
   // |x_q - x_p| <= same_position and |y_q - y_p| <= same_position is joined. A sweep in x order with the
   // window of the points within same_position in x, searched by y: O(n log n + pairs found) per image
@@ -222,12 +223,12 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
     std::vector<size_t> fill(comp_at.begin(), comp_at.end() - 1);
     for (size_t n = 0; n < nodes.size(); ++n) comp_nodes[fill[root[n]]++] = n;
   }
+  std::vector<size_t>().swap(root);
+  std::vector<size_t>().swap(uf.p);
 
-  struct Out {
-    long long ref_id;
-    std::vector<double> xy;
-  };
-  std::vector<Out> out;
+  // the tracks found: reference keypoint ids and their 2K coordinates, flat (one block, not one per track)
+  std::vector<long long> out_ref;
+  std::vector<double> out_xy;
   auto same = [&](size_t p, size_t q) {
     return std::abs(nodes[p].x - nodes[q].x) <= o.same_position && std::abs(nodes[p].y - nodes[q].y) <= o.same_position;
   };
@@ -313,29 +314,29 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
     for (int im = 0; im < K; ++im) views += have[im];
     if (views >= 2) st.by_length[views]++;
     if (views < K || views < o.min_views) continue;
-    Out t;
-    t.ref_id = nodes[first[ref]].id;
-    t.xy.reserve(static_cast<size_t>(2 * K));
+    out_ref.push_back(nodes[first[ref]].id);
     for (int im = 0; im < K; ++im) {
-      t.xy.push_back(view[im].x());
-      t.xy.push_back(view[im].y());
+      out_xy.push_back(view[im].x());
+      out_xy.push_back(view[im].y());
     }
-    out.push_back(std::move(t));
   }
   // Written tracks hold every output image, so their reference is image 0 and their reference ids
   // (keypoint ids of image 0, one node each) are distinct: the order is total.
-  std::sort(out.begin(), out.end(), [](const Out& a, const Out& b) { return a.ref_id < b.ref_id; });
+  std::vector<size_t> order(out_ref.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return out_ref[a] < out_ref[b]; });
   Tracks T;
   T.images.assign(imgs.begin(), imgs.begin() + K);
-  T.xy.resize(static_cast<Eigen::Index>(out.size()), 2 * K);
+  T.xy.resize(static_cast<Eigen::Index>(order.size()), 2 * K);
   T.extra.names = {"kp1"};
-  T.extra.values.resize(static_cast<Eigen::Index>(out.size()), 1);
-  for (size_t i = 0; i < out.size(); ++i) {
+  T.extra.values.resize(static_cast<Eigen::Index>(order.size()), 1);
+  T.id.reserve(order.size());
+  for (size_t i = 0; i < order.size(); ++i) {
     T.id.push_back(static_cast<long long>(i));
-    for (int c = 0; c < 2 * K; ++c) T.xy(static_cast<Eigen::Index>(i), c) = out[i].xy[c];
-    T.extra.values(static_cast<Eigen::Index>(i), 0) = static_cast<double>(out[i].ref_id);
+    for (int c = 0; c < 2 * K; ++c) T.xy(static_cast<Eigen::Index>(i), c) = out_xy[order[i] * static_cast<size_t>(2 * K) + static_cast<size_t>(c)];
+    T.extra.values(static_cast<Eigen::Index>(i), 0) = static_cast<double>(out_ref[order[i]]);
   }
-  st.written = static_cast<long>(out.size());
+  st.written = static_cast<long>(order.size());
   meta_set(T.meta, "positions", "refer to the keypoint of image1 (kp1 = its id in image1's matches files)");
   meta_set(T.meta, "min_views", std::to_string(o.min_views));
   if (stats) *stats = st;
