@@ -12,6 +12,7 @@
 // id counts as missing (with a warning) and is detected again and rewritten. Written atomically (temporary file + rename), so
 // parallel runs that share a folder only ever read whole files.
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -36,8 +37,11 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
 // (detect_sift_tile_set with the whole image's stretch `st`), each tile kept in its own cache file
 // whose identity is the image's plus " tile=INDEX stretch=LO,HI", so that jobs on neighbouring regions
 // that share the folder detect each tile once. `cached_tiles` (may be null) counts the tiles loaded.
+// With `window` ([x0, x1) x [y0, y1), pixel-centre coordinates), only the keypoints inside it are kept,
+// each tile filtered as it is loaded: memory of the window's keypoints, not of the whole tiles'.
 Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
-                                   int threads, const std::string& dir, long* cached_tiles = nullptr);
+                                   int threads, const std::string& dir, long* cached_tiles = nullptr,
+                                   const std::array<double, 4>* window = nullptr);
 
 // Detection jobs of a scaled-out run (tp-match --detect, tp-plan's detect stage): each tile of `tiles`
 // is detected with the image's stretch `st` into its cache file (the files detect_sift_tiles_cached

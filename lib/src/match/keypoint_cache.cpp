@@ -200,29 +200,55 @@ Keypoints detect_sift_cached(const ImageSource& src, const SiftOptions& o, int t
   return K;
 }
 
-Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
-                                   int threads, const std::string& dir, long* cached_tiles) {
-  if (cached_tiles) *cached_tiles = 0;
-  if (dir.empty()) return detect_sift_tile_set(src, o, st, tiles, threads);
-  create_cache_dir(dir);
-  std::vector<std::string> identity, path;
-  tile_entries(src, o, st, tiles, dir, identity, path);
-  std::vector<Keypoints> per_tile(tiles.size());
-  std::vector<Tile> missing;
-  std::vector<size_t> missing_at;
-  for (size_t t = 0; t < tiles.size(); ++t) {
-    if (load_entry(path[t], identity[t], per_tile[t])) {
-      if (cached_tiles) ++*cached_tiles;
-      continue;
+namespace {
+// Keeps the keypoints of K inside w = [x0, x1) x [y0, y1) (order and ids kept).
+void keep_inside(Keypoints& K, const std::array<double, 4>& w) {
+  size_t n = 0;
+  for (size_t i = 0; i < K.kp.size(); ++i) {
+    const cv::Point2f p = K.kp[i].pt;
+    if (!(p.x >= w[0] && p.x < w[2] && p.y >= w[1] && p.y < w[3])) continue;
+    if (n != i) {
+      K.kp[n] = K.kp[i];
+      K.id[n] = K.id[i];
+      std::memcpy(K.desc.ptr<uint8_t>(static_cast<int>(n)), K.desc.ptr<uint8_t>(static_cast<int>(i)), 128);
     }
-    missing.push_back(tiles[t]);
-    missing_at.push_back(t);
+    ++n;
   }
-  std::vector<Keypoints> found = detect_tiles_ranked(src, o, st, missing, threads);
-  for (size_t k = 0; k < missing.size(); ++k) {
-    save_keypoints(path[missing_at[k]], identity[missing_at[k]], found[k]);
-    per_tile[missing_at[k]] = std::move(found[k]);
+  K.kp.resize(n);
+  K.id.resize(n);
+  K.desc = n > 0 ? K.desc.rowRange(0, static_cast<int>(n)).clone() : cv::Mat(0, 128, CV_8U);
+}
+}  // namespace
+
+Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
+                                   int threads, const std::string& dir, long* cached_tiles, const std::array<double, 4>* window) {
+  if (cached_tiles) *cached_tiles = 0;
+  std::vector<Keypoints> per_tile(tiles.size());
+  if (dir.empty()) {
+    per_tile = detect_tiles_ranked(src, o, st, tiles, threads);
+  } else {
+    create_cache_dir(dir);
+    std::vector<std::string> identity, path;
+    tile_entries(src, o, st, tiles, dir, identity, path);
+    std::vector<Tile> missing;
+    std::vector<size_t> missing_at;
+    for (size_t t = 0; t < tiles.size(); ++t) {
+      if (load_entry(path[t], identity[t], per_tile[t])) {
+        if (cached_tiles) ++*cached_tiles;
+        if (window) keep_inside(per_tile[t], *window);  // each tile as it comes: one copy of the window's keypoints
+        continue;
+      }
+      missing.push_back(tiles[t]);
+      missing_at.push_back(t);
+    }
+    std::vector<Keypoints> found = detect_tiles_ranked(src, o, st, missing, threads);
+    for (size_t k = 0; k < missing.size(); ++k) {
+      save_keypoints(path[missing_at[k]], identity[missing_at[k]], found[k]);
+      per_tile[missing_at[k]] = std::move(found[k]);
+    }
   }
+  if (window)
+    for (Keypoints& K : per_tile) keep_inside(K, *window);  // (a no-op on the tiles filtered already)
   return gather_tiles(std::move(per_tile), tiles, st);
 }
 

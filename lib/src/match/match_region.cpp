@@ -12,25 +12,6 @@ namespace tpkit {
 
 namespace {
 
-// The keypoints of K at positions inside [x0, x1) x [y0, y1) (order and ids kept).
-Keypoints keypoints_in(const Keypoints& K, const std::array<double, 4>& w) {
-  Keypoints out;
-  out.stretch = K.stretch;
-  out.tiles = K.tiles;
-  std::vector<int> keep;
-  for (int i = 0; i < static_cast<int>(K.kp.size()); ++i) {
-    const cv::Point2f p = K.kp[static_cast<size_t>(i)].pt;
-    if (p.x >= w[0] && p.x < w[2] && p.y >= w[1] && p.y < w[3]) keep.push_back(i);
-  }
-  out.desc.create(static_cast<int>(keep.size()), 128, CV_8U);
-  for (size_t j = 0; j < keep.size(); ++j) {
-    out.kp.push_back(K.kp[static_cast<size_t>(keep[j])]);
-    out.id.push_back(K.id[static_cast<size_t>(keep[j])]);
-    K.desc.row(keep[j]).copyTo(out.desc.row(static_cast<int>(j)));
-  }
-  return out;
-}
-
 std::array<double, 4> clipped(const std::array<double, 4>& w, const ImageSource& s) {
   return {std::max(-0.5, w[0]), std::max(-0.5, w[1]), std::min(s.info.width - 0.5, w[2]), std::min(s.info.height - 0.5, w[3])};
 }
@@ -41,7 +22,7 @@ Keypoints window_keypoints(const ImageSource& s, const PairMatchOptions& o, cons
   const std::vector<Tile> grid = tile_grid(s.info.width, s.info.height, o.sift.tile, o.sift.overlap);
   const std::vector<Tile> need = tiles_meeting(grid, w[0], w[1], w[2], w[3]);
   *tiles = static_cast<long>(need.size());
-  return keypoints_in(detect_sift_tiles_cached(s, o.sift, st, need, o.threads, o.cache_dir, cached), w);
+  return detect_sift_tiles_cached(s, o.sift, st, need, o.threads, o.cache_dir, cached, &w);
 }
 
 }  // namespace
