@@ -33,6 +33,8 @@ struct SearchOptions {
   int local = 30;            // neighbours of the anchor that score a hypothesis
   bool allow_reflection = false;
   uint64_t seed = 1;
+  int widen = 1;             // > 1: a wider second search (cluster_optimize): dense clusters (B over 2000
+                             // points) take widen times the anchors, sparse ones 2 and 4 more neighbours
 };
 
 struct SearchHypothesis {

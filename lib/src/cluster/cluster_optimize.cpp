@@ -452,10 +452,24 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
       }
       return accepted;
     };
-    if (!(have_start && done()) && opt.search_fallback) {
+    // The verdict at its own threshold (cluster_verdict.hpp), on the current best.
+    auto verdict_accepts = [&]() {
+      if (!std::isfinite(best)) return false;
+      VerdictOptions vo;
+      vo.hypotheses = std::max(1L, evals);
+      return judge_homography(cost, bestH, vo).accepted;
+    };
+    // The search, and when its best is not accepted, a second one, wider (SearchOptions::widen: in dense
+    // clusters three times the random anchors of A and B, in sparse ones larger neighbourhoods): with
+    // unmatched points the quadruples whose four partners are all there (around an anchor of B that was
+    // drawn) are few, and the first search can miss them all. Unrelated clusters pay for both
+    // searches; the verdict counts every hypothesis tried.
+    for (int pass = 0; pass < 2 && !(have_start && done()) && opt.search_fallback; ++pass) {
+      if (pass == 1 && verdict_accepts()) break;
       SearchOptions so;
-      so.seed = opt.seed;
+      so.seed = opt.seed + static_cast<uint64_t>(pass) * 0x9E3779B97F4A7C15ULL;
       so.allow_reflection = opt.allow_reflection;
+      so.widen = pass == 0 ? 1 : 3;
       long tried = 0;
       auto hyps = search_hypotheses(cost, so, &tried);
       evals += tried;
@@ -467,7 +481,7 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
         ++evals;
         if (cr < best && usable(Hr)) {  // a degenerate map is no candidate, however low its cost
           best = cr, bestH = Hr, judged = false;
-          res.method = "search+local";
+          res.method = pass == 0 ? "search+local" : "wide search+local";
         }
         if (done()) break;
       }

@@ -144,11 +144,14 @@ std::vector<SearchHypothesis> search_hypotheses(const ClusterCost& cost, const S
   SearchOptions o = opt;
   double dtol = 0.01;
   if (B.rows() > 2000) {
-    o.max_anchors_b = std::min(o.max_anchors_b, 1500);
-    o.max_anchors_a = std::max(o.max_anchors_a, 300);
+    o.max_anchors_b = std::min(o.max_anchors_b, 1500 * std::max(1, opt.widen));
+    o.max_anchors_a = std::max(o.max_anchors_a, 300 * std::max(1, opt.widen));
     o.matches_per_quad = std::max(o.matches_per_quad, 24);
     dtol = 0.03;
   }
+  // Sparse clusters use every anchor already: a wider search takes larger neighbourhoods instead, so
+  // that more quadruples have all four partners (with half the points unmatched, few of 5 do).
+  if (B.rows() <= 2000 && opt.widen > 1) o.k_a += 2, o.k_b += 4;
   std::vector<Quad> qa = make_quads(A, o.k_a, o.max_anchors_a, rng);
   // Scoring sets: the `local` nearest neighbours of each anchor of A; tolerance from B's point spacing.
   std::vector<std::array<double, 2>> pa(static_cast<size_t>(A.rows()));
