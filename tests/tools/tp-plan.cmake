@@ -13,6 +13,12 @@ tpkit_tool_test(tp-plan.list
   STDERR_MATCH "2 images, 1 pairs, 2 detection jobs, 1 region jobs")
 tpkit_tool_test(tp-plan.tile-in-match-options
   COMMAND "${_imgs} && tp-plan -o w --match-options '--tile 512' s/view1.tif s/view2.tif" EXPECT_FAIL STDERR_MATCH "--detect-tile" NO_FILE w)
+# pairs from the RPC footprints (tp-synth writes a model beside each view): a view of a scene 1 degree
+# north overlaps none of the others and is left out, of the pairs and of the chain
+tpkit_tool_test(tp-plan.rpc-footprints
+  COMMAND "${_imgs} && tp-synth --out far --size 256 --seed 3 --threads 2 --supersample 1 --origin 44.3,5.4,100 >/dev/null && tp-plan -o w s/view1.tif s/view2.tif s/view3.tif far/view1.tif && cat w/jobs/geometry.jobs | wc -l && (grep -c far w/jobs/chain.jobs || true)"
+  STDOUT_MATCH "^3\n0\n$"
+  STDERR_MATCH "far/view1.tif: its RPC footprint meets no other image's: left out of the plan\n.*4 images, 3 pairs")
 tpkit_tool_test(tp-plan.one-image
   COMMAND "${_imgs} && tp-plan -o w s/view1.tif" EXPECT_FAIL STDERR_MATCH "two images or more" NO_FILE w)
 tpkit_tool_test(tp-plan.unreadable-image

@@ -17,8 +17,8 @@
 // SIFT pyramid (about 480 MB at tp-match's default of 1024 pixels, 340 MB at 768, 250 MB at 512).
 //
 // Pairs: two images are paired when their footprints overlap. A footprint is the image's ground
-// outline (longitude, latitude in degrees); image_footprint() gives none today (the RPC footprints of
-// component rpc go there), and an image without a footprint is paired with every image of the list.
+// outline (longitude, latitude in degrees) from its RPC model (image_footprint); an image without a
+// model is paired with every image of the list, and an image paired with none is left out (warned).
 #pragma once
 #include <array>
 #include <optional>
@@ -37,9 +37,13 @@ struct PlanImage {
   std::optional<Footprint> footprint;
 };
 
-// The footprint of an image, when one can be known. Today: none (see above).
-std::optional<Footprint> image_footprint(const std::string& path);
-// True when the footprints' longitude/latitude boxes meet, or when either is unknown.
+// The footprint of a width x height image from its RPC model (a sidecar or the TIFF tag, rpc_io.hpp):
+// its border (16 points, corners included) localized at both ends of the model's height range. None
+// without a model, or (warned) when the model does not localize the border. Throws InputError for an
+// unreadable model.
+std::optional<Footprint> image_footprint(const std::string& path, long width, long height);
+// True when the footprints' longitude/latitude boxes meet, or when either is unknown. (Boxes do not
+// wrap: footprints across the antimeridian are not handled.)
 bool footprints_may_overlap(const PlanImage& a, const PlanImage& b);
 
 struct PlanOptions {

@@ -7,16 +7,35 @@
 #include "tpkit/atomic_output.hpp"
 #include "tpkit/error.hpp"
 #include "tpkit/image_io.hpp"
+#include "tpkit/rpc_io.hpp"
+#include "tpkit/tool_support.hpp"
 #include "tpkit/sift_tiles.hpp"
 
 namespace tpkit {
 
 namespace fs = std::filesystem;
 
-std::optional<Footprint> image_footprint(const std::string&) {
-  // The ground outline from the image's RPC (component rpc: localize the image corners at the
-  // heights of the scene) goes here. Until then no image has a footprint: every pair is planned.
-  return std::nullopt;
+std::optional<Footprint> image_footprint(const std::string& path, long width, long height) {
+  const std::optional<RpcSource> rpc = find_image_rpc(path);  // a broken model is bad input: thrown
+  if (!rpc || width <= 0 || height <= 0) return std::nullopt;
+  // the image's border, 4 points a side (corners included), at both ends of the model's height range:
+  // the outline of every ground point the image can see
+  Footprint f;
+  try {
+    for (double h : {rpc->model.height_min(), rpc->model.height_max()})
+      for (int k = 0; k < 16; ++k) {
+        const int side = k / 4, t = k % 4;  // top, right, bottom, left; t = 0..3 along it
+        const double u = t / 4.0, X = width - 0.5, Y = height - 0.5;
+        const double x = side == 0 ? -0.5 + u * width : side == 1 ? X : side == 2 ? X - u * width : -0.5;
+        const double y = side == 0 ? -0.5 : side == 1 ? -0.5 + u * height : side == 2 ? Y : Y - u * height;
+        const Eigen::Vector2d ll = rpc->model.localize(x, y, h);
+        f.lonlat.push_back({ll.x(), ll.y()});
+      }
+  } catch (const NumericalError&) {
+    warn(path + ": its RPC model (" + rpc->path + ") does not localize the image's border: paired with every image");
+    return std::nullopt;
+  }
+  return f;
 }
 
 bool footprints_may_overlap(const PlanImage& a, const PlanImage& b) {
@@ -41,7 +60,7 @@ std::vector<PlanImage> plan_images(const std::vector<std::string>& paths) {
     const fs::path abs = fs::absolute(p, ec).lexically_normal();
     for (const auto& q : out)
       if (q.path == abs.string()) throw UsageError("the image " + p + " is listed twice");
-    out.push_back({abs.string(), info.width, info.height, image_footprint(p)});
+    out.push_back({abs.string(), info.width, info.height, image_footprint(p, info.width, info.height)});
   }
   return out;
 }
@@ -95,6 +114,10 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
     for (size_t j = i + 1; j < images.size(); ++j)
       if (footprints_may_overlap(images[i], images[j])) p.pairs.push_back({i, j});
   if (p.pairs.empty()) throw UsageError("no two images of the list overlap");
+  std::vector<char> paired(images.size(), 0);
+  for (const auto& pr : p.pairs) paired[pr[0]] = paired[pr[1]] = 1;
+  for (size_t i = 0; i < images.size(); ++i)
+    if (!paired[i]) warn(images[i].path + ": its RPC footprint meets no other image's: left out of the plan");
   const std::string quiet = " -q";
   std::vector<std::string> pair_files;
   for (const auto& pr : p.pairs) {
@@ -142,7 +165,8 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
   }
   for (PlanJob& t : p.tiles) t.depends.insert(t.depends.end(), detect_files.begin(), detect_files.end());
   PlanJob chain{"tracks.tracks", pair_files, tool(o, "tp-chain") + quiet + " --images"};
-  for (const auto& im : images) chain.command += " " + shell_quote(im.path);
+  for (size_t i = 0; i < images.size(); ++i)
+    if (paired[i]) chain.command += " " + shell_quote(images[i].path);
   chain.command += " -o " + in_work(o, "tracks.tracks");
   for (const auto& f : pair_files) chain.command += " " + in_work(o, f);
   p.chain.push_back(chain);
