@@ -440,24 +440,22 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
     // cost of the right h stays above any fixed target, while the verdict recognizes it
     // (cluster_verdict.hpp). A marginal acceptance does not stop the search: a map right on part of
     // the clusters can pass the verdict narrowly while the search would still find the whole one.
-    bool judged = false, accepted = false;  // the verdict on the current best (judged once per best)
-    auto done = [&]() {
-      if (best <= opt.target) return true;
-      if (!judged && std::isfinite(best)) {
-        VerdictOptions vo;
-        vo.hypotheses = std::max(1L, evals);
-        vo.min_log10_odds = kEarlyAcceptOdds;
-        accepted = judge_homography(cost, bestH, vo).accepted;
-        judged = true;
-      }
-      return accepted;
-    };
-    // The verdict at its own threshold (cluster_verdict.hpp), on the current best.
-    auto verdict_accepts = [&]() {
+    // The verdict on the current best, accepting at log10 odds >= min_odds.
+    auto verdict_accepts = [&](double min_odds) {
       if (!std::isfinite(best)) return false;
       VerdictOptions vo;
       vo.hypotheses = std::max(1L, evals);
+      vo.min_log10_odds = min_odds;
       return judge_homography(cost, bestH, vo).accepted;
+    };
+    bool judged = false, accepted = false;  // the early verdict on the current best (judged once per best)
+    auto done = [&]() {
+      if (best <= opt.target) return true;
+      if (!judged && std::isfinite(best)) {
+        accepted = verdict_accepts(kEarlyAcceptOdds);
+        judged = true;
+      }
+      return accepted;
     };
     // The search, and when its best is not accepted, a second one, wider (SearchOptions::widen: in dense
     // clusters three times the random anchors of A and B, in sparse ones larger neighbourhoods): with
@@ -465,7 +463,7 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
     // drawn) are few, and the first search can miss them all. Unrelated clusters pay for both
     // searches; the verdict counts every hypothesis tried.
     for (int pass = 0; pass < 2 && !(have_start && done()) && opt.search_fallback; ++pass) {
-      if (pass == 1 && verdict_accepts()) break;
+      if (pass == 1 && verdict_accepts(VerdictOptions{}.min_log10_odds)) break;  // at the verdict's own threshold
       SearchOptions so;
       so.seed = opt.seed + static_cast<uint64_t>(pass) * 0x9E3779B97F4A7C15ULL;
       so.allow_reflection = opt.allow_reflection;

@@ -214,6 +214,7 @@ void keep_inside(Keypoints& K, const std::array<double, 4>& w) {
     }
     ++n;
   }
+  if (n == K.kp.size()) return;  // all inside: nothing to copy
   K.kp.resize(n);
   K.id.resize(n);
   K.desc = n > 0 ? K.desc.rowRange(0, static_cast<int>(n)).clone() : cv::Mat(0, 128, CV_8U);
@@ -243,12 +244,13 @@ Keypoints detect_sift_tiles_cached(const ImageSource& src, const SiftOptions& o,
     }
     std::vector<Keypoints> found = detect_tiles_ranked(src, o, st, missing, threads);
     for (size_t k = 0; k < missing.size(); ++k) {
-      save_keypoints(path[missing_at[k]], identity[missing_at[k]], found[k]);
+      save_keypoints(path[missing_at[k]], identity[missing_at[k]], found[k]);  // the whole tile
+      if (window) keep_inside(found[k], *window);
       per_tile[missing_at[k]] = std::move(found[k]);
     }
   }
-  if (window)
-    for (Keypoints& K : per_tile) keep_inside(K, *window);  // (a no-op on the tiles filtered already)
+  if (window && dir.empty())
+    for (Keypoints& K : per_tile) keep_inside(K, *window);
   return gather_tiles(std::move(per_tile), tiles, st);
 }
 

@@ -103,6 +103,11 @@ std::string match_args(const PlanOptions& o) {
   return s;
 }
 
+// " --region X0 Y0 W H"
+std::string region_arg(const std::array<long, 4>& r) {
+  return " --region " + std::to_string(r[0]) + " " + std::to_string(r[1]) + " " + std::to_string(r[2]) + " " + std::to_string(r[3]);
+}
+
 }  // namespace
 
 Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
@@ -131,9 +136,7 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
       const auto& r = regions[k];
       const std::string out = "tiles/" + name + "/tile-" + std::to_string(k + 1) + ".matches";
       p.tiles.push_back({out, {geo},
-                         tool(o, "tp-match") + quiet + match_args(o) + " --geometry " + in_work(o, geo) + " --region " +
-                             std::to_string(r[0]) + " " + std::to_string(r[1]) + " " + std::to_string(r[2]) + " " +
-                             std::to_string(r[3]) + " --cache " + in_work(o, "cache") + " -o " + in_work(o, out) + imgs});
+                         tool(o, "tp-match") + quiet + match_args(o) + " --geometry " + in_work(o, geo) + region_arg(r) + " --cache " + in_work(o, "cache") + " -o " + in_work(o, out) + imgs});
       merge.depends.push_back(out);
       merge.command += " " + in_work(o, out);
     }
@@ -157,8 +160,7 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
       const std::string out = "detect/image-" + std::to_string(i + 1) + "/block-" + std::to_string(k + 1) + ".detection";
       p.detect.push_back({out, {geo},
                           tool(o, "tp-match") + quiet + match_args(o) + " --geometry " + in_work(o, geo) + " --detect " +
-                              std::string((*pr)[0] == i ? "1" : "2") + " --region " + std::to_string(r[0]) + " " +
-                              std::to_string(r[1]) + " " + std::to_string(r[2]) + " " + std::to_string(r[3]) + " --cache " +
+                              std::string((*pr)[0] == i ? "1" : "2") + region_arg(r) + " --cache " +
                               in_work(o, "cache") + " -o " + in_work(o, out) + imgs});
       detect_files.push_back(out);
     }
