@@ -1,6 +1,7 @@
 #include "tpkit/cluster_verdict.hpp"
 
 #include <Eigen/Dense>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -45,6 +46,8 @@ double area(const std::vector<Pt>& poly) {
   return 0.5 * std::fabs(s);
 }
 
+constexpr double kPi = 3.14159265358979323846;
+
 bool inside(const std::vector<Pt>& poly, const Pt& q) {  // convex, counter-clockwise
   for (size_t i = 0; i < poly.size(); ++i) {
     const Pt &a = poly[i], &b = poly[(i + 1) % poly.size()];
@@ -68,24 +71,6 @@ bool carry(const Eigen::Matrix3d& H, const std::vector<Pt>& in, std::vector<Pt>&
   return true;
 }
 
-// log of the binomial upper tail P(K >= k), K ~ Bin(n, p), summed in log space.
-double log_binomial_tail(int n, int k, double p) {
-  if (k <= 0) return 0;
-  if (k > n) return -std::numeric_limits<double>::infinity();
-  if (p <= 0) return -std::numeric_limits<double>::infinity();
-  if (p >= 1) return 0;
-  const double lp = std::log(p), lq = std::log1p(-p);
-  double m = -std::numeric_limits<double>::infinity();
-  std::vector<double> terms;
-  for (int j = k; j <= n; ++j) {
-    const double t = std::lgamma(n + 1.0) - std::lgamma(j + 1.0) - std::lgamma(n - j + 1.0) + j * lp + (n - j) * lq;
-    terms.push_back(t);
-    m = std::max(m, t);
-  }
-  double s = 0;
-  for (double t : terms) s += std::exp(t - m);
-  return std::min(0.0, m + std::log(s));
-}
 }  // namespace
 
 MapCheck::MapCheck(const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B)
@@ -107,8 +92,75 @@ std::string MapCheck::operator()(const Eigen::Matrix3d& H) const {
   return "";
 }
 
+double MapCheck::outside_b(const Eigen::Vector2d& q) const {
+  if (inside(hull_b_, q)) return 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < hull_b_.size(); ++i) {
+    const Pt &a = hull_b_[i], &b = hull_b_[(i + 1) % hull_b_.size()];
+    const Pt ab = b - a;
+    const double t = ab.squaredNorm() > 0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + t * ab - q).norm());
+  }
+  return best;
+}
+
 std::string degeneracy(const Eigen::Matrix3d& H, const Eigen::MatrixX2d& A, const Eigen::MatrixX2d& B) {
   return MapCheck(A, B)(H);
+}
+
+double log10_binomial_tail(int n, int k, double p) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (k <= 0) return 0;
+  if (k > n) return -kInf;
+  if (!(p > 0)) return -kInf;
+  if (p >= 1) return 0;
+  // terms t_j = C(n, j) p^j q^(n-j) summed from the largest outwards, in units of the first term, until
+  // they stop counting (they fall geometrically away from the mode): O(n p q)^(1/2) terms at worst
+  const double lp = std::log(p), lq = std::log1p(-p), lr = lp - lq;
+  auto log_term = [&](int j) { return std::lgamma(n + 1.0) - std::lgamma(j + 1.0) - std::lgamma(n - j + 1.0) + j * lp + (n - j) * lq; };
+  const int mode = static_cast<int>(std::floor((n + 1) * p));
+  if (k > mode) {  // the upper tail itself: decreasing terms from j = k up
+    double sum = 1, t = 1;
+    for (int j = k; j < n; ++j) {
+      t *= std::exp(std::log(static_cast<double>(n - j) / (j + 1)) + lr);
+      sum += t;
+      if (t < 1e-17 * sum) break;
+    }
+    return std::min(0.0, (log_term(k) + std::log(sum)) / std::log(10.0));
+  }
+  // k <= mode: 1 - P(K <= k - 1), decreasing terms from j = k - 1 down
+  const double l0 = log_term(k - 1);
+  double sum = 1, t = 1;
+  for (int j = k - 1; j > 0; --j) {
+    t *= std::exp(std::log(static_cast<double>(j) / (n - j + 1)) - lr);
+    sum += t;
+    if (t < 1e-17 * sum) break;
+  }
+  const double lower = std::exp(l0 + std::log(sum));
+  return lower >= 1 ? 0 : std::log1p(-lower) / std::log(10.0);
+}
+
+Significance match_significance(int n, std::vector<double> d, double density, double spacing) {
+  Significance s;
+  s.radii = std::max(1, n - 4);
+  std::sort(d.begin(), d.end());
+  const double floor = 1e-6 * spacing;
+  s.log10_tail = 0;
+  bool any = false;
+  for (size_t i = 4; i < d.size() && static_cast<int>(i) < n; ++i) {  // k = i + 1 matches within d_k
+    const int k = static_cast<int>(i) + 1;
+    if (i + 1 < d.size() && d[i + 1] == d[i]) continue;  // ties: the largest k at that radius
+    const double r = std::max(d[i], floor);
+    const double p = -std::expm1(-kPi * r * r * density);
+    const double lt = log10_binomial_tail(n - 4, k - 4, p);
+    if (!any || lt < s.log10_tail) s = {lt, k, r, p, s.radii}, any = true;
+  }
+  if (!any) {  // nothing beyond the 4 matches any h fits: no evidence (the smallest radius, for the report)
+    s.inliers = static_cast<int>(std::min<size_t>(d.size(), static_cast<size_t>(std::max(n, 0))));
+    s.radius = d.empty() ? 0 : std::max(d.back(), floor);
+    s.p = -std::expm1(-kPi * s.radius * s.radius * density);
+  }
+  return s;
 }
 
 Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, const VerdictOptions& opt) {
@@ -120,36 +172,58 @@ Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, cons
     v.log10_odds = -std::numeric_limits<double>::infinity();
     return v;
   }
-  const std::vector<Pt>& hb = check.hull_b();
-  const double b_area = check.area_b(), m = static_cast<double>(B.rows());
-  const double spacing = std::sqrt(b_area / m);
-  // candidates: points of A that land inside hull B
+  const double m = static_cast<double>(B.rows()), density = m / check.area_b(), spacing = std::sqrt(check.area_b() / m);
+  // candidates: points of A that land in hull B (or within a quarter spacing of it: a cluster's hull
+  // vertices are its own points, which noise puts just outside); their mutual matches' distances
   std::vector<char> cand(static_cast<size_t>(A.rows()), 0);
   for (Eigen::Index i = 0; i < A.rows(); ++i) {
     const Eigen::Vector3d q = H * Eigen::Vector3d(A(i, 0), A(i, 1), 1);
-    cand[static_cast<size_t>(i)] = inside(hb, Pt(q.x() / q.z(), q.y() / q.z()));
+    cand[static_cast<size_t>(i)] = check.outside_b(Pt(q.x() / q.z(), q.y() / q.z())) <= kCandidateMargin * spacing;
   }
   const int n = static_cast<int>(std::count(cand.begin(), cand.end(), 1));
-  const std::vector<MutualPair> mutual = mutual_pairs(cost, H);
-  const double radii[4] = {spacing / 32, spacing / 16, spacing / 8, spacing / 4};
-  const double tests = 4.0 * static_cast<double>(std::max(1L, opt.hypotheses));
-  v.log10_odds = -std::numeric_limits<double>::infinity();
-  for (double r : radii) {
-    int k = 0;
-    for (const MutualPair& mp : mutual) k += cand[static_cast<size_t>(mp.ia)] && mp.d <= r;
-    const double p = -std::expm1(-3.14159265358979323846 * r * r * m / b_area);
-    const double log10_tail = log_binomial_tail(n - 4, k - 4, p) / std::log(10.0);
-    const double odds = -(std::log10(tests) + log10_tail);
-    if (odds > v.log10_odds || v.radius_px == 0) {
-      v.log10_odds = odds;
-      v.inliers = k;
-      v.radius_px = r;
-      v.expected = 4 + std::max(0, n - 4) * p;
-    }
-  }
+  std::vector<double> d;
+  for (const MutualPair& mp : mutual_pairs(cost, H))
+    if (cand[static_cast<size_t>(mp.ia)]) d.push_back(mp.d);
+  const Significance s = match_significance(n, std::move(d), density, spacing);
   v.candidates = n;
-  v.accepted = v.log10_odds >= opt.min_log10_odds;
+  v.inliers = s.inliers;
+  v.radius_px = s.radius;
+  v.expected = std::min(n, 4) + std::max(0, n - 4) * s.p;
+  const double tests = static_cast<double>(s.radii) * static_cast<double>(std::max(1L, opt.hypotheses));
+  v.log10_odds = -(std::log10(tests) + s.log10_tail);
+  if (n <= 4)
+    v.undetermined = "only " + std::to_string(n) + " points of cluster A map into cluster B, and any 4 correspondences fit a homography exactly";
+  v.accepted = v.undetermined.empty() && v.log10_odds >= opt.min_log10_odds;
   return v;
+}
+
+RegionSupport::RegionSupport(const ClusterCost& cost)
+    : cost_(cost), check_(cost.a(), cost.b()), density_(static_cast<double>(cost.b().rows()) / check_.area_b()),
+      spacing_(std::sqrt(check_.area_b() / static_cast<double>(cost.b().rows()))) {}
+
+double RegionSupport::log10_odds(const Eigen::Matrix3d& H, const Eigen::Vector2d& center, double radius) const {
+  const Eigen::MatrixX2d &A = cost_.a(), &B = cost_.b();
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(H);
+  if (!H.allFinite() || !lu.isInvertible()) return -std::numeric_limits<double>::infinity();
+  const Eigen::Matrix3d Hi = lu.inverse();
+  const double r2 = radius * radius;
+  int n = 0;
+  std::vector<double> d;
+  for (Eigen::Index i = 0; i < A.rows(); ++i) {
+    if ((A.row(i).transpose() - center).squaredNorm() > r2) continue;
+    const Eigen::Vector3d q = H * Eigen::Vector3d(A(i, 0), A(i, 1), 1);
+    const Pt qa(q.x() / q.z(), q.y() / q.z());
+    if (!qa.allFinite() || !(check_.outside_b(qa) <= kCandidateMargin * spacing_)) continue;
+    ++n;
+    double d2 = 0, e2 = 0;
+    const int j = cost_.nearest_b(qa.data(), &d2);
+    const Eigen::Vector3d w = Hi * Eigen::Vector3d(B(j, 0), B(j, 1), 1);
+    const double back[2] = {w.x() / w.z(), w.y() / w.z()};
+    if (std::isfinite(back[0]) && std::isfinite(back[1]) && cost_.nearest_a(back, &e2) == static_cast<int>(i))
+      d.push_back(std::sqrt(d2));
+  }
+  const Significance s = match_significance(n, std::move(d), density_, spacing_);
+  return -(std::log10(static_cast<double>(s.radii)) + s.log10_tail);
 }
 
 }  // namespace tpkit

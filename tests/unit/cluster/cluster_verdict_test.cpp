@@ -1,9 +1,12 @@
 // The verdict of cluster-homog (cluster_verdict.hpp): accepted on a true pair with partial overlap,
-// rejected on unrelated clusters under a plausible map, degenerate maps refused, tiny clusters
-// unverifiable; independent of the cost's trim and truncation.
+// rejected on unrelated clusters under a plausible map, degenerate maps refused, six points verified at
+// the radius their noise gives and four never; independent of the cost's trim and truncation; the
+// binomial tail and the radius chosen from the data.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
+#include <limits>
 
 #include "tpkit/cluster_cost.hpp"
 #include "tpkit/cluster_synth.hpp"
@@ -60,14 +63,64 @@ TEST(ClusterVerdict, DegenerateMapsRefused) {
   EXPECT_FALSE(v.accepted);
 }
 
-TEST(ClusterVerdict, SixPointsCannotBeVerified) {
+// Six points measured to 0.1 px carry two matches beyond the four any homography fits, at a radius
+// the data choose (0.1-0.2 px, not a fixed fraction of the spacing): verifiable against the 5 400
+// correspondences an exhaustive search of 6 and 6 points tries (cluster_exhaustive.hpp).
+TEST(ClusterVerdict, SixPointsWithinTheNoiseAreVerified) {
   ClusterSynthOptions o;
-  o.n = 6;
+  o.n = 6, o.noise = 0.1, o.seed = 4;
   const ClusterPair cp = synth_cluster_pair(truth(), o);
   ClusterCost cost(cp.A, cp.B);
   VerdictOptions vo;
-  vo.hypotheses = 10000;  // what a search from scratch tries
+  vo.hypotheses = 5400;
   const Verdict v = judge_homography(cost, cp.truth, vo);
   EXPECT_EQ(v.inliers, 6);
-  EXPECT_FALSE(v.accepted) << v.log10_odds;
+  EXPECT_LT(v.radius_px, 0.5);
+  EXPECT_TRUE(v.accepted) << v.log10_odds;
+  EXPECT_TRUE(v.undetermined.empty());
+}
+
+// Four points: every four correspondences fit exactly, so nothing is left to verify.
+TEST(ClusterVerdict, FourPointsAreNeverDetermined) {
+  ClusterSynthOptions o;
+  o.n = 4, o.seed = 4;
+  const ClusterPair cp = synth_cluster_pair(truth(), o);
+  ClusterCost cost(cp.A, cp.B);
+  const Verdict v = judge_homography(cost, cp.truth);
+  EXPECT_FALSE(v.accepted);
+  EXPECT_NE(v.undetermined.find("any 4 correspondences"), std::string::npos) << v.undetermined;
+}
+
+// The tail summed from its largest term agrees with the plain sum, in the upper and lower halves.
+TEST(ClusterVerdict, BinomialTailMatchesTheDirectSum) {
+  for (int n : {1, 7, 60, 900})
+    for (double p : {1e-9, 1e-3, 0.05, 0.5, 0.97})
+      for (int k = 0; k <= n; k += std::max(1, n / 17)) {
+        long double sum = 0;
+        for (int j = k; j <= n; ++j)
+          sum += std::exp(std::lgamma(n + 1.0L) - std::lgamma(j + 1.0L) - std::lgamma(n - j + 1.0L) + j * std::log((long double)p) +
+                          (n - j) * std::log1p(-(long double)p));
+        const double direct = sum > 0 ? static_cast<double>(std::log10(sum)) : -std::numeric_limits<double>::infinity();
+        const double ours = log10_binomial_tail(n, k, p);
+        if (direct < -250) continue;  // below what the long double sum resolves
+        EXPECT_NEAR(ours, std::min(0.0, direct), 1e-9 * std::max(1.0, std::fabs(direct))) << "n " << n << " k " << k << " p " << p;
+      }
+  EXPECT_EQ(log10_binomial_tail(10, 0, 0.3), 0);
+  EXPECT_EQ(log10_binomial_tail(10, 11, 0.3), -std::numeric_limits<double>::infinity());
+}
+
+// The radius comes from the data: 30 matches within 0.1 px and 20 spread up to the spacing give the
+// best significance at the 30th distance, with max(1, n - 4) radii counted.
+TEST(ClusterVerdict, RadiusChosenWhereTheMatchesEnd) {
+  std::vector<double> d;
+  for (int i = 0; i < 30; ++i) d.push_back(0.003 * (i + 1));
+  for (int i = 0; i < 20; ++i) d.push_back(2.0 + 0.4 * i);
+  const double spacing = 10, density = 1 / (spacing * spacing);
+  const Significance s = match_significance(60, d, density, spacing);
+  EXPECT_EQ(s.inliers, 30);
+  EXPECT_DOUBLE_EQ(s.radius, 0.09);
+  EXPECT_EQ(s.radii, 56);
+  EXPECT_LT(s.log10_tail, -40);
+  // nothing beyond four matches: no evidence at all
+  EXPECT_EQ(match_significance(4, {0.0, 0.0, 0.0, 0.0}, density, spacing).log10_tail, 0);
 }
