@@ -139,19 +139,20 @@ int main(int argc, char** argv) {
         verdict = judge_homography(cost, r.H, vo);
         m.emplace_back("verdict", verdict.accepted ? "accepted" : "rejected");
         if (!verdict.degenerate.empty()) m.emplace_back("degenerate", verdict.degenerate);
+        if (!verdict.undetermined.empty()) m.emplace_back("undetermined", verdict.undetermined);
         m.emplace_back("verdict_log10_odds", std::isfinite(verdict.log10_odds) ? num(std::round(verdict.log10_odds * 100) / 100) : "-inf");
         m.emplace_back("inliers", std::to_string(verdict.inliers) + " of " + std::to_string(verdict.candidates) +
                                       " points of cluster1 mapped into cluster2, mutual nearest neighbours within " +
                                       num(std::round(verdict.radius_px * 1e4) / 1e4) + " px (chance: " +
                                       num(std::round(verdict.expected * 100) / 100) + ")");
-        std::fprintf(stderr, "cluster-homog: verdict: %s (%s)\n", verdict.accepted ? "accepted" : "rejected",
-                     verdict.degenerate.empty()
-                         ? (std::to_string(verdict.inliers) + " of " + std::to_string(verdict.candidates) +
-                            " points matched within " + num(std::round(verdict.radius_px * 1e3) / 1e3) + " px, chance " +
-                            num(std::round(verdict.expected * 10) / 10) + "; log10 odds " +
-                            num(std::round(verdict.log10_odds * 10) / 10))
-                               .c_str()
-                         : ("degenerate: " + verdict.degenerate).c_str());
+        const std::string why =
+            !verdict.degenerate.empty()     ? "degenerate: " + verdict.degenerate
+            : !verdict.undetermined.empty() ? "h is not determined: " + verdict.undetermined
+                                            : std::to_string(verdict.inliers) + " of " + std::to_string(verdict.candidates) +
+                                                  " points matched within " + num(std::round(verdict.radius_px * 1e3) / 1e3) +
+                                                  " px, chance " + num(std::round(verdict.expected * 10) / 10) + "; log10 odds " +
+                                                  num(std::round(verdict.log10_odds * 10) / 10);
+        std::fprintf(stderr, "cluster-homog: verdict: %s (%s)\n", verdict.accepted ? "accepted" : "rejected", why.c_str());
         if (!verdict.accepted && !o->keep_rejected) return kExitNoAnswer;  // nothing written
       }
 

@@ -84,3 +84,14 @@ tpkit_tool_test(cluster-homog.verdict-keep-rejected
 tpkit_tool_test(cluster-homog.trim-from-data-by-default
   COMMAND "cluster-homog ${_s}/cluster-extra-a.points ${_s}/cluster-extra-b.points --param math -o h.homography"
   CHECK_FILE h.homography FILE_MATCH "# trim: from the data \\(0\\.[0-9]+ of cluster1, 0\\.[0-9]+ of cluster2 left out\\).*# verdict: accepted.*${_eq4}")
+# small clusters (cluster_exhaustive.hpp): six points measured to 0.05 px are found by trying every
+# correspondence and verified; four points never determine h (exit 3, nothing written)
+set(_six_a "printf '%s %s\\n' 10 20 400 35 250 300 60 480 470 410 200 150 > a6.points")
+set(_six_b "printf '%s %s\\n' 275.285 737.466 498.442 226.745 616.295 474.648 887.870 472.816 738.564 903.327 578.670 660.458 > b6.points")
+tpkit_tool_test(cluster-homog.six-points-accepted
+  COMMAND "${_six_a} && ${_six_b} && cluster-homog a6.points b6.points --param math -o h.homography"
+  STDERR_MATCH "verdict: accepted \\(6 of 6 points matched"
+  CHECK_FILE h.homography FILE_MATCH "optimizer: default \\(exhaustive\\+least squares\\).*# verdict: accepted\n.*# inliers: 6 of 6 ")
+tpkit_tool_test(cluster-homog.four-points-undetermined
+  COMMAND "${_six_a} && ${_six_b} && head -4 a6.points > a4.points && sed -n '1p@SEMI@2p@SEMI@4p@SEMI@6p' b6.points > b4.points && cluster-homog a4.points b4.points -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 3" STDERR_MATCH "verdict: rejected \\(h is not determined: only 4 points" NO_FILE h.homography)

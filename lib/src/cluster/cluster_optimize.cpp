@@ -10,6 +10,7 @@
 #include <limits>
 #include <random>
 
+#include "tpkit/cluster_exhaustive.hpp"
 #include "tpkit/cluster_search.hpp"
 #include "tpkit/cluster_synth.hpp"
 #include "tpkit/cluster_verdict.hpp"
@@ -138,12 +139,31 @@ void solve_pairs(ceres::Problem& problem) {
 
 }  // namespace
 
-Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds) {
+Eigen::Matrix3d fit_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, const std::vector<std::pair<int, int>>& pairs) {
   const Eigen::MatrixX2d &A = cost.a(), &B = cost.b();
   const Eigen::Matrix3d TA = normalizing_transform(A), TB = normalizing_transform(B), TBi = TB.inverse();
   const double kB = TB(0, 0);
+  if (pairs.size() < 4) return H0;
+  Eigen::Matrix3d Hn = TB * H0 * TA.inverse();
+  if (!(std::abs(Hn(2, 2)) > 1e-12)) return H0;
+  Hn /= Hn(2, 2);
+  double h[8] = {Hn(0, 0), Hn(0, 1), Hn(0, 2), Hn(1, 0), Hn(1, 1), Hn(1, 2), Hn(2, 0), Hn(2, 1)};
+  ceres::Problem problem;
+  for (const auto& [i, j] : pairs) {
+    const double ax = TA(0, 0) * A(i, 0) + TA(0, 2), ay = TA(1, 1) * A(i, 1) + TA(1, 2);
+    const double bx = TB(0, 0) * B(j, 0) + TB(0, 2), by = TB(1, 1) * B(j, 1) + TB(1, 2);
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 8>(new PairResidual{ax, ay, bx, by, 1.0 / kB}),
+                             nullptr, h);
+  }
+  solve_pairs(problem);
+  Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
+  const Eigen::Matrix3d H = normalized_homography(TBi * Hn * TA);
+  return H.allFinite() ? H : H0;
+}
+
+Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H0, int max_rounds) {
   Eigen::Matrix3d H = H0;
-  std::vector<long long> prev;
+  std::vector<std::pair<int, int>> prev;
   for (int round = 0; round < max_rounds; ++round) {
     const std::vector<MutualPair> mutual = mutual_pairs(cost, H);
     if (mutual.size() < 8) break;
@@ -152,28 +172,12 @@ Eigen::Matrix3d polish_on_mutual_pairs(const ClusterCost& cost, const Eigen::Mat
     for (const MutualPair& mp : mutual) ds.push_back(mp.d);
     std::nth_element(ds.begin(), ds.begin() + ds.size() / 2, ds.end());
     const double gate = std::max(3 * 1.4826 * ds[ds.size() / 2], 1e-3);
-    std::vector<long long> key;
+    std::vector<std::pair<int, int>> key;
     for (const MutualPair& mp : mutual)
-      if (mp.d <= gate) key.push_back(static_cast<long long>(mp.ia) * (B.rows() + 1) + mp.ib);
+      if (mp.d <= gate) key.emplace_back(mp.ia, mp.ib);
     if (key.size() < 8 || key == prev) break;
     prev = key;
-    Eigen::Matrix3d Hn = TB * H * TA.inverse();
-    if (!(std::abs(Hn(2, 2)) > 1e-12)) break;
-    Hn /= Hn(2, 2);
-    double h[8] = {Hn(0, 0), Hn(0, 1), Hn(0, 2), Hn(1, 0), Hn(1, 1), Hn(1, 2), Hn(2, 0), Hn(2, 1)};
-    ceres::Problem problem;
-    for (long long kk : key) {
-      const Eigen::Index i = static_cast<Eigen::Index>(kk / (B.rows() + 1)), j = static_cast<Eigen::Index>(kk % (B.rows() + 1));
-      const double ax = TA(0, 0) * A(i, 0) + TA(0, 2), ay = TA(1, 1) * A(i, 1) + TA(1, 2);
-      const double bx = TB(0, 0) * B(j, 0) + TB(0, 2), by = TB(1, 1) * B(j, 1) + TB(1, 2);
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PairResidual, 2, 8>(new PairResidual{ax, ay, bx, by, 1.0 / kB}),
-                               nullptr, h);
-    }
-    solve_pairs(problem);
-    Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
-    const Eigen::Matrix3d Hp = normalized_homography(TBi * Hn * TA);
-    if (!Hp.allFinite()) break;
-    H = Hp;
+    H = fit_on_pairs(cost, H, key);
   }
   return H;
 }
@@ -300,22 +304,27 @@ Eigen::Matrix3d refine_on_pairs(const ClusterCost& cost, const Eigen::Matrix3d& 
   return best;
 }
 
-Eigen::Matrix3d refine_growing(const ClusterCost& cost, const Eigen::Matrix3d& H0, RefineRegion region, int* rounds) {
+GrownHypothesis refine_growing(const ClusterCost& cost, const Eigen::Matrix3d& H0, RefineRegion region, int* rounds,
+                               const RegionSupport* support) {
   const Eigen::MatrixX2d& A = cost.a();
   double reach = 0;
   for (Eigen::Index i = 0; i < A.rows(); ++i) reach = std::max(reach, (A.row(i).transpose() - region.center).norm());
   Eigen::Matrix3d H = H0;
-  int total = 0, r = 0;
+  int total = 0, r = 0, step = 0;
   region.radius = std::max(region.radius, 1e-9);
   while (region.radius < reach) {
     H = refine_on_pairs(cost, H, 4, &r, &region);
     total += r;
+    if (support && ++step >= 2 && support->log10_odds(H, region.center, region.radius) < kRegionMinLog10Odds) {
+      if (rounds) *rounds = total;
+      return {H, false};
+    }
     region.radius *= 2;
   }
   H = refine_on_pairs(cost, H, 30, &r);
   total += r;
   if (rounds) *rounds = total;
-  return H;
+  return {H, true};
 }
 
 OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& start, const OptimizeOptions& opt) {
@@ -457,12 +466,40 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
       }
       return accepted;
     };
-    // The search, and when its best is not accepted, a second one, wider (SearchOptions::widen: in dense
-    // clusters three times the random anchors of A and B, in sparse ones larger neighbourhoods): with
-    // unmatched points the quadruples whose four partners are all there (around an anchor of B that was
-    // drawn) are few, and the first search can miss them all. Unrelated clusters pay for both
-    // searches; the verdict counts every hypothesis tried.
-    for (int pass = 0; pass < 2 && !(have_start && done()) && opt.search_fallback; ++pass) {
+    const bool small = exhaustive_hypothesis_count(cost.a().rows(), cost.b().rows()) <= kExhaustiveMaxHypotheses;
+    if (small && opt.search_fallback && !(have_start && done())) {
+      // Small clusters: every correspondence of four points (cluster_exhaustive.hpp), each of the best
+      // fitted by least squares to its matches; the verdict picks among them.
+      long tried = 0;
+      const auto hyps = exhaustive_hypotheses(cost, opt.allow_reflection, 8, &tried);
+      evals += tried;
+      auto odds_of = [&](const Eigen::Matrix3d& H) {
+        VerdictOptions vo;
+        vo.hypotheses = std::max(1L, evals);
+        return judge_homography(cost, H, vo).log10_odds;
+      };
+      double best_odds = std::isfinite(best) ? odds_of(bestH) : -std::numeric_limits<double>::infinity();
+      for (const auto& hy : hyps) {
+        const Eigen::Matrix3d Hr = hy.pairs.size() > 4 ? fit_on_pairs(cost, hy.H, hy.pairs) : hy.H;
+        ++evals;
+        if (!usable(Hr)) continue;
+        const double odds = odds_of(Hr), cr = cost(Hr);
+        if (odds > best_odds || (odds == best_odds && cr < best)) {
+          best_odds = odds, best = cr, bestH = Hr, judged = false;
+          res.method = "exhaustive+least squares";
+        }
+      }
+    }
+    // Larger ones: the quadruple search, and when its best is not accepted, a second one, wider
+    // (SearchOptions::widen: in dense clusters three times the random anchors of A and B, in sparse ones
+    // larger neighbourhoods): with unmatched points the quadruples whose four partners are all there
+    // (around an anchor of B that was drawn) are few, and the first search can miss them all. Unrelated
+    // clusters pay for both searches, less the hypotheses whose growing regions stay at chance level
+    // (RegionSupport); the verdict counts every hypothesis tried.
+    const RegionSupport support(cost);
+    double dropped_cost = std::numeric_limits<double>::infinity();  // the best of the dropped hypotheses
+    Eigen::Matrix3d dropped = Eigen::Matrix3d::Identity();
+    for (int pass = 0; pass < 2 && !small && !(have_start && done()) && opt.search_fallback; ++pass) {
       if (pass == 1 && verdict_accepts(VerdictOptions{}.min_log10_odds)) break;  // at the verdict's own threshold
       SearchOptions so;
       so.seed = opt.seed + static_cast<uint64_t>(pass) * 0x9E3779B97F4A7C15ULL;
@@ -473,10 +510,15 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
       evals += tried;
       for (const auto& hy : hyps) {
         int rounds = 0;
-        Eigen::Matrix3d Hr = refine_growing(cost, hy.H, {hy.center, hy.radius}, &rounds);
+        const GrownHypothesis grown = refine_growing(cost, hy.H, {hy.center, hy.radius}, &rounds, &support);
         res.local_rounds += rounds;
+        const Eigen::Matrix3d& Hr = grown.H;
         double cr = cost(Hr);
         ++evals;
+        if (!grown.supported) {  // its region stayed at chance level: an answer only if nothing else is
+          if (cr < dropped_cost && usable(Hr)) dropped_cost = cr, dropped = Hr;
+          continue;
+        }
         if (cr < best && usable(Hr)) {  // a degenerate map is no candidate, however low its cost
           best = cr, bestH = Hr, judged = false;
           res.method = pass == 0 ? "search+local" : "wide search+local";
@@ -487,6 +529,10 @@ OptimizeResult optimize_clusters(const ClusterCost& cost, const OptimizeStart& s
     for (int round = (dense && opt.search_fallback) ? 0 : 1; have_start && round < 6 && used < budget && !done(); ++round) {
       es_round(round);
       judged = false;  // a new best, perhaps
+    }
+    if (!std::isfinite(best) && std::isfinite(dropped_cost)) {  // every hypothesis dropped: the verdict will say no
+      best = dropped_cost, bestH = dropped;
+      res.method = "search+local, every hypothesis at chance level";
     }
     if (res.method.empty()) res.method = have_start ? "global+local" : "search+local";
     if (!std::isfinite(best)) throw NumericalError("no homography found: every hypothesis failed");
