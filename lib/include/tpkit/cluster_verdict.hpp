@@ -16,7 +16,10 @@
 //     p(r) = 1 - exp(-pi r^2 |B| / area(hull B)) (Poisson); any homography fits 4 matches exactly (8
 //     parameters), so those prove nothing: with the radius r = d_k of the k-th match (k = 5 ... n,
 //     floored at 1e-6 s), the chance of k matches is the binomial tail
-//     P_k = P(K >= k - 4), K ~ Bin(n - 4, p(d_k)); the number of false alarms is
+//     P_k = P(K >= k - 4), K ~ Bin(n - 4, p(d_k / sqrt(1 - 4/k))), the radius widened because h is
+//     fitted to its matches by least squares (8 parameters leave 2k - 8 of the 2k residuals' degrees
+//     of freedom: 5 points fitted to 0.05 px are no closer than 4 exact and a fifth at 0.11 px); the
+//     number of false alarms is
 //     NFA = max(1, n - 4) radii x max(1, hypotheses tried) x min_k P_k;
 //   - accepted when log10_odds = -log10(NFA) >= min_log10_odds (default 3).
 // The radius comes from the data, so a small cluster measured to 0.1 px is verifiable: 6 points (2

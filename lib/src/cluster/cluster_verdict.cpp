@@ -151,7 +151,11 @@ Significance match_significance(int n, std::vector<double> d, double density, do
     const int k = static_cast<int>(i) + 1;
     if (i + 1 < d.size() && d[i + 1] == d[i]) continue;  // ties: the largest k at that radius
     const double r = std::max(d[i], floor);
-    const double p = -std::expm1(-kPi * r * r * density);
+    // h is fitted to its matches (least squares, 8 parameters): k matches' 2k residuals keep only
+    // (2k - 8) / 2k of their squared size, so k matches within r are as likely by chance as k independent
+    // points within r / sqrt(1 - 4 / k) (for k = 5, 2.2 r; for k = 100, 1.02 r)
+    const double r_chance = r / std::sqrt(1.0 - 4.0 / k);
+    const double p = -std::expm1(-kPi * r_chance * r_chance * density);
     const double lt = log10_binomial_tail(n - 4, k - 4, p);
     if (!any || lt < s.log10_tail) s = {lt, k, r, p, s.radii}, any = true;
   }
