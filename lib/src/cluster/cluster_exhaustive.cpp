@@ -57,16 +57,16 @@ std::vector<ExhaustiveHypothesis> exhaustive_hypotheses(const ClusterCost& cost,
   if (na < 4 || nb < 4) return best;
   const MapCheck check(A, B);
   const double density = nb / check.area_b(), spacing = std::sqrt(check.area_b() / nb);
-  // every ordered quadruple of B with its basis
-  std::vector<std::array<int, 4>> qb;
-  std::vector<Eigen::Matrix3d> mb;
-  for (int a = 0; a < nb; ++a)
-    for (int b = 0; b < nb; ++b)
-      for (int c = 0; c < nb; ++c)
-        for (int d = 0; d < nb; ++d) {
-          if (a == b || a == c || a == d || b == c || b == d || c == d) continue;
-          Eigen::Matrix3d M;
-          if (basis(B, {a, b, c, d}, M)) qb.push_back({a, b, c, d}), mb.push_back(M);
+  // every 4 points of A with the inverse of its basis (C(|A|, 4) of them: at most a few MB within the
+  // budget), then every ordered 4 points of B against them
+  std::vector<std::array<int, 4>> qas;
+  std::vector<Eigen::Matrix3d> mais;
+  for (int i0 = 0; i0 < na; ++i0)
+    for (int i1 = i0 + 1; i1 < na; ++i1)
+      for (int i2 = i1 + 1; i2 < na; ++i2)
+        for (int i3 = i2 + 1; i3 < na; ++i3) {
+          Eigen::Matrix3d Ma;
+          if (basis(A, {i0, i1, i2, i3}, Ma)) qas.push_back({i0, i1, i2, i3}), mais.push_back(Ma.inverse());
         }
   std::vector<Eigen::Vector3d> ha(static_cast<size_t>(na));
   for (int i = 0; i < na; ++i) ha[static_cast<size_t>(i)] << A(i, 0), A(i, 1), 1.0;
@@ -74,16 +74,18 @@ std::vector<ExhaustiveHypothesis> exhaustive_hypotheses(const ClusterCost& cost,
   std::vector<std::pair<int, int>> extra;
   std::vector<int> claim(static_cast<size_t>(nb));  // -2: one of the four; else the index into extra
   std::vector<double> dist_of;                        // squared distance of each claim
-  for (int i0 = 0; i0 < na; ++i0)
-    for (int i1 = i0 + 1; i1 < na; ++i1)
-      for (int i2 = i1 + 1; i2 < na; ++i2)
-        for (int i3 = i2 + 1; i3 < na; ++i3) {
-          const std::array<int, 4> qa = {i0, i1, i2, i3};
-          Eigen::Matrix3d Ma;
-          if (!basis(A, qa, Ma)) continue;
-          const Eigen::Matrix3d Mai = Ma.inverse();
-          for (size_t t = 0; t < qb.size(); ++t) {
-            const Eigen::Matrix3d H = mb[t] * Mai;
+  for (int b0 = 0; b0 < nb; ++b0)
+    for (int b1 = 0; b1 < nb; ++b1)
+      for (int b2 = 0; b2 < nb; ++b2)
+        for (int b3 = 0; b3 < nb; ++b3) {
+          if (b0 == b1 || b0 == b2 || b0 == b3 || b1 == b2 || b1 == b3 || b2 == b3) continue;
+          const std::array<int, 4> qb = {b0, b1, b2, b3};
+          Eigen::Matrix3d Mb;
+          if (!basis(B, qb, Mb)) continue;
+          for (size_t u = 0; u < qas.size(); ++u) {
+            const std::array<int, 4>& qa = qas[u];
+            const int i0 = qa[0], i1 = qa[1], i2 = qa[2], i3 = qa[3];
+            const Eigen::Matrix3d H = Mb * mais[u];
             ++n_tried;
             // all of A on one side of the line at infinity; orientation kept unless mirrors are allowed
             const double w0 = H.row(2).dot(ha[static_cast<size_t>(i0)]);
@@ -94,7 +96,7 @@ std::vector<ExhaustiveHypothesis> exhaustive_hypotheses(const ClusterCost& cost,
             // the other points of A: nearest free point of B, each point of B given to the nearest claim
             // only (a map that squeezes A onto one point of B matches one point, not all)
             std::fill(claim.begin(), claim.end(), -1);
-            for (int k = 0; k < 4; ++k) claim[static_cast<size_t>(qb[t][k])] = -2;
+            for (int k = 0; k < 4; ++k) claim[static_cast<size_t>(qb[k])] = -2;
             d.assign(4, 0.0);
             extra.clear();
             for (int i = 0; i < na; ++i) {
@@ -131,7 +133,7 @@ std::vector<ExhaustiveHypothesis> exhaustive_hypotheses(const ClusterCost& cost,
             if (!check(H).empty()) continue;  // torn or collapsed (cluster_verdict.hpp)
             ExhaustiveHypothesis h;
             h.H = H;
-            for (int k = 0; k < 4; ++k) h.pairs.emplace_back(qa[k], qb[t][k]);
+            for (int k = 0; k < 4; ++k) h.pairs.emplace_back(qa[k], qb[k]);
             for (size_t k = 0; k < extra.size(); ++k)
               if (d[k + 4] <= s.radius) h.pairs.push_back(extra[k]);
             std::sort(h.pairs.begin(), h.pairs.end());
