@@ -142,7 +142,8 @@ int main(int argc, char** argv) {
         if (!verdict.undetermined.empty()) m.emplace_back("undetermined", verdict.undetermined);
         m.emplace_back("verdict_log10_odds", std::isfinite(verdict.log10_odds) ? num(std::round(verdict.log10_odds * 100) / 100) : "-inf");
         m.emplace_back("inliers", std::to_string(verdict.inliers) + " of " + std::to_string(verdict.candidates) +
-                                      " points of cluster1 mapped into cluster2, mutual nearest neighbours within " +
+                                      " points of cluster1 (" + std::to_string(verdict.mapped_into_b) +
+                                      " mapped into cluster2), mutual nearest neighbours within " +
                                       num(std::round(verdict.radius_px * 1e4) / 1e4) + " px (chance: " +
                                       num(std::round(verdict.expected * 100) / 100) + ")");
         const std::string why =

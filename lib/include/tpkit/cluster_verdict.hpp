@@ -7,11 +7,10 @@
 //   - a degenerate h is refused outright (degeneracy()): its line at infinity (h3 . x = 0) must not cross
 //     cluster A (nor that of h^-1 cross B), and neither h(hull A) nor h^-1(hull B) may shrink below
 //     kMinAreaRatio of the smaller of the two hulls' areas (a cluster collapsed onto a few points);
-//   - candidates n: the points of A that h maps inside hull B, or within kCandidateMargin of B's mean
-//     spacing s = sqrt(area(hull B) / |B|) of it (a small cluster's points are mostly its hull's vertices,
-//     which noise puts just outside; counting more candidates only makes the verdict stricter);
-//     matches: those whose forward nearest neighbour in B is mutual, with their distances
-//     d_1 <= d_2 <= ... (image-2 pixels);
+//   - trials n = |A|, every point of A (not only those h maps into B: a map the search chose can push
+//     the points it does not fit out of B, and be judged on the few it keeps); matches: the points of A
+//     whose forward nearest neighbour in B is mutual, with their distances d_1 <= d_2 <= ... (image-2
+//     pixels); s = sqrt(area(hull B) / |B|) is B's mean spacing;
 //   - for unrelated clusters, a mapped point has a B point within r with probability
 //     p(r) = 1 - exp(-pi r^2 |B| / area(hull B)) (Poisson); any homography fits 4 matches exactly (8
 //     parameters), so those prove nothing: with the radius r = d_k of the k-th match (k = 5 ... n,
@@ -43,9 +42,10 @@ struct VerdictOptions {
 struct Verdict {
   bool accepted = false;
   std::string degenerate;   // why h is degenerate, "" if it is not
-  std::string undetermined; // why the points cannot verify any h (4 or fewer candidates), "" otherwise
+  std::string undetermined; // why the points cannot verify any h (4 or fewer of A mapped into B), "" otherwise
   int inliers = 0;          // k at the chosen radius
-  int candidates = 0;       // n: points of A mapped inside hull B
+  int candidates = 0;       // n: the trials, every point of A
+  int mapped_into_b = 0;    // points of A mapped into hull B (or within kCandidateMargin s of it)
   double radius_px = 0;     // the radius of the best significance
   double expected = 0;      // chance inliers at that radius: 4 + (n - 4) p
   double log10_odds = 0;    // -log10(NFA); -inf for a degenerate h
