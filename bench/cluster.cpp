@@ -3,11 +3,12 @@
 // search, and time against the cluster size. Prints plain tables on stdout.
 //
 //   bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|scale|all] [--max-n N]
-//                 [--family K] [--n N] [--paper-cost] [--verbose]
+//                 [--family K] [--n N [--first T]] [--paper-cost] [--verbose]
 //
 // --family K runs only the K-th family (1-based) of --section families (the one after the last: the
 // unrelated pairs); --n N runs --section unrelated at N points only, with --trials trials (a 95% bound of
-// 0.1% on false accepts needs 3000 trials without one); --paper-cost makes the
+// 0.1% on false accepts needs 3000 trials without one; --first T starts at trial T, whose seeds are
+// fixed, so the 3000 can be split over processes and the counts added); --paper-cost makes the
 // families and unrelated pairs use the paper's untrimmed cost instead of cluster-homog's default (the
 // trim chosen from the data, cluster_cost.hpp), which was the default before.
 //
@@ -195,11 +196,11 @@ void family_case(const char* label, int n, double aniso, double proj, double unm
   std::fflush(stdout);
 }
 
-void unrelated_case(int n, int trials) {
+void unrelated_case(int n, int trials, int first = 0) {
   int accepted = 0;
   std::vector<double> odds;  // the verdict's log10 odds of each trial
   const auto t0 = std::chrono::steady_clock::now();
-  for (int t = 0; t < trials; ++t) {
+  for (int t = first; t < first + trials; ++t) {
     ClusterSynthOptions sa;
     sa.n = n;
     sa.seed = 9000 + static_cast<uint64_t>(t);
@@ -228,9 +229,9 @@ void unrelated_case(int n, int trials) {
                                      : (p + z * z / (2 * trials) + z * std::sqrt(p * (1 - p) / trials + z * z / (4.0 * trials * trials))) /
                                            (1 + z * z / trials);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("unrelated uniform clusters, n = %-5d               %4d trials: false accepts %d (%.2f%%, 95%% upper bound %.2f%%), "
+  std::printf("unrelated uniform clusters, n = %-5d trials %4d-%-4d: false accepts %d of %d (%.2f%%, 95%% upper bound %.2f%%), "
               "log10 odds median %.1f, 99th percentile %.1f, max %.1f (accepted at 3), %.2f s each\n",
-              n, trials, accepted, 100.0 * accepted / trials, 100.0 * upper, odds[odds.size() / 2],
+              n, first, first + trials - 1, accepted, trials, 100.0 * accepted / trials, 100.0 * upper, odds[odds.size() / 2],
               odds[std::min(odds.size() - 1, odds.size() * 99 / 100)], odds.back(), secs / trials);
   std::fflush(stdout);
 }
@@ -243,16 +244,18 @@ int main(int argc, char** argv) {
   std::string section = "all";
   int family = 0;
   int only_n = 0;  // --n: the unrelated section at this size only, --trials trials
+  int first = 0;   // --first: the first trial's index (its seeds), so one size can be split over processes
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--trials") && i + 1 < argc) trials = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--family") && i + 1 < argc) family = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--n") && i + 1 < argc) only_n = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--first") && i + 1 < argc) first = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--paper-cost")) g_paper_cost = true;
     else if (!std::strcmp(argv[i], "--verbose")) g_verbose = true;
     else if (!std::strcmp(argv[i], "--section") && i + 1 < argc) section = argv[++i];
     else if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|scale|all] [--max-n N] [--family K] [--n N] [--paper-cost] [--verbose]\n");
+      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|scale|all] [--max-n N] [--family K] [--n N [--first T]] [--paper-cost] [--verbose]\n");
       return 2;
     }
   }
@@ -348,7 +351,7 @@ int main(int argc, char** argv) {
   if (section == "unrelated") {  // false accepts (issue 15: <= 0.1% for 10..5000 points): --trials at n <= 100,
                                  // a quarter of them at 1000, a twentieth at 5000
     std::printf("== unrelated clusters from scratch: false accepts of the verdict (goal <= 0.1%%)\n");
-    if (only_n > 0) unrelated_case(only_n, trials);
+    if (only_n > 0) unrelated_case(only_n, trials, first);
     else
       for (int n : {5, 6, 10, 100, 1000, 5000}) unrelated_case(n, std::max(1, n <= 100 ? trials : n <= 1000 ? trials / 4 : trials / 20));
   }
