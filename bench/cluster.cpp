@@ -259,6 +259,10 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (first < 0 || (first > 0 && (only_n <= 0 || section != "unrelated"))) {
+    std::fprintf(stderr, "bench_cluster: --first %d: needs --section unrelated --n N and a trial index >= 0\n", first);
+    return 2;
+  }
   bool all = section == "all";
   ClusterSynthOptions paper;  // 100 points in [0, 512]^2, exact h
   OptimizeOptions o;
