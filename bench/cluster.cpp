@@ -28,12 +28,12 @@
 #include <string>
 #include <vector>
 
-#include "tpkit/cluster_cost.hpp"
-#include "tpkit/cluster_optimize.hpp"
-#include "tpkit/cluster_search.hpp"
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/cluster_verdict.hpp"
-#include "tpkit/physical_homography.hpp"
+#include "tpkit/cluster/cluster_cost.hpp"
+#include "tpkit/cluster/cluster_optimize.hpp"
+#include "tpkit/cluster/cluster_search.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
+#include "tpkit/cluster/physical_homography.hpp"
 
 using namespace tpkit;
 

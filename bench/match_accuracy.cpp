@@ -29,11 +29,11 @@
 #include <thread>
 #include <vector>
 
-#include "tpkit/formats.hpp"
-#include "tpkit/image_tiles.hpp"
-#include "tpkit/match_pair.hpp"
-#include "tpkit/synth_scene.hpp"
-#include "tpkit/tracks_chain.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/match/image_tiles.hpp"
+#include "tpkit/match/match_pair.hpp"
+#include "tpkit/synth/synth_scene.hpp"
+#include "tpkit/match/tracks_chain.hpp"
 
 namespace {
 struct Dist {

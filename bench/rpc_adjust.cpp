@@ -15,12 +15,12 @@
 #include <string>
 #include <vector>
 
-#include "tpkit/image_io.hpp"
-#include "tpkit/rpc_adjust.hpp"
-#include "tpkit/rpc_io.hpp"
-#include "tpkit/synth_camera.hpp"
-#include "tpkit/synth_rpc.hpp"
-#include "tpkit/synth_scene.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/rpc/rpc_adjust.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/synth/synth_camera.hpp"
+#include "tpkit/synth/synth_rpc.hpp"
+#include "tpkit/synth/synth_scene.hpp"
 
 using namespace tpkit;
 

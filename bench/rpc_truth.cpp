@@ -9,11 +9,11 @@
 #include <cstdio>
 #include <string>
 
-#include "tpkit/formats.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/rpc_adjust.hpp"
-#include "tpkit/rpc_io.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/rpc/rpc_adjust.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/core/text_table.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 5 && argc != 7) {

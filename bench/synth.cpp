@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "tpkit/synth_scene.hpp"
+#include "tpkit/synth/synth_scene.hpp"
 
 namespace {
 const tpkit::SynthScene& scene(const std::string& camera) {

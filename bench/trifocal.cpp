@@ -34,12 +34,12 @@
 #include <string>
 #include <vector>
 
-#include "tpkit/affine_camera.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/reproj_eval.hpp"
-#include "tpkit/trifocal_fit.hpp"
-#include "tpkit/trifocal_three_f.hpp"
-#include "tpkit/trifocal_transfer.hpp"
+#include "tpkit/geometry/affine_camera.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/geometry/reproj_eval.hpp"
+#include "tpkit/geometry/trifocal_fit.hpp"
+#include "tpkit/geometry/trifocal_three_f.hpp"
+#include "tpkit/geometry/trifocal_transfer.hpp"
 
 using namespace tpkit;
 

@@ -7,8 +7,8 @@
 #include <sstream>
 #include <string>
 
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
 
 #define TPKIT_CAT2(a, b) a##b
 #define TPKIT_CAT(a, b) TPKIT_CAT2(a, b)

@@ -4,15 +4,15 @@
 #include <memory>
 #include <sstream>
 
-#include "tpkit/cluster_cost.hpp"
-#include "tpkit/cluster_init.hpp"
-#include "tpkit/cluster_optimize.hpp"
-#include "tpkit/cluster_scan.hpp"
-#include "tpkit/cluster_verdict.hpp"
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/cluster/cluster_cost.hpp"
+#include "tpkit/cluster/cluster_init.hpp"
+#include "tpkit/cluster/cluster_optimize.hpp"
+#include "tpkit/cluster/cluster_scan.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

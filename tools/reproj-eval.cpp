@@ -4,13 +4,13 @@
 #include <memory>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/reproj_eval.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/tool_support.hpp"
-#include "tpkit/trifocal_transfer.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/geometry/reproj_eval.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/tool_support.hpp"
+#include "tpkit/geometry/trifocal_transfer.hpp"
 
 extern const char* const tpkit_man_page;
 

@@ -7,15 +7,15 @@
 #include <set>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/parallel_for.hpp"
-#include "tpkit/rpc_adjust.hpp"
-#include "tpkit/rpc_ground.hpp"
-#include "tpkit/rpc_io.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/core/parallel_for.hpp"
+#include "tpkit/rpc/rpc_adjust.hpp"
+#include "tpkit/rpc/rpc_ground.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

@@ -2,11 +2,11 @@
 #include <iostream>
 #include <memory>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/tool_support.hpp"
-#include "tpkit/tracks_chain.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/tool_support.hpp"
+#include "tpkit/match/tracks_chain.hpp"
 
 extern const char* const tpkit_man_page;
 

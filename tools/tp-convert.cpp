@@ -5,15 +5,15 @@
 #include <iostream>
 #include <memory>
 
-#include "tpkit/asp_match.hpp"
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/colmap_database.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/micmac_homol.hpp"
-#include "tpkit/openmvg_matches.hpp"
-#include "tpkit/peer_keypoints.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/interop/asp_match.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/interop/colmap_database.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/interop/micmac_homol.hpp"
+#include "tpkit/interop/openmvg_matches.hpp"
+#include "tpkit/interop/peer_keypoints.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

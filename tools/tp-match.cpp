@@ -7,17 +7,17 @@
 #include <optional>
 #include <thread>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/keypoint_cache.hpp"
-#include "tpkit/match_every_pair.hpp"
-#include "tpkit/match_pair.hpp"
-#include "tpkit/match_region.hpp"
-#include "tpkit/opencv_threads.hpp"
-#include "tpkit/rpc_guided_matching.hpp"
-#include "tpkit/rpc_io.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/match/keypoint_cache.hpp"
+#include "tpkit/match/match_every_pair.hpp"
+#include "tpkit/match/match_pair.hpp"
+#include "tpkit/match/match_region.hpp"
+#include "tpkit/match/opencv_threads.hpp"
+#include "tpkit/match/rpc_guided_matching.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

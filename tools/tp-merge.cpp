@@ -3,10 +3,10 @@
 #include <iostream>
 #include <memory>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/matches_merge.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/match/matches_merge.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

@@ -6,10 +6,10 @@
 #include <memory>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/scale_out_plan.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/plan/scale_out_plan.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

@@ -3,11 +3,11 @@
 #include <memory>
 #include <optional>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/table_sample.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/table_sample.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

@@ -2,10 +2,10 @@
 #include <iostream>
 #include <memory>
 
-#include "tpkit/error.hpp"
-#include "tpkit/parallel_for.hpp"
-#include "tpkit/synth_scene.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/parallel_for.hpp"
+#include "tpkit/synth/synth_scene.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
 

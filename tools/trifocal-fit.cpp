@@ -3,13 +3,13 @@
 #include <memory>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/reproj_eval.hpp"
-#include "tpkit/tool_support.hpp"
-#include "tpkit/trifocal_three_f.hpp"
-#include "tpkit/trifocal_fit.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/geometry/reproj_eval.hpp"
+#include "tpkit/core/tool_support.hpp"
+#include "tpkit/geometry/trifocal_three_f.hpp"
+#include "tpkit/geometry/trifocal_fit.hpp"
 
 extern const char* const tpkit_man_page;
 

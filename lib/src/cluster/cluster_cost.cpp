@@ -1,5 +1,5 @@
 // See cluster_cost.hpp.
-#include "tpkit/cluster_cost.hpp"
+#include "tpkit/cluster/cluster_cost.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -8,7 +8,7 @@
 #include <nanoflann.hpp>
 #include <stdexcept>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,5 +1,5 @@
 // See cluster_exhaustive.hpp.
-#include "tpkit/cluster_exhaustive.hpp"
+#include "tpkit/cluster/cluster_exhaustive.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "tpkit/cluster_verdict.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
 
 namespace tpkit {
 

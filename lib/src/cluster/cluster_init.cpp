@@ -1,5 +1,5 @@
 // See cluster_init.hpp.
-#include "tpkit/cluster_init.hpp"
+#include "tpkit/cluster/cluster_init.hpp"
 
 #include <GeographicLib/LocalCartesian.hpp>
 
@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

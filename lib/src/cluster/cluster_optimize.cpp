@@ -1,5 +1,5 @@
 // See cluster_optimize.hpp.
-#include "tpkit/cluster_optimize.hpp"
+#include "tpkit/cluster/cluster_optimize.hpp"
 
 #include <ceres/ceres.h>
 
@@ -10,11 +10,11 @@
 #include <limits>
 #include <random>
 
-#include "tpkit/cluster_exhaustive.hpp"
-#include "tpkit/cluster_search.hpp"
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/cluster_verdict.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/cluster/cluster_exhaustive.hpp"
+#include "tpkit/cluster/cluster_search.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,12 +1,12 @@
 // See cluster_scan.hpp.
-#include "tpkit/cluster_scan.hpp"
+#include "tpkit/cluster/cluster_scan.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/svg_plot.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/svg_plot.hpp"
 
 namespace tpkit {
 

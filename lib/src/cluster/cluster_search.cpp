@@ -1,5 +1,5 @@
 // See cluster_search.hpp.
-#include "tpkit/cluster_search.hpp"
+#include "tpkit/cluster/cluster_search.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>

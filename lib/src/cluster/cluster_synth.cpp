@@ -1,5 +1,5 @@
 // See cluster_synth.hpp.
-#include "tpkit/cluster_synth.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
 
 #include <algorithm>
 #include <cmath>

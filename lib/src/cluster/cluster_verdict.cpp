@@ -1,4 +1,4 @@
-#include "tpkit/cluster_verdict.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/LU>

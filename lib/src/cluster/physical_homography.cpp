@@ -1,11 +1,11 @@
 // See physical_homography.hpp.
-#include "tpkit/physical_homography.hpp"
+#include "tpkit/cluster/physical_homography.hpp"
 
 #include <ceres/ceres.h>
 
 #include <cmath>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/atomic_output.hpp"
+#include "tpkit/core/atomic_output.hpp"
 
 #include <unistd.h>
 
@@ -15,7 +15,7 @@
 #include <random>
 #include <system_error>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

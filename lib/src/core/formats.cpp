@@ -1,12 +1,12 @@
-#include "tpkit/formats.hpp"
+#include "tpkit/core/formats.hpp"
 
 #include <Eigen/LU>
 
 #include <cmath>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/image_io.hpp"
+#include "tpkit/core/image_io.hpp"
 
 #include <OpenImageIO/imageio.h>
 #include <tiffio.h>
@@ -11,9 +11,9 @@
 #include <map>
 #include <mutex>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/version.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/version.hpp"
 
 namespace tpkit {
 

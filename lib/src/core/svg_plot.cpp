@@ -1,12 +1,12 @@
-#include "tpkit/svg_plot.hpp"
+#include "tpkit/core/svg_plot.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/version.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/version.hpp"
 
 namespace tpkit {
 

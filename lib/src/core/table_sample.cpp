@@ -1,4 +1,4 @@
-#include "tpkit/table_sample.hpp"
+#include "tpkit/core/table_sample.hpp"
 
 #include <algorithm>
 #include <array>
@@ -7,7 +7,7 @@
 #include <numeric>
 #include <random>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/text_table.hpp"
 
 #include <cerrno>
 #include <charconv>
@@ -8,9 +8,9 @@
 #include <iostream>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/version.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/version.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 #include <unistd.h>
 
@@ -9,9 +9,9 @@
 #include <mutex>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/version.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/version.hpp"
 
 namespace tpkit {
 

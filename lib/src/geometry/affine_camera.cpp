@@ -1,4 +1,4 @@
-#include "tpkit/affine_camera.hpp"
+#include "tpkit/geometry/affine_camera.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>

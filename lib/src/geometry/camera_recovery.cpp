@@ -1,8 +1,8 @@
-#include "tpkit/camera_recovery.hpp"
+#include "tpkit/geometry/camera_recovery.hpp"
 
 #include <Eigen/Dense>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,14 +1,14 @@
-#include "tpkit/reproj_eval.hpp"
+#include "tpkit/geometry/reproj_eval.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
-#include "tpkit/camera_recovery.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/svg_plot.hpp"
-#include "tpkit/triangulate.hpp"
+#include "tpkit/geometry/camera_recovery.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/svg_plot.hpp"
+#include "tpkit/geometry/triangulate.hpp"
 
 namespace tpkit {
 

@@ -1,9 +1,9 @@
-#include "tpkit/triangulate.hpp"
+#include "tpkit/geometry/triangulate.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,8 +1,8 @@
-#include "tpkit/trifocal_affine_dlt.hpp"
+#include "tpkit/geometry/trifocal_affine_dlt.hpp"
 
 #include <Eigen/Dense>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,12 +1,12 @@
-#include "tpkit/trifocal_dlt.hpp"
+#include "tpkit/geometry/trifocal_dlt.hpp"
 
 #include <Eigen/Dense>
 
 #include <algorithm>
 #include <cmath>
 
-#include "tpkit/camera_recovery.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/geometry/camera_recovery.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,17 +1,17 @@
-#include "tpkit/trifocal_fit.hpp"
+#include "tpkit/geometry/trifocal_fit.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "tpkit/error.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/trifocal_affine_dlt.hpp"
-#include "tpkit/trifocal_algebraic.hpp"
-#include "tpkit/trifocal_dlt.hpp"
-#include "tpkit/trifocal_minimal.hpp"
-#include "tpkit/trifocal_ml.hpp"
-#include "tpkit/trifocal_three_f.hpp"
-#include "tpkit/trifocal_ml.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/geometry/trifocal_affine_dlt.hpp"
+#include "tpkit/geometry/trifocal_algebraic.hpp"
+#include "tpkit/geometry/trifocal_dlt.hpp"
+#include "tpkit/geometry/trifocal_minimal.hpp"
+#include "tpkit/geometry/trifocal_ml.hpp"
+#include "tpkit/geometry/trifocal_three_f.hpp"
+#include "tpkit/geometry/trifocal_ml.hpp"
 
 namespace tpkit {
 

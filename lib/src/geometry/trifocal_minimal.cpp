@@ -1,13 +1,13 @@
-#include "tpkit/trifocal_minimal.hpp"
+#include "tpkit/geometry/trifocal_minimal.hpp"
 
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "tpkit/camera_recovery.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/trifocal_affine_dlt.hpp"
+#include "tpkit/geometry/camera_recovery.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/geometry/trifocal_affine_dlt.hpp"
 
 namespace tpkit {
 

@@ -1,10 +1,10 @@
-#include "tpkit/trifocal_ml.hpp"
+#include "tpkit/geometry/trifocal_ml.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "tpkit/affine_camera.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/geometry/affine_camera.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,11 +1,11 @@
-#include "tpkit/trifocal_tensor.hpp"
+#include "tpkit/geometry/trifocal_tensor.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/trifocal_three_f.hpp"
+#include "tpkit/geometry/trifocal_three_f.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

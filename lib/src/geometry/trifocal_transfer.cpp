@@ -1,10 +1,10 @@
-#include "tpkit/trifocal_transfer.hpp"
+#include "tpkit/geometry/trifocal_transfer.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "tpkit/camera_recovery.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/geometry/camera_recovery.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

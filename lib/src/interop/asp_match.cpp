@@ -1,4 +1,4 @@
-#include "tpkit/asp_match.hpp"
+#include "tpkit/interop/asp_match.hpp"
 
 #include <cmath>
 #include <cstdint>
@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "binary_stream.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/peer_keypoints.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/interop/peer_keypoints.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 

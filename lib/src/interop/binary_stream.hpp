@@ -8,7 +8,7 @@
 #include <string>
 #include <type_traits>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

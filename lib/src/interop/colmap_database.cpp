@@ -1,4 +1,4 @@
-#include "tpkit/colmap_database.hpp"
+#include "tpkit/interop/colmap_database.hpp"
 
 #include <sqlite3.h>
 
@@ -10,8 +10,8 @@
 #include <map>
 #include <memory>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace fs = std::filesystem;
 

@@ -1,4 +1,4 @@
-#include "tpkit/micmac_homol.hpp"
+#include "tpkit/interop/micmac_homol.hpp"
 
 #include <algorithm>
 #include <cstdint>
@@ -8,9 +8,9 @@
 #include <sstream>
 
 #include "binary_stream.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/peer_keypoints.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/interop/peer_keypoints.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace fs = std::filesystem;
 

@@ -1,4 +1,4 @@
-#include "tpkit/openmvg_matches.hpp"
+#include "tpkit/interop/openmvg_matches.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -6,9 +6,9 @@
 #include <regex>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace fs = std::filesystem;
 

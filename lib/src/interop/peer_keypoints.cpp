@@ -1,11 +1,11 @@
-#include "tpkit/peer_keypoints.hpp"
+#include "tpkit/interop/peer_keypoints.hpp"
 
 #include <filesystem>
 #include <map>
 #include <tuple>
 
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
 
 namespace tpkit {
 

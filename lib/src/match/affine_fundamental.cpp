@@ -1,4 +1,4 @@
-#include "tpkit/affine_fundamental.hpp"
+#include "tpkit/match/affine_fundamental.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

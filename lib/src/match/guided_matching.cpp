@@ -1,6 +1,6 @@
-#include "tpkit/guided_matching.hpp"
+#include "tpkit/match/guided_matching.hpp"
 
-#include "tpkit/parallel_for.hpp"
+#include "tpkit/core/parallel_for.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>

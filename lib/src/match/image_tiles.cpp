@@ -1,10 +1,10 @@
-#include "tpkit/image_tiles.hpp"
+#include "tpkit/match/image_tiles.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/keypoint_cache.hpp"
+#include "tpkit/match/keypoint_cache.hpp"
 
 #include <sys/stat.h>
 
@@ -11,10 +11,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 namespace tpkit {
 

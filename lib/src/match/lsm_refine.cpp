@@ -1,4 +1,4 @@
-#include "tpkit/lsm_refine.hpp"
+#include "tpkit/match/lsm_refine.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>

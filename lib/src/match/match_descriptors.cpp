@@ -1,4 +1,4 @@
-#include "tpkit/match_descriptors.hpp"
+#include "tpkit/match/match_descriptors.hpp"
 
 #include <algorithm>
 #include <numeric>

@@ -1,4 +1,4 @@
-#include "tpkit/match_every_pair.hpp"
+#include "tpkit/match/match_every_pair.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -7,8 +7,8 @@
 #include <future>
 #include <thread>
 
-#include "tpkit/keypoint_cache.hpp"
-#include "tpkit/parallel_for.hpp"
+#include "tpkit/match/keypoint_cache.hpp"
+#include "tpkit/core/parallel_for.hpp"
 
 namespace tpkit {
 

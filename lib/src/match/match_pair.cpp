@@ -1,4 +1,4 @@
-#include "tpkit/match_pair.hpp"
+#include "tpkit/match/match_pair.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -7,13 +7,13 @@
 #include <memory>
 #include <opencv2/calib3d.hpp>
 
-#include "tpkit/affine_fundamental.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/keypoint_cache.hpp"
-#include "tpkit/parallel_for.hpp"
-#include "tpkit/rpc_guided_matching.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/match/affine_fundamental.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/match/keypoint_cache.hpp"
+#include "tpkit/core/parallel_for.hpp"
+#include "tpkit/match/rpc_guided_matching.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 namespace tpkit {
 

@@ -1,12 +1,12 @@
-#include "tpkit/match_region.hpp"
+#include "tpkit/match/match_region.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 
-#include "tpkit/error.hpp"
-#include "tpkit/keypoint_cache.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/match/keypoint_cache.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 

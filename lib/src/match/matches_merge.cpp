@@ -1,4 +1,4 @@
-#include "tpkit/matches_merge.hpp"
+#include "tpkit/match/matches_merge.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <map>
 #include <sstream>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/opencv_threads.hpp"
+#include "tpkit/match/opencv_threads.hpp"
 
 #include <mutex>
 #include <opencv2/core/utility.hpp>

@@ -1,4 +1,4 @@
-#include "tpkit/pair_geometry.hpp"
+#include "tpkit/match/pair_geometry.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -8,11 +8,11 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "tpkit/affine_fundamental.hpp"
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/match_descriptors.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/match/affine_fundamental.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/match/match_descriptors.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 

@@ -1,12 +1,12 @@
-#include "tpkit/rpc_guided_matching.hpp"
+#include "tpkit/match/rpc_guided_matching.hpp"
 
 #include <algorithm>
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "tpkit/error.hpp"
-#include "tpkit/parallel_for.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/parallel_for.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 

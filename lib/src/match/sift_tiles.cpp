@@ -1,4 +1,4 @@
-#include "tpkit/sift_tiles.hpp"
+#include "tpkit/match/sift_tiles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,10 +8,10 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "tpkit/error.hpp"
-#include "tpkit/parallel_for.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/parallel_for.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 namespace tpkit {
 

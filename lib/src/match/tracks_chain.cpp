@@ -1,4 +1,4 @@
-#include "tpkit/tracks_chain.hpp"
+#include "tpkit/match/tracks_chain.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <set>
 #include <unordered_map>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

@@ -1,15 +1,15 @@
-#include "tpkit/scale_out_plan.hpp"
+#include "tpkit/plan/scale_out_plan.hpp"
 
 #include <algorithm>
 #include <filesystem>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/rpc_io.hpp"
-#include "tpkit/tool_support.hpp"
-#include "tpkit/sift_tiles.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/core/tool_support.hpp"
+#include "tpkit/match/sift_tiles.hpp"
 
 namespace tpkit {
 

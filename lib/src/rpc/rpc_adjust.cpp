@@ -1,4 +1,4 @@
-#include "tpkit/rpc_adjust.hpp"
+#include "tpkit/rpc/rpc_adjust.hpp"
 
 #include <ceres/ceres.h>
 
@@ -9,14 +9,14 @@
 #include <limits>
 #include <memory>
 
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/parallel_for.hpp"
-#include "tpkit/rpc_ground.hpp"
-#include "tpkit/svg_plot.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/core/parallel_for.hpp"
+#include "tpkit/rpc/rpc_ground.hpp"
+#include "tpkit/core/svg_plot.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 namespace tpkit {
 

@@ -1,11 +1,11 @@
-#include "tpkit/rpc_bias.hpp"
+#include "tpkit/rpc/rpc_bias.hpp"
 
 #include <cmath>
 #include <sstream>
 #include <vector>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

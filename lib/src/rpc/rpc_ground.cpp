@@ -1,4 +1,4 @@
-#include "tpkit/rpc_ground.hpp"
+#include "tpkit/rpc/rpc_ground.hpp"
 
 #include <GeographicLib/Geocentric.hpp>
 #include <GeographicLib/UTMUPS.hpp>
@@ -6,7 +6,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

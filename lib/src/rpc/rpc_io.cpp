@@ -1,4 +1,4 @@
-#include "tpkit/rpc_io.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
 
 #include <cctype>
 #include <cstdio>
@@ -12,10 +12,10 @@
 #include <set>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/rpc_model.hpp"
+#include "tpkit/rpc/rpc_model.hpp"
 
 #include <ceres/jet.h>
 
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 namespace tpkit {
 

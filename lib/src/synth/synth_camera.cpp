@@ -1,13 +1,13 @@
 // Cameras of tp-synth (synth_camera.hpp) and the trifocal tensor of three cameras (synth_scene.hpp).
-#include "tpkit/synth_camera.hpp"
+#include "tpkit/synth/synth_camera.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
 
-#include "tpkit/error.hpp"
-#include "tpkit/synth_scene.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/synth/synth_scene.hpp"
 
 namespace tpkit {
 

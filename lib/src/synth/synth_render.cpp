@@ -16,16 +16,16 @@
 #include <thread>
 #include <vector>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/rpc_bias.hpp"
-#include "tpkit/rpc_io.hpp"
-#include "tpkit/synth_noise.hpp"
-#include "tpkit/synth_scene.hpp"
-#include "tpkit/synth_terrain.hpp"
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/rpc/rpc_bias.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/synth/synth_noise.hpp"
+#include "tpkit/synth/synth_scene.hpp"
+#include "tpkit/synth/synth_terrain.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 namespace tpkit {
 

@@ -1,4 +1,4 @@
-#include "tpkit/synth_rpc.hpp"
+#include "tpkit/synth/synth_rpc.hpp"
 
 #include <GeographicLib/LocalCartesian.hpp>
 
@@ -7,9 +7,9 @@
 #include <sstream>
 #include <vector>
 
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/synth_scene.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/synth/synth_scene.hpp"
 
 namespace tpkit {
 

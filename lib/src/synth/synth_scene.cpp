@@ -1,5 +1,5 @@
 // The synthetic satellite triplet of tp-synth: parameters, geometry, truth points (synth_scene.hpp).
-#include "tpkit/synth_scene.hpp"
+#include "tpkit/synth/synth_scene.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -9,14 +9,14 @@
 #include <random>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/version.hpp"
-#include "tpkit/synth_camera.hpp"
-#include "tpkit/synth_noise.hpp"
-#include "tpkit/synth_terrain.hpp"
-#include "tpkit/synth_texture.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/version.hpp"
+#include "tpkit/synth/synth_camera.hpp"
+#include "tpkit/synth/synth_noise.hpp"
+#include "tpkit/synth/synth_terrain.hpp"
+#include "tpkit/synth/synth_texture.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 

@@ -1,13 +1,13 @@
 // Terrain height field of tp-synth: bicubic B-spline over fractal control heights (synth_terrain.hpp).
-#include "tpkit/synth_terrain.hpp"
+#include "tpkit/synth/synth_terrain.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
 
-#include "tpkit/error.hpp"
-#include "tpkit/synth_noise.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/synth/synth_noise.hpp"
 
 namespace tpkit {
 

@@ -1,10 +1,10 @@
 // Ground albedo of tp-synth (synth_texture.hpp).
-#include "tpkit/synth_texture.hpp"
+#include "tpkit/synth/synth_texture.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "tpkit/synth_noise.hpp"
+#include "tpkit/synth/synth_noise.hpp"
 
 namespace tpkit {
 

@@ -1,15 +1,15 @@
 // The KD-tree cost of eq. 3 against a brute-force O(n m) evaluation, its robust variants, the
 // nearest-neighbour pairs and the cluster checks.
-#include "tpkit/cluster_cost.hpp"
+#include "tpkit/cluster/cluster_cost.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/physical_homography.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/cluster/physical_homography.hpp"
 
 using namespace tpkit;
 

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <vector>
 
-#include "tpkit/cluster_cost.hpp"
-#include "tpkit/cluster_optimize.hpp"
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/cluster_verdict.hpp"
+#include "tpkit/cluster/cluster_cost.hpp"
+#include "tpkit/cluster/cluster_optimize.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
 
 using namespace tpkit;
 

@@ -2,16 +2,16 @@
 // optimizer on clusters of 4 to 10 points: 5 and 6 points found with their true correspondences and
 // accepted, 4 points never determined, mirror images only when allowed; and the region test of the
 // growing refinement (cluster_optimize.hpp), which drops unrelated clusters' hypotheses early.
-#include "tpkit/cluster_exhaustive.hpp"
+#include "tpkit/cluster/cluster_exhaustive.hpp"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 
-#include "tpkit/cluster_optimize.hpp"
-#include "tpkit/cluster_search.hpp"
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/cluster_verdict.hpp"
+#include "tpkit/cluster/cluster_optimize.hpp"
+#include "tpkit/cluster/cluster_search.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
 
 using namespace tpkit;
 

@@ -1,5 +1,5 @@
 // The --init file: physical values, geodetic positions through GeographicLib, and its errors.
-#include "tpkit/cluster_init.hpp"
+#include "tpkit/cluster/cluster_init.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <sstream>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 using namespace tpkit;
 

@@ -1,12 +1,12 @@
 // Optimizers on the paper's setup (section 6) with reduced trial counts: success rates of the default
 // optimizer in both parameterizations, robustness to extra/missing points, the paper's random search,
 // determinism. Success: cost <= 0.25 px and h within 0.5 px of the truth over the cluster's extent.
-#include "tpkit/cluster_optimize.hpp"
+#include "tpkit/cluster/cluster_optimize.hpp"
 
 #include <gtest/gtest.h>
 
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/core/error.hpp"
 
 using namespace tpkit;
 

@@ -1,5 +1,5 @@
 // Cost profiles (figures 2 and 5) and the mutual pairs.
-#include "tpkit/cluster_scan.hpp"
+#include "tpkit/cluster/cluster_scan.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +8,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/text_table.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/text_table.hpp"
 
 using namespace tpkit;
 

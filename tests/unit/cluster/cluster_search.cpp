@@ -1,14 +1,14 @@
 // The correspondence-free search: rotations of any angle, scales 0.3-3, anisotropy and mild
 // projective distortion, mirror images on request.
-#include "tpkit/cluster_search.hpp"
+#include "tpkit/cluster/cluster_search.hpp"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 
-#include "tpkit/cluster_optimize.hpp"
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/physical_homography.hpp"
+#include "tpkit/cluster/cluster_optimize.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/cluster/physical_homography.hpp"
 
 using namespace tpkit;
 

@@ -8,10 +8,10 @@
 #include <cmath>
 #include <limits>
 
-#include "tpkit/cluster_cost.hpp"
-#include "tpkit/cluster_synth.hpp"
-#include "tpkit/cluster_verdict.hpp"
-#include "tpkit/physical_homography.hpp"
+#include "tpkit/cluster/cluster_cost.hpp"
+#include "tpkit/cluster/cluster_synth.hpp"
+#include "tpkit/cluster/cluster_verdict.hpp"
+#include "tpkit/cluster/physical_homography.hpp"
 
 using namespace tpkit;
 

@@ -1,5 +1,5 @@
 // The physical model of section 4 against the paper's eq. 4, and the H -> parameters fit.
-#include "tpkit/physical_homography.hpp"
+#include "tpkit/cluster/physical_homography.hpp"
 
 #include <gtest/gtest.h>
 

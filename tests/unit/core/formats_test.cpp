@@ -6,9 +6,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "tpkit/atomic_output.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
 
 using namespace tpkit;
 namespace fs = std::filesystem;

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
 
 using namespace tpkit;
 namespace fs = std::filesystem;

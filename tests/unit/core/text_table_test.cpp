@@ -8,10 +8,10 @@
 #include <random>
 #include <sstream>
 
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/text_table.hpp"
-#include "tpkit/version.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/version.hpp"
 
 using namespace tpkit;
 

@@ -1,7 +1,7 @@
 // The man-page renderer behind every tool's --help.
 #include <gtest/gtest.h>
 
-#include "tpkit/tool_support.hpp"
+#include "tpkit/core/tool_support.hpp"
 
 TEST(ToolSupport, RendersTheRoffSubset) {
   const char* page =

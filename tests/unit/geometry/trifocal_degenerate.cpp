@@ -4,11 +4,11 @@
 #include <Eigen/Dense>
 #include <random>
 
-#include "tpkit/affine_camera.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/reproj_eval.hpp"
-#include "tpkit/trifocal_fit.hpp"
-#include "tpkit/trifocal_transfer.hpp"
+#include "tpkit/geometry/affine_camera.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/geometry/reproj_eval.hpp"
+#include "tpkit/geometry/trifocal_fit.hpp"
+#include "tpkit/geometry/trifocal_transfer.hpp"
 
 using namespace tpkit;
 

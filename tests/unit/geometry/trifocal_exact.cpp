@@ -4,12 +4,12 @@
 
 #include <Eigen/Dense>
 
-#include "tpkit/affine_camera.hpp"
-#include "tpkit/camera_recovery.hpp"
-#include "tpkit/reproj_eval.hpp"
-#include "tpkit/trifocal_fit.hpp"
-#include "tpkit/trifocal_minimal.hpp"
-#include "tpkit/trifocal_transfer.hpp"
+#include "tpkit/geometry/affine_camera.hpp"
+#include "tpkit/geometry/camera_recovery.hpp"
+#include "tpkit/geometry/reproj_eval.hpp"
+#include "tpkit/geometry/trifocal_fit.hpp"
+#include "tpkit/geometry/trifocal_minimal.hpp"
+#include "tpkit/geometry/trifocal_transfer.hpp"
 
 using namespace tpkit;
 

@@ -6,14 +6,14 @@
 #include <algorithm>
 #include <random>
 
-#include "tpkit/affine_camera.hpp"
-#include "tpkit/camera_recovery.hpp"
-#include "tpkit/reproj_eval.hpp"
-#include "tpkit/trifocal_affine_dlt.hpp"
-#include "tpkit/trifocal_dlt.hpp"
-#include "tpkit/trifocal_fit.hpp"
-#include "tpkit/trifocal_ml.hpp"
-#include "tpkit/trifocal_transfer.hpp"
+#include "tpkit/geometry/affine_camera.hpp"
+#include "tpkit/geometry/camera_recovery.hpp"
+#include "tpkit/geometry/reproj_eval.hpp"
+#include "tpkit/geometry/trifocal_affine_dlt.hpp"
+#include "tpkit/geometry/trifocal_dlt.hpp"
+#include "tpkit/geometry/trifocal_fit.hpp"
+#include "tpkit/geometry/trifocal_ml.hpp"
+#include "tpkit/geometry/trifocal_transfer.hpp"
 
 using namespace tpkit;
 

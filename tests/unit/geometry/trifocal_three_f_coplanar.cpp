@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "tpkit/affine_camera.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/trifocal_fit.hpp"
-#include "tpkit/trifocal_three_f.hpp"
-#include "tpkit/trifocal_transfer.hpp"
+#include "tpkit/geometry/affine_camera.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/geometry/trifocal_fit.hpp"
+#include "tpkit/geometry/trifocal_three_f.hpp"
+#include "tpkit/geometry/trifocal_transfer.hpp"
 
 using namespace tpkit;
 

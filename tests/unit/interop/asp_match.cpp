@@ -1,5 +1,5 @@
 // ASP / VisionWorkbench match files: the binary layout pinned byte by byte, round trips, bad input.
-#include "tpkit/asp_match.hpp"
+#include "tpkit/interop/asp_match.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "sample_matches.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/peer_keypoints.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/interop/peer_keypoints.hpp"
 
 using namespace tpkit;
 using tpkit_test::f32;

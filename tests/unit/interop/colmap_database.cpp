@@ -1,6 +1,6 @@
 // COLMAP database and text form: the schema of COLMAP 3.8, the 0.5 pixel offset, pair ids, blobs and
 // F pinned; round trips with ids; bad databases.
-#include "tpkit/colmap_database.hpp"
+#include "tpkit/interop/colmap_database.hpp"
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
@@ -13,7 +13,7 @@
 #include <set>
 
 #include "sample_matches.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 using namespace tpkit;
 using tpkit_test::f32;

@@ -1,6 +1,6 @@
 // MicMac Homol files: the .dat layout (8-byte header, 44-byte records, from MicMac's own
 // cPackNupletsHom::read) pinned byte by byte, both directions, round trips, bad input.
-#include "tpkit/micmac_homol.hpp"
+#include "tpkit/interop/micmac_homol.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <sstream>
 
 #include "sample_matches.hpp"
-#include "tpkit/error.hpp"
-#include "tpkit/peer_keypoints.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/interop/peer_keypoints.hpp"
 
 using namespace tpkit;
 namespace fs = std::filesystem;

@@ -1,5 +1,5 @@
 // OpenMVG regions and matches files: layout, round trip (float32 positions, names, counts), bad input.
-#include "tpkit/openmvg_matches.hpp"
+#include "tpkit/interop/openmvg_matches.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "sample_matches.hpp"
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 using namespace tpkit;
 using tpkit_test::f32;

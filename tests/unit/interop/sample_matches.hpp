@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
 
 namespace tpkit_test {
 

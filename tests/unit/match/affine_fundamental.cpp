@@ -1,5 +1,5 @@
 // Affine fundamental matrix: exact minimal fit, residual in pixels, RANSAC against outliers.
-#include "tpkit/affine_fundamental.hpp"
+#include "tpkit/match/affine_fundamental.hpp"
 
 #include <gtest/gtest.h>
 

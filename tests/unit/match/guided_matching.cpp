@@ -1,7 +1,7 @@
 // Guided descriptor matching on a synthetic affine pair with known correspondences: the epipolar band
 // and parallax ranges find the true pairs and only them, the ratio test rejects repeated texture along
 // the band, the result does not depend on the thread count; and the keypoint cache round trip.
-#include "tpkit/guided_matching.hpp"
+#include "tpkit/match/guided_matching.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <fstream>
 #include <random>
 
-#include "tpkit/keypoint_cache.hpp"
+#include "tpkit/match/keypoint_cache.hpp"
 
 using namespace tpkit;
 

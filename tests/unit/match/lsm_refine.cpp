@@ -1,6 +1,6 @@
 // Least-squares matching against a known warp: a smooth random texture, image 2 = affine warp of
 // image 1 with gain, offset and noise. Truth of p1 in image 2 is known in closed form.
-#include "tpkit/lsm_refine.hpp"
+#include "tpkit/match/lsm_refine.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <cmath>
 #include <random>
 
-#include "tpkit/match_pair.hpp"
+#include "tpkit/match/match_pair.hpp"
 
 using namespace tpkit;
 

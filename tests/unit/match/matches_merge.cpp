@@ -1,10 +1,10 @@
 // tp-merge's rules: duplicates once, conflicts resolved towards the record deepest inside its file's
 // region, files of another pair or detector refused, output sorted by (id1, id2).
-#include "tpkit/matches_merge.hpp"
+#include "tpkit/match/matches_merge.hpp"
 
 #include <gtest/gtest.h>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 using namespace tpkit;
 

@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <map>
 
-#include "tpkit/keypoint_cache.hpp"
-#include "tpkit/sift_tiles.hpp"
+#include "tpkit/match/keypoint_cache.hpp"
+#include "tpkit/match/sift_tiles.hpp"
 
 using namespace tpkit;
 

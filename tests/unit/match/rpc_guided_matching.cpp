@@ -4,7 +4,7 @@
 // fits one affine F as well as the true one; the RPC epipolar curves cut each search region down to one
 // copy, and the matches found are the true ones. Also the
 // search regions themselves: the true match lies in the region of its keypoint, within the margin.
-#include "tpkit/rpc_guided_matching.hpp"
+#include "tpkit/match/rpc_guided_matching.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,9 +15,9 @@
 #include <filesystem>
 #include <random>
 
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/match_pair.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/match/match_pair.hpp"
 
 using namespace tpkit;
 

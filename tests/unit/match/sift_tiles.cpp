@@ -1,15 +1,15 @@
 // Tiled SIFT on the real Pléiades crop: ids do not depend on the thread count, interior keypoints do
 // not depend on the tiling, nodata is honoured; percentile stretch and the tile grid; descriptor
 // matching's ratio / mutual rules and the grid filter.
-#include "tpkit/sift_tiles.hpp"
+#include "tpkit/match/sift_tiles.hpp"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <set>
 
-#include "tpkit/error.hpp"
-#include "tpkit/match_descriptors.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/match/match_descriptors.hpp"
 
 using namespace tpkit;
 

@@ -1,10 +1,10 @@
 // tp-chain's union-find: triplets from pairwise files, same-position duplicates, conflicts, positions
 // referred to the reference keypoint, determinism.
-#include "tpkit/tracks_chain.hpp"
+#include "tpkit/match/tracks_chain.hpp"
 
 #include <gtest/gtest.h>
 
-#include "tpkit/error.hpp"
+#include "tpkit/core/error.hpp"
 
 using namespace tpkit;
 

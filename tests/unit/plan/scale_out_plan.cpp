@@ -1,12 +1,12 @@
 // tp-plan's pieces: shell quoting, regions, pairs from footprints, the jobs and the Makefile text.
-#include "tpkit/scale_out_plan.hpp"
+#include "tpkit/plan/scale_out_plan.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 
-#include "tpkit/error.hpp"
-#include "tpkit/sift_tiles.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/match/sift_tiles.hpp"
 
 using namespace tpkit;
 

@@ -7,10 +7,10 @@
 #include <fstream>
 #include <regex>
 
-#include "tpkit/error.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/rpc_io.hpp"
-#include "tpkit/rpc_model.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/rpc/rpc_model.hpp"
 
 using namespace tpkit;
 namespace fs = std::filesystem;

@@ -10,11 +10,11 @@
 #include <iostream>
 #include <random>
 
-#include "tpkit/image_io.hpp"
-#include "tpkit/rpc_adjust.hpp"
-#include "tpkit/rpc_ground.hpp"
-#include "tpkit/synth_rpc.hpp"
-#include "tpkit/synth_scene.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/rpc/rpc_adjust.hpp"
+#include "tpkit/rpc/rpc_ground.hpp"
+#include "tpkit/synth/synth_rpc.hpp"
+#include "tpkit/synth/synth_scene.hpp"
 
 using namespace tpkit;
 

@@ -11,10 +11,10 @@
 #include <random>
 #include <sstream>
 
-#include "tpkit/error.hpp"
-#include "tpkit/formats.hpp"
-#include "tpkit/image_io.hpp"
-#include "tpkit/synth_scene.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/synth/synth_scene.hpp"
 
 using namespace tpkit;
 namespace fs = std::filesystem;

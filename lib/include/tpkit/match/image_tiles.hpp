@@ -1,0 +1,55 @@
+// One band of an image as tp-match sees it: the original radiometry as float with invalid pixels
+// (nodata value, zero in a mask image) set to NaN, an 8-bit rendering by a robust percentile stretch
+// for the detector, and a grid of overlapping tiles so that large images are read region by region.
+// Pixels: x = column, y = row, (0, 0) the centre of the top-left pixel; regions in whole pixels.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tpkit/core/image_io.hpp"
+
+namespace tpkit {
+
+struct ImageSource {
+  std::string path;
+  int band = 0;                   // 0-based
+  std::optional<double> nodata;   // pixels equal to it are invalid (default: the file's GDAL_NODATA tag)
+  std::string mask;               // optional mask image of the same size: 0 = invalid
+  ImageInfo info;                 // filled by open_image_source()
+};
+
+// Checks the file, the band and the mask, and fills `info`; takes the file's nodata tag when `nodata`
+// is unset. Throws InputError (path: reason) for an unreadable file, a missing band or a mask of
+// another size.
+ImageSource open_image_source(const std::string& path, int band, std::optional<double> nodata, const std::string& mask);
+
+// Region [x0, x0 + w) x [y0, y0 + h) clipped to the image, as float, invalid pixels NaN.
+Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h);
+
+// Grey levels at the low and high percentiles (0..100) of the valid pixels, from a regular subsample
+// of at most ~`max_samples` pixels read strip by strip (bounded memory). lo == hi when the image is
+// flat; throws InputError when no pixel is valid.
+struct Stretch {
+  double lo = 0, hi = 1;
+  long valid_samples = 0;
+};
+Stretch percentile_stretch(const ImageSource& src, double p_lo = 0.5, double p_hi = 99.5, long max_samples = 1 << 21);
+
+// 8-bit rendering: round(255 (v - lo) / (hi - lo)) clipped to 0..255; NaN (invalid) -> 0.
+// `valid` (same size, may be null) receives 255 for valid pixels, 0 otherwise.
+std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<uint8_t>* valid = nullptr);
+
+// A tile: the core [cx0, cx1) x [cy0, cy1) that owns the features found in it, and the read region
+// [rx0, rx1) x [ry0, ry1) = core grown by `overlap` on every side, clipped to the image.
+struct Tile {
+  int index = 0;
+  long cx0 = 0, cy0 = 0, cx1 = 0, cy1 = 0;
+  long rx0 = 0, ry0 = 0, rx1 = 0, ry1 = 0;
+};
+// Row-major grid of round(width / tile) x round(height / tile) tiles (at least 1 x 1) with cores of
+// nearly equal size (so at most about 1.5 tile on a side) covering width x height.
+std::vector<Tile> tile_grid(long width, long height, long tile, long overlap);
+
+}  // namespace tpkit

@@ -1,0 +1,91 @@
+// Least-squares matching (LSM) of one correspondence, image 1 -> image 2, on the original radiometry.
+//
+// The template is the win x win block of image 1's own pixels (not resampled) centred on the pixel
+// nearest the keypoint p1 (fixed: p1 stays the keypoint position); the model maps each template
+// pixel's offset d = (u, v) from p1 (pixels, fractional, u along x = column) to
+//   q(d) = p2 + A d [+ (H0 u^2 + H1 u v + H2 v^2, H3 u^2 + H4 u v + H5 v^2)]   in image 2,
+//   and   I1(p1 + d) ~ r0 + r1 * I2(q(d))
+// with 6 geometric (p2, A) and 2 radiometric (r0 offset, r1 gain) parameters (+ 6 quadratic terms H),
+// solved by Gauss-Newton with bicubic interpolation (Keys, a = -0.5) and its analytic gradient. So p2 is
+// the position of p1 itself and A the local map's derivative at p1. Pixels are weighted by the Gaussian
+// taper exp(-|d|^2 / (2 taper^2)); with support > 0 only the pixels within support x taper of the
+// centre pixel take part in the estimation (the outer ones weigh < 1 %); all win x win pixels set the
+// grey-level normalisation and the final correlation. Robust L1 by iteratively reweighted least
+// squares (the first two iterations L2), weights taper / max(|r|, eps) (residuals of contrast-normalised
+// grey levels). Converged when the update of p2 is below `tolerance` pixels (not before iteration 4 with L1).
+//
+// Stages: (0) affine, as above. With `quadratic`: (1) the quadratic model from the affine solution; with
+// `adaptive`: (2) the quadratic model again with the taper taper * (c / curvature_ref)^(-1/4) clamped to
+// [taper_min, taper_max], c = lsm_curvature(H) of stage 1 (small windows where the map bends, large
+// ones where it is smooth). The affine window estimates the window-averaged map, which is biased by
+// about taper^2 x (second derivative) on curved (steep) terrain; the quadratic model removes that
+// bias at the cost of more noise. A quadratic stage that does not reach `stage_tolerance` within
+// `stage_iterations` iterations (or breaks down) falls back to the affine solution. With `epipolar_dir`
+// set, the quadratic terms act only along that direction of image 2 (3 parameters, H = e (K0, K1, K2)):
+// for affine views the parallax of the terrain moves a point only along the epipolar lines, so this is
+// the map's exact second-order form, with 3 fewer unknowns than the general one.
+// Precision: the covariance sigma0^2 (J^T W J)^-1 of the final model with sigma0^2 = sum(w r^2) / (n - P);
+// `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error).
+// Arithmetic: the iterations interpolate image 2 in single precision (4 taps at a time) and build the
+// affine normal matrix in single precision, 4 pixels at a time; positions, residuals, the right-hand side
+// J^T W r (which fixes the solution) and the final covariance are double. Results do not depend on threads.
+#pragma once
+#include <Eigen/Core>
+#include <string>
+
+#include "tpkit/core/image_io.hpp"
+
+namespace tpkit {
+
+struct LsmOptions {
+  int window = 21;          // template size in pixels (odd)
+  int max_iterations = 40;
+  double tolerance = 5e-3;  // pixels, on the update of p2
+  double max_shift = 1.5;   // pixels: drop when p2 ends farther than this from its initial value
+  double min_corr = 0.8;    // drop when the final normalised cross-correlation is lower
+  bool l1 = true;           // robust L1 (IRLS); false: plain least squares
+  double eps = 0.02;        // IRLS floor on |r|, in units of the template's grey-level standard deviation
+  double taper = 3;         // > 0: Gaussian weight exp(-(u^2+v^2) / (2 taper^2)) on the window (pixels); 0 = flat
+  double support = 3;       // > 0: only pixels within support x taper of the centre pixel are used (0 = window)
+  bool quadratic = false;   // second stage with a quadratic geometric model (after the affine converges)
+  bool adaptive = true;     // third stage: quadratic with the taper chosen from the second stage's curvature
+  double curvature_ref = 0.0625;  // adaptive taper = taper * (curvature / curvature_ref)^(-1/4), px^-1
+  double taper_min = 2.5, taper_max = 6;  // bounds of the adaptive taper, pixels
+  double stage_tolerance = 3e-3;  // pixels, on the update of p2 in the quadratic stages
+  int stage_iterations = 30;  // a quadratic stage not converged after this many: keep the affine solution
+  // Epipolar direction in image 2 (any length; zero = unknown). When given, the quadratic stages bend the
+  // map only along it: q(d) = p2 + A d + e (K0 u^2 + K1 u v + K2 v^2), 3 curvature terms instead of 6.
+  Eigen::Vector2d epipolar_dir = Eigen::Vector2d::Zero();
+  bool epipolar_curvature = true;  // match_keypoints: pass the verified affine F's epipolar direction
+};
+
+enum class LsmStatus { Ok, OutOfImage, Invalid, Flat, Diverged, NotConverged, Drifted, LowCorrelation };
+const char* to_string(LsmStatus s);
+
+struct LsmResult {
+  LsmStatus status = LsmStatus::NotConverged;
+  Eigen::Vector2d p2 = Eigen::Vector2d::Zero();  // refined position in image 2, pixels
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+  Eigen::Matrix<double, 6, 1> H = Eigen::Matrix<double, 6, 1>::Zero();  // quadratic terms: x (u^2, uv, v^2), y (same)
+  double r0 = 0, r1 = 1;  // radiometric offset and gain (normalised grey levels)
+  double sigma = 0;       // pixels
+  double corr = 0;        // normalised cross-correlation of the template and the resampled window
+  int iterations = 0;
+  double taper = 0;       // taper of the last stage, pixels
+  bool quadratic = false; // the result is the quadratic model's (false: affine, also after a fallback)
+  bool ok() const { return status == LsmStatus::Ok; }
+};
+
+// img1, img2: regions of the two images (Raster::x0/y0 give their place; NaN = invalid pixel).
+// p1, p2: positions in full-image pixels; A0: initial local map (e.g. scale ratio x rotation).
+LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector2d& p1, const Eigen::Vector2d& p2,
+                     const Eigen::Matrix2d& A0, const LsmOptions& o);
+
+// Curvature of the quadratic terms: sqrt of the sum of squares of the second derivatives of x and y.
+double lsm_curvature(const Eigen::Matrix<double, 6, 1>& H);
+
+// Bicubic (Keys a = -0.5) value and gradient at (x, y) in full-image pixels; false outside the
+// region's interpolation support or when a NaN is involved.
+bool bicubic(const Raster& r, double x, double y, double& value, double* gx = nullptr, double* gy = nullptr);
+
+}  // namespace tpkit

@@ -1,0 +1,89 @@
+// tp-match's pipeline for one pair of images (image 1 -> image 2): SIFT by tiles (sift_tiles.hpp),
+// ratio + mutual nearest neighbours searched along the epipolar band of a coarse affine F
+// (guided_matching.hpp; over all descriptors, match_descriptors.hpp, if that finds no geometry), or
+// along the epipolar curves of the images' RPC models when both are given (rpc_guided_matching.hpp),
+// then affine fundamental matrix RANSAC
+// (affine_fundamental.hpp), optional grid thinning, then least-squares matching of each verified
+// match (lsm_refine.hpp) region by region. Image 1's position of every record is its keypoint
+// position (the LSM template is fixed there); image 2's is refined.
+//
+// Records: id1 x1 y1 id2 x2 y2 kx2 ky2 [sigma corr] -- (kx2, ky2) is image 2's keypoint position,
+// sigma the LSM standard deviation of (x2, y2) in pixels, corr the final correlation.
+#pragma once
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "tpkit/core/formats.hpp"
+#include "tpkit/match/guided_matching.hpp"
+#include "tpkit/match/image_tiles.hpp"
+#include "tpkit/match/lsm_refine.hpp"
+#include "tpkit/match/match_descriptors.hpp"
+#include "tpkit/match/rpc_guided_matching.hpp"
+#include "tpkit/match/sift_tiles.hpp"
+
+namespace tpkit {
+
+struct PairMatchOptions {
+  SiftOptions sift;
+  DescriptorMatchOptions desc;
+  bool guided = true;             // descriptor search guided by a coarse epipolar geometry (guided_matching.hpp)
+  GuidedMatchOptions guide;
+  // RPC-guided search (rpc_guided_matching.hpp): with both models set (not owned), the search regions
+  // come from the images' RPCs instead of the coarse stage; guide.ratio_margin still widens them for
+  // the ratio test and the mutual check.
+  const RpcModel* rpc1 = nullptr;
+  const RpcModel* rpc2 = nullptr;
+  RpcGuideOptions rpc_guide;
+  bool rpc_only = false;          // with models: no fallback to the coarse stage when their curves hold no geometry
+  double ransac_threshold = 1.0;  // pixels (geometric distance to the affine F, R^4)
+  int ransac_iterations = 20000;
+  uint64_t seed = 1;
+  int min_inliers = 12;           // fewer verified matches: the images are taken not to overlap
+  int grid = 0;                   // grid cells per side (0 = off)
+  int per_cell = 4;               // matches kept per grid cell (best ratio first)
+  bool refine = true;
+  LsmOptions lsm;
+  std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
+  // Region runs (match_region.hpp): only the verified matches whose image-1 keypoint lies in this
+  // window [x0, x1) x [y0, y1) (pixel-centre coordinates) are refined and returned; the others gave
+  // them their context (ratio test, mutual check, RANSAC) and are dropped before refinement.
+  std::optional<std::array<double, 4>> window;
+  long refine_tile = 256;         // rows of the image-1 bands refined one after the other (bounded memory)
+  int threads = 1;
+  // When set, refinement takes its current value for each band instead of `threads`: a pair matched
+  // beside another job (match_every_pair) gets back the threads that job frees.
+  const std::atomic<int>* live_threads = nullptr;
+  bool progress = false;
+};
+
+struct PairMatchStats {
+  long keypoints1 = 0, keypoints2 = 0, putative = 0, verified = 0, gridded = 0, refined = 0;
+  long in_window = 0;                          // of the gridded ones, those in PairMatchOptions::window (all without one)
+  double ransac_rms = 0;
+  bool cached1 = false, cached2 = false;       // keypoints read from the cache
+  bool guided = false;                         // the guided search ran (else the global one)
+  GuidedMatchResult guide;                     // its figures (matches moved out)
+  bool rpc_guided = false;                     // the search regions came from the RPCs
+  RpcGuidedStats rpc;                          // their figures
+  bool rpc_fallback = false;                   // the curves held no geometry: the coarse stage's was used
+  double seconds[4] = {0, 0, 0, 0};             // wall time of detection, matching, verification, refinement
+  long dropped[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // by LsmStatus
+  bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
+  bool overlap = true;                         // false: too few verified matches, zero records
+};
+
+Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOptions& o, PairMatchStats* stats = nullptr);
+
+// The same from keypoints already detected (detect_sift_cached with o.sift) of a and b; the pipeline
+// from step 2 on. The descriptors are released once matched (shallow copies keep the caller's).
+Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
+                        PairMatchStats* stats = nullptr);
+
+// Initial local map image 1 -> image 2 from two SIFT keypoints: (size2 / size1) R(angle2 - angle1),
+// angles in OpenCV's convention (degrees, from +x towards +y in pixel coordinates).
+Eigen::Matrix2d keypoint_affine(double size1, double angle1_deg, double size2, double angle2_deg);
+
+}  // namespace tpkit

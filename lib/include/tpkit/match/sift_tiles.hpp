@@ -1,0 +1,68 @@
+// SIFT keypoints of one image band, found tile by tile on an 8-bit percentile-stretched rendering
+// (image_tiles.hpp), with stable ids. Positions are in the full image's pixels (x = column, y = row,
+// (0, 0) the centre of the top-left pixel). Memory is bounded by one band of tiles (a tile row, full width) and one tile per worker plus the
+// keypoints and their 128-byte descriptors.
+//
+// Ids: id = t * kIdsPerTile + r, t the index of the detection tile (tile_grid over the whole image,
+// row-major) that owns the keypoint and r its rank in that tile by (y, x, size, angle, response,
+// octave). The grid depends on the image size and the options only, and a tile's keypoints on its own
+// read region only, so the same image, band, nodata/mask and SiftOptions give the same ids whatever
+// the thread count and whatever part of the image a run detects (tp-match --region): tiles' outputs
+// join (detector_tag() records the options in the matches header; tp-chain joins files by these ids).
+// The keypoints of a run are sorted by (y, x, ...) band of tiles by band.
+#pragma once
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "tpkit/match/image_tiles.hpp"
+
+namespace tpkit {
+
+struct SiftOptions {
+  long tile = 1024;           // tile core size in pixels (tile_grid)
+  long overlap = 96;          // margin read around each core; keypoints larger than it are dropped
+  int max_per_tile = 0;       // strongest keypoints kept per tile (0 = all)
+  double contrast = 0.02;     // OpenCV contrastThreshold (on the 8-bit rendering)
+  double edge = 10;           // OpenCV edgeThreshold
+  double sigma = 1.6;
+  int octave_layers = 3;
+  double stretch_lo = 0.5, stretch_hi = 99.5;  // percentiles of the 8-bit rendering
+};
+
+struct Keypoints {
+  std::vector<cv::KeyPoint> kp;  // kp[i].pt in full-image pixels
+  cv::Mat desc;                  // n x 128, CV_8U (OpenCV SIFT's descriptors are integers 0..255)
+  std::vector<long long> id;     // stable ids (see above)
+  Stretch stretch;
+  long tiles = 0;
+};
+
+// Text for the matches header naming the detector and every option that changes the ids.
+std::string detector_tag(const SiftOptions& o, const ImageSource& src);
+
+// Detects keypoints over the whole image with `threads` workers; `progress` (may be null) is
+// advanced once per tile.
+class Progress;
+Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int threads, Progress* progress = nullptr);
+
+constexpr long long kIdsPerTile = 100000000;  // ids of tile t are t * kIdsPerTile + rank
+
+// The tiles of `grid` whose core meets the window [x0, x1) x [y0, y1) (pixel-centre coordinates).
+std::vector<Tile> tiles_meeting(const std::vector<Tile>& grid, double x0, double y0, double x1, double y1);
+// The tiles of `grid` whose core starts (top-left pixel cx0, cy0) in the window [x0, x0 + w) x
+// [y0, y0 + h) of whole pixels: windows that partition an image partition its tiles.
+std::vector<Tile> tiles_starting_in(const std::vector<Tile>& grid, long x0, long y0, long w, long h);
+
+// Detection of some tiles of the global grid (tile_grid(width, height, o.tile, o.overlap)) with a given
+// stretch (percentile_stretch of the whole image, as detect_sift_tiles computes it): the keypoints and
+// ids a whole-image run finds in these tiles. Reads only the tiles' regions (band of tiles by band).
+Keypoints detect_sift_tile_set(const ImageSource& src, const SiftOptions& o, const Stretch& st, const std::vector<Tile>& tiles,
+                               int threads, Progress* progress = nullptr);
+// The two halves of it: each tile's keypoints in rank order with their ids (one entry per tile), and
+// their gathering into one set in the stable order (tiles in grid order).
+std::vector<Keypoints> detect_tiles_ranked(const ImageSource& src, const SiftOptions& o, const Stretch& st,
+                                           const std::vector<Tile>& tiles, int threads, Progress* progress = nullptr);
+Keypoints gather_tiles(std::vector<Keypoints> per_tile, const std::vector<Tile>& tiles, const Stretch& st);
+
+}  // namespace tpkit

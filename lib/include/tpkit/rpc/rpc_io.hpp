@@ -1,0 +1,79 @@
+// RPC00B models in the files that carry them (man/tpkit-formats.5, "RPC camera models"):
+//
+//   tiff    GeoTIFF tag 50844 (RPCCoefficientTag, 92 doubles) inside the image
+//   txt     GDAL / Ikonos key-value sidecar IMAGE_rpc.txt or IMAGE_RPC.TXT ("LINE_OFF: 5720.5", one per line,
+//           LINE_NUM_COEFF_1 .. _20 etc.; a unit word after a value is allowed)
+//   rpb     DigitalGlobe / Maxar IMAGE.RPB (BEGIN_GROUP = IMAGE ... lineOffset = ...; lineNumCoef = ( ... );)
+//   dimap   Pléiades / SPOT DIMAP v2 RPC_*.XML (Global_RFM: Direct_Model, Inverse_Model, RFM_Validity)
+//
+// Pixel convention: RPC00B (tiff, txt, rpb) has (0, 0) at the centre of the top-left pixel, as tpkit;
+// DIMAP numbers pixels from 1 (the centre of the top-left pixel is (1, 1)): its SAMP_OFF and LINE_OFF
+// (and the validity domain's rows and columns) are 1 more than tpkit's. The conversion happens here only.
+// Every writer writes numbers in the shortest form that reads back to the same double, so that
+// write -> read is exact; every reader refuses a malformed file with InputError(file:line: reason).
+#pragma once
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tpkit/rpc/rpc_model.hpp"
+
+namespace tpkit {
+
+enum class RpcForm { tiff, txt, rpb, dimap };
+// "tiff", "txt", "rpb", "dimap"
+const char* rpc_form_name(RpcForm);
+// The form of a file, from its name: *.RPB -> rpb, *.txt / *.TXT -> txt, *.XML -> dimap, *.tif / *.tiff -> tiff.
+// Throws InputError when the name tells nothing.
+RpcForm rpc_form_of(const std::string& path);
+
+// Readers of each form. read_rpc_tiff returns nothing when the TIFF has no RPC tag.
+RpcModel read_rpc_txt(const std::string& path);
+RpcModel read_rpc_rpb(const std::string& path);
+RpcModel read_rpc_dimap(const std::string& path);
+std::optional<RpcModel> read_rpc_tiff(const std::string& path);
+// Any form, chosen by rpc_form_of(); a TIFF without the tag is an InputError.
+RpcModel read_rpc_file(const std::string& path);
+
+// Writers (atomic, atomic_output.hpp). DIMAP needs a direct model: when the model has none, one is fitted
+// to it over its normalization volume (fit_direct_model).
+void write_rpc_txt(const std::string& path, const RpcModel&);
+void write_rpc_rpb(const std::string& path, const RpcModel&);
+void write_rpc_dimap(const std::string& path, const RpcModel&);
+// A copy of the TIFF `image` with the model in tag 50844 (every other tag and the pixels kept).
+void write_rpc_tiff_copy(const std::string& image, const std::string& out, const RpcModel&);
+void write_rpc_file(const std::string& path, RpcForm, const RpcModel&);
+
+// The 92 values of tag 50844 (image_io.hpp RpcTagValues) of a model, and back.
+std::array<double, 92> rpc_tag_values(const RpcModel&);
+RpcModel rpc_from_tag_values(const std::array<double, 92>&);
+
+// Text of the txt / rpb / dimap forms (what the writers write).
+std::string format_rpc_txt(const RpcModel&);
+std::string format_rpc_rpb(const RpcModel&);
+std::string format_rpc_dimap(const RpcModel&);
+
+// The model with a direct model (image -> ground) fitted to its inverse over its normalization volume.
+RpcModel with_direct_model(const RpcModel&);
+
+// Sidecar names beside an image, in the order they are looked for: IMAGE_rpc.txt, IMAGE_RPC.TXT, IMAGE.RPB,
+// IMAGE.rpb, and for DIMAP images named IMG_NAME.ext (optionally with a _R<i>C<j> tile suffix) RPC_NAME.XML.
+std::vector<std::string> rpc_sidecar_candidates(const std::string& image);
+
+// Where an image's model comes from: an explicit file (overrides, keyed by the image path as given), else
+// the image's own tag 50844, else the first sidecar found (rpc_sidecar_candidates).
+struct RpcSource {
+  RpcModel model;
+  std::string path;  // the file read (the image itself for the tag)
+  RpcForm form = RpcForm::tiff;
+};
+// Nothing when the image has no model anywhere.
+std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
+// The same, throwing InputError("IMAGE: no RPC model: no tag 50844 and none of SIDECARS") when there is none.
+RpcSource load_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
+// "--rpc IMG=FILE" values -> map image -> file; UsageError for a value without '='.
+std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::string>& values);
+
+}  // namespace tpkit
