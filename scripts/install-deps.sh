@@ -15,6 +15,8 @@ packages=(
 if [ "${1:-}" = "--test" ]; then
   # the sanitizer build and the fuzzers of the test suite use clang and its runtimes
   packages+=(clang libclang-rt-14-dev)
+  # groff renders the man pages for their lint test (tests/layout/man_pages.sh)
+  packages+=(groff-base)
   # real consumers and engines the tests drive: COLMAP's importer (tp-convert), a single-node Slurm
   # and GNU parallel (tp-plan's job files)
   packages+=(colmap slurm-wlm munge parallel)
