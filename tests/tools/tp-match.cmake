@@ -118,3 +118,13 @@ tpkit_tool_test(tp-match.height-range-empty
 tpkit_tool_test(tp-match.rpc-biased-falls-back
   COMMAND "tp-synth --out s --size 512 --seed 4 --relief 40 --points 10 --rpc-bias 3:20,0 >/dev/null 2>&1 && tp-match s/view1.tif s/view3.tif -o fb.m && grep -q 'guided: coarse affine F.*(the RPC epipolar curves held no geometry within 10 px' fb.m && test $(grep -vc '^#' fb.m) -gt 1000 && tp-match s/view1.tif s/view3.tif -q --rpc-guided -o strict.m && test $(grep -vc '^#' strict.m) -eq 0 && tp-match s/view1.tif s/view3.tif -q --rpc-margin 30 -o wide.m && grep -o 'bias across the curves [-0-9.]*' wide.m"
   STDOUT_MATCH "bias across the curves -?(18|19|20|21)[.0-9]*\\.\\.-?(18|19|20|21)" STDERR_MATCH "held no geometry within --rpc-margin 10 px")
+# Under an address-space limit (as clusters set with ulimit -v) the system refuses most of 1000 worker
+# threads: tp-match goes on with those that started, says so once, and writes what one thread writes;
+# the every-pair mode's detection thread likewise. (Label rlimit: not under the sanitizers, whose shadow
+# memory needs more address space than any such limit.)
+tpkit_tool_test(tp-match.threads-under-address-limit
+  COMMAND "tp-synth --out s --size 384 --seed 4 && tp-match s/view1.tif s/view2.tif --threads 1 -q -o a.m && (ulimit -v 4000000 && tp-match s/view1.tif s/view2.tif --threads 1000 -q -o b.m) && cmp a.m b.m"
+  STDERR_MATCH "tp-match: warning: the system refused a worker thread .*going on with [0-9]+ of the 1000 threads" LABELS rlimit)
+tpkit_tool_test(tp-match.every-pair-under-address-limit
+  COMMAND "tp-synth --out s --size 256 --seed 4 && tp-match s/view1.tif s/view2.tif s/view3.tif --threads 1 -q -o a && (ulimit -v 4000000 && tp-match s/view1.tif s/view2.tif s/view3.tif --threads 1000 -q -o b) && diff -r a b"
+  STDERR_MATCH "refused a worker thread" LABELS rlimit)

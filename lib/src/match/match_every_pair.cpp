@@ -55,8 +55,7 @@ void match_every_pair(const std::vector<ImageSource>& src, const PairMatchOption
   };
 
   std::thread detector;
-  if (T == 1) detect_all();
-  else detector = std::thread(detect_all);
+  if (T == 1 || !try_start_thread(detector, detect_all, T, 1)) detect_all();
   struct Join {
     std::thread& t;
     ~Join() {

@@ -20,6 +20,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/formats.hpp"
 #include "tpkit/core/image_io.hpp"
+#include "tpkit/core/parallel_for.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/synth/synth_noise.hpp"
@@ -184,26 +185,12 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     std::vector<std::vector<uint16_t>> buf(static_cast<size_t>(std::min(batch, strips)));
     for (long s0 = 0; s0 < strips; s0 += batch) {
       const long nb = std::min(batch, strips - s0);
-      std::atomic<long> next{0};
-      std::exception_ptr err;
-      std::atomic<bool> failed{false};
-      auto work = [&]() {
-        for (long k; (k = next++) < nb && !failed;) {
-          const long y0 = (s0 + k) * rows, h = std::min(rows, W - y0);
-          try {
-            buf[k].resize(static_cast<size_t>(h) * W);
-            scene.render_rows(v, y0, h, buf[k].data());
-          } catch (...) {
-            if (!failed.exchange(true)) err = std::current_exception();
-          }
-          progress.add();
-        }
-      };
-      std::vector<std::thread> pool;
-      for (int t = 1; t < std::min<long>(threads, nb); ++t) pool.emplace_back(work);
-      work();
-      for (auto& t : pool) t.join();
-      if (err) std::rethrow_exception(err);
+      parallel_for(static_cast<size_t>(nb), threads, [&](size_t k) {
+        const long y0 = (s0 + static_cast<long>(k)) * rows, h = std::min(rows, W - y0);
+        buf[k].resize(static_cast<size_t>(h) * W);
+        scene.render_rows(v, y0, h, buf[k].data());
+        progress.add();
+      });
       for (long k = 0; k < nb; ++k) {
         const long y0 = (s0 + k) * rows, h = std::min(rows, W - y0);
         writer.write_rows(y0, h, buf[k].data());
