@@ -13,6 +13,7 @@
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/version.hpp"
 
 namespace tpkit {
@@ -39,6 +40,7 @@ std::string decode_error(ImageInput& in) {
 }
 
 std::unique_ptr<ImageInput> open_input(const std::string& path) {
+  check_input_file(path);  // "is a directory", "no such file" (OIIO would say it knows no such format)
   note_input(path);
   auto in = ImageInput::open(path);
   if (!in) {

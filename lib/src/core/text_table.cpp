@@ -10,6 +10,7 @@
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/version.hpp"
 
 namespace tpkit {
@@ -79,25 +80,6 @@ bool parse_long(const std::string& s, long& v) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
-// One line into `line` (without its '\n'); false at the end of the stream. Binary data (a NUL byte) and
-// a line longer than kMaxLine are refused as they are read, so that a stream of zeros with no newline
-// (a device, a binary file) fails at once instead of filling memory.
-constexpr size_t kMaxLine = size_t(1) << 20;
-bool read_line(std::istream& in, std::string& line, const std::string& source, long lineno) {
-  line.clear();
-  std::streambuf* sb = in.rdbuf();
-  if (!sb) return false;
-  for (;;) {
-    const int c = sb->sbumpc();
-    if (c == std::char_traits<char>::eof()) return !line.empty();
-    if (c == '\n') return true;
-    if (c == 0) throw InputError(source, lineno, "binary data (NUL byte) in a text file");
-    if (line.size() >= kMaxLine)
-      throw InputError(source, lineno, "line longer than " + std::to_string(kMaxLine) + " bytes: not a tpkit text file");
-    line.push_back(static_cast<char>(c));
-  }
-}
-
 }  // namespace
 
 TextTable read_table(std::istream& in, const std::string& source_in, const ReadOptions& opt) {
@@ -107,7 +89,7 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
   long lineno = 0;
   bool header_seen = false;
   bool first_content = true;
-  while (read_line(in, line, t.source, lineno + 1)) {
+  while (read_text_line(in, line, t.source, lineno + 1)) {
     ++lineno;
     if (lineno == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // a UTF-8 byte order mark
     std::string s = trim(line);
@@ -217,9 +199,7 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
 
 TextTable read_table_file(const std::string& path, const ReadOptions& opt) {
   if (path == "-") return read_table(std::cin, "-", opt);
-  note_input(path);
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, std::string("cannot open for reading: ") + std::strerror(errno));
+  std::ifstream f = open_input_file(path, InputKind::stream, true);
   return read_table(f, path, opt);
 }
 

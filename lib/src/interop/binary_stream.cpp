@@ -4,11 +4,12 @@
 #include <fstream>
 #include <sstream>
 
+#include "tpkit/core/input_file.hpp"
+
 namespace tpkit {
 
 std::string read_binary_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "cannot open: " + std::string(std::strerror(errno)));
+  std::ifstream in = open_input_file(path, InputKind::regular, true);
   std::ostringstream s;
   s << in.rdbuf();
   if (in.bad()) throw InputError(path, 0, "read error");

@@ -11,6 +11,7 @@
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/version.hpp"
 #include "tpkit/synth/synth_camera.hpp"
 #include "tpkit/synth/synth_noise.hpp"
@@ -108,8 +109,7 @@ void save_params(const std::string& path, const SynthParams& p) {
 }
 
 SynthParams load_params(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open");
+  std::ifstream in = open_input_file(path, InputKind::file);
   SynthParams p;
   std::string line;
   long n = 0;
@@ -117,7 +117,7 @@ SynthParams load_params(const std::string& path) {
     const auto b = s.find_first_not_of(" \t\r"), e = s.find_last_not_of(" \t\r");
     return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
   };
-  while (std::getline(in, line)) {
+  while (read_text_line(in, line, path, n + 1)) {
     ++n;
     const std::string t = trim(line);
     if (t.empty() || t[0] == '#') continue;

@@ -144,6 +144,6 @@ TEST(Formats, MissingFileIsAnInputError) {
     read_points("/nonexistent/dir/x.points");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "/nonexistent/dir/x.points: cannot open for reading: No such file or directory");
+    EXPECT_STREQ(e.what(), "/nonexistent/dir/x.points: no such file");
   }
 }

@@ -1,0 +1,53 @@
+#include "tpkit/core/input_file.hpp"
+
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/error.hpp"
+
+namespace tpkit {
+
+void check_input_file(const std::string& path, InputKind kind) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT || errno == ENOTDIR) throw InputError(path, 0, "no such file");
+    throw InputError(path, 0, std::string("cannot open for reading: ") + std::strerror(errno));
+  }
+  if (S_ISDIR(st.st_mode)) throw InputError(path, 0, "is a directory");
+  const bool regular = S_ISREG(st.st_mode), pipe = S_ISFIFO(st.st_mode);
+  if (kind == InputKind::regular && !regular) throw InputError(path, 0, "not a regular file");
+  if (kind == InputKind::file && !regular && !pipe) throw InputError(path, 0, "not a regular file or a pipe");
+}
+
+std::ifstream open_input_file(const std::string& path, InputKind kind, bool binary) {
+  check_input_file(path, kind);
+  note_input(path);
+  std::ifstream in(path, binary ? std::ios::in | std::ios::binary : std::ios::in);
+  if (!in) throw InputError(path, 0, std::string("cannot open for reading: ") + std::strerror(errno));
+  return in;
+}
+
+bool read_text_line(std::istream& in, std::string& line, const std::string& source, long lineno, size_t max_line) {
+  line.clear();
+  std::streambuf* sb = in.rdbuf();
+  if (!sb) return false;
+  for (;;) {
+    int c;
+    try {
+      c = sb->sbumpc();
+    } catch (const std::ios_base::failure&) {  // libstdc++'s filebuf throws on a failed read(2)
+      throw InputError(source, lineno, std::string("read error: ") + std::strerror(errno));
+    }
+    if (c == std::char_traits<char>::eof()) return !line.empty();
+    if (c == '\n') return true;
+    if (c == 0) throw InputError(source, lineno, "binary data (NUL byte) in a text file");
+    if (line.size() >= max_line)
+      throw InputError(source, lineno, "line longer than " + std::to_string(max_line) + " bytes: not a text file");
+    line.push_back(static_cast<char>(c));
+  }
+}
+
+}  // namespace tpkit
