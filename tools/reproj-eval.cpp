@@ -123,8 +123,8 @@ int main(int argc, char** argv) {
                               o->check.empty() ? Eigen::MatrixXd(0, 6) : held.residual,
                               "reprojection residuals: " + tf.source + " on " + tracks.source);
           write_file_atomic(o->output, os.str());
-          std::cerr << "reproj-eval: fit: " << brief(fit.stats) << '\n';
-          if (!o->check.empty()) std::cerr << "reproj-eval: check: " << brief(held.stats) << '\n';
+          tpkit::summary("fit: " + brief(fit.stats));
+          if (!o->check.empty()) tpkit::summary("check: " + brief(held.stats));
           return 0;
         };
       },

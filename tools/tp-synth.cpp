@@ -1,6 +1,7 @@
 // tp-synth: a synthetic satellite triplet with exact ground truth (man/tp-synth.1).
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/parallel_for.hpp"
@@ -50,9 +51,11 @@ int main(int argc, char** argv) {
               throw tpkit::UsageError("--rpc-bias: view " + std::to_string(vb.first + 1) + " given twice");
           }
           tpkit::write_synth_scene(scene, o->out, w);
-          std::cerr << "tp-synth: wrote " << o->out << ": 3 views " << o->p.size << "x" << o->p.size << " ("
-                    << o->p.camera << "), scene square " << scene.scene_size() << " m, relief " << o->p.relief
-                    << " m, " << o->p.points << " truth tracks\n";
+          std::ostringstream line;
+          line << "wrote " << o->out << ": 3 views " << o->p.size << "x" << o->p.size << " (" << o->p.camera
+               << "), scene square " << scene.scene_size() << " m, relief " << o->p.relief << " m, " << o->p.points
+               << " truth tracks";
+          tpkit::summary(line.str());
           return 0;
         };
       },

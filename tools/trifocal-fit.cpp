@@ -116,8 +116,8 @@ int main(int argc, char** argv) {
           save_trifocal(o->output, out);
           if (!o->cameras.empty()) save_cameras(o->cameras, cams);
           if (!o->inliers.empty()) save_tracks(o->inliers, flagged);
-          std::cerr << "trifocal-fit: " << trifocal_method_name(m) << ": " << fit_xy.rows() << " of " << tracks.size()
-                    << " tracks fitted, reprojection rmse " << num(st.rmse) << " px\n";
+          tpkit::summary(trifocal_method_name(m) + ": " + std::to_string(fit_xy.rows()) + " of " + std::to_string(tracks.size()) +
+                         " tracks fitted, reprojection rmse " + num(st.rmse) + " px");
           return 0;
         };
       },

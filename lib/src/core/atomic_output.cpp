@@ -47,10 +47,32 @@ void unregister_temp(const std::string& tmp) {
   }
 }
 
+// Folders created for the run's outputs, in creation order (parents first), readable from a signal
+// handler: removed, when empty, on a signal as on a failure.
+constexpr int kDirSlots = 4096;
+std::atomic<char*> g_dirs[kDirSlots];
+std::atomic<int> g_dir_count{0};
+
+void register_dir(const std::string& dir) {
+  const int i = g_dir_count.load();
+  if (i >= kDirSlots) return;  // more folders than slots: the rest are not removed on a signal
+  g_dirs[i].store(::strdup(dir.c_str()));
+  g_dir_count.store(i + 1);
+}
+
+void forget_dirs() {
+  const int n = g_dir_count.exchange(0);
+  for (int i = 0; i < n; ++i) std::free(g_dirs[i].exchange(nullptr));
+}
+
 extern "C" void remove_temps_on_signal(int sig) {
   for (auto& slot : g_temps) {
     char* p = slot.load();
     if (p) ::unlink(p);
+  }
+  for (int i = g_dir_count.load() - 1; i >= 0; --i) {
+    char* d = g_dirs[i].load();
+    if (d) ::rmdir(d);  // only if empty
   }
   std::signal(sig, SIG_DFL);
   std::raise(sig);
@@ -179,6 +201,7 @@ void begin_outputs() {
   t.inputs.clear();
   t.stale.clear();
   t.made_dirs.clear();
+  forget_dirs();
 }
 
 void note_input(const std::string& path) {
@@ -236,17 +259,27 @@ void check_outputs(const std::vector<std::pair<std::string, std::string>>& optio
 }
 
 void create_output_dir(const std::string& path) {
+  // the folders that are missing, outermost first, as create_directories makes them: every prefix of the
+  // path as written ("o/new/.." makes o and o/new, though it names o)
   std::vector<fs::path> missing;
   std::error_code ec;
-  for (fs::path p = fs::absolute(path, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
-    missing.push_back(p);
-    if (p == p.parent_path()) break;
+  fs::path prefix;
+  for (const fs::path& part : fs::absolute(path, ec)) {
+    prefix /= part;
+    if (part == "." || part == ".." || part.empty()) continue;
+    if (!fs::exists(prefix, ec)) missing.push_back(prefix.lexically_normal());
   }
   fs::create_directories(path, ec);
-  if (ec || !fs::is_directory(path)) throw InputError(path, 0, "cannot create the folder: " + (ec ? ec.message() : "not a folder"));
+  if (ec || !fs::is_directory(path)) {
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) fs::remove(*it, ec);  // only those it made, if empty
+    throw InputError(path, 0, "cannot create the folder: " + (ec ? ec.message() : "not a folder"));
+  }
   std::lock_guard<std::mutex> lock(tx().m);
   if (tx().active)
-    for (auto it = missing.rbegin(); it != missing.rend(); ++it) tx().made_dirs.push_back(*it);
+    for (const fs::path& d : missing) {
+      tx().made_dirs.push_back(d);
+      register_dir(d.string());
+    }
 }
 
 void remove_on_commit(const std::string& path) {
@@ -255,18 +288,41 @@ void remove_on_commit(const std::string& path) {
   else std::remove(path.c_str());
 }
 
+namespace {
+// Removes the folders made for the run, innermost first, those that are empty (a failed run's).
+void remove_made_dirs(const std::vector<fs::path>& dirs) {
+  std::error_code ec;
+  for (auto it = dirs.rbegin(); it != dirs.rend(); ++it) fs::remove(*it, ec);  // only if empty
+  forget_dirs();
+}
+
+void commit_pending(std::vector<Pending>& pending, const std::vector<std::string>& stale);
+}  // namespace
+
 void commit_outputs() {
   std::vector<Pending> pending;
   std::vector<std::string> stale;
+  std::vector<fs::path> dirs;
   {
     std::lock_guard<std::mutex> lock(tx().m);
     pending.swap(tx().pending);
     stale.swap(tx().stale);
-    tx().made_dirs.clear();
+    dirs.swap(tx().made_dirs);
     tx().active = false;
     tx().claimed.clear();
     tx().inputs.clear();
   }
+  try {
+    commit_pending(pending, stale);
+  } catch (...) {
+    remove_made_dirs(dirs);  // a failure found at commit leaves no folder the run made, as any failure
+    throw;
+  }
+  forget_dirs();
+}
+
+namespace {
+void commit_pending(std::vector<Pending>& pending, const std::vector<std::string>& stale) {
   // every target checked before any is replaced, so that a rename that must fail fails before the first
   for (const auto& p : pending) {
     if (p.to_stdout) continue;
@@ -304,6 +360,7 @@ void commit_outputs() {
   std::cout.flush();
   if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
 }
+}  // namespace
 
 void abort_outputs() {
   std::vector<Pending> pending;
@@ -319,8 +376,7 @@ void abort_outputs() {
   }
   for (const auto& p : pending)
     if (!p.to_stdout) discard_temp(p.tmp);
-  std::error_code ec;
-  for (auto it = dirs.rbegin(); it != dirs.rend(); ++it) fs::remove(*it, ec);  // only if empty
+  remove_made_dirs(dirs);
 }
 
 void install_output_signal_cleanup() {

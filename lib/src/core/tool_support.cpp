@@ -8,6 +8,7 @@
 #include <iostream>
 #include <mutex>
 #include <sstream>
+#include <vector>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
@@ -17,6 +18,24 @@ namespace tpkit {
 
 namespace {
 std::string g_tool = "tpkit";
+std::vector<std::string> g_summaries;  // summary(): printed after the commit
+std::mutex g_summary_mutex;
+
+// One line of a message, whatever the message holds (CLI11 joins some with line breaks).
+std::string one_line(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\n' || c == '\r') {
+      while (!out.empty() && out.back() == ' ') out.pop_back();
+      if (!out.empty() && out.back() != ';' && out.back() != ':') out += ';';
+      out += ' ';
+    } else {
+      out += c;
+    }
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
+  return out;
+}
 
 std::string strip_fonts(std::string s) {
   // \fB \fI \fR \fP font changes, \- and \(em escapes, \e backslash
@@ -104,6 +123,11 @@ const std::string& tool_name() { return g_tool; }
 std::string written_by() { return g_tool + ' ' + version_full(); }
 
 void warn(const std::string& message) { std::cerr << g_tool << ": warning: " << message << std::endl; }
+
+void summary(const std::string& line) {
+  std::lock_guard<std::mutex> lock(g_summary_mutex);
+  g_summaries.push_back(line);
+}
 
 std::string render_man_page(const char* roff) {
   std::istringstream in(roff ? roff : "");
@@ -299,7 +323,7 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
       std::cout << e.what() << "\n";
       return 0;
     } catch (const CLI::ParseError& e) {
-      std::cerr << tool << ": " << e.what() << "\n" << tool << ": see '" << tool << " --help'\n";
+      std::cerr << tool << ": " << one_line(e.what()) << " (see " << tool << " --help)\n";
       return 2;
     }
     // the body's outputs commit together when it succeeds, and are all discarded when it fails
@@ -308,23 +332,32 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
     struct Abort {
       ~Abort() { abort_outputs(); }  // no-op after commit_outputs()
     } abort_unless_committed;
+    {
+      std::lock_guard<std::mutex> lock(g_summary_mutex);
+      g_summaries.clear();
+    }
     const int rc = body();
-    if (rc == 0 || rc == kExitNoAnswer) commit_outputs();
+    if (rc == 0 || rc == kExitNoAnswer) {
+      commit_outputs();
+      std::lock_guard<std::mutex> lock(g_summary_mutex);
+      for (const auto& line : g_summaries) std::cerr << tool << ": " << line << "\n";
+      g_summaries.clear();
+    }
     return rc;
   } catch (const UsageError& e) {
-    std::cerr << tool << ": " << e.what() << "\n";
+    std::cerr << tool << ": " << one_line(e.what()) << "\n";
     return 2;
   } catch (const InputError& e) {
-    std::cerr << tool << ": " << e.what() << "\n";
+    std::cerr << tool << ": " << one_line(e.what()) << "\n";
     return 1;
   } catch (const NumericalError& e) {
-    std::cerr << tool << ": " << e.what() << "\n";
+    std::cerr << tool << ": " << one_line(e.what()) << "\n";
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << tool << ": out of memory\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << tool << ": " << e.what() << "\n";
+    std::cerr << tool << ": " << one_line(e.what()) << "\n";
     return 1;
   }
 }

@@ -28,7 +28,8 @@ constexpr int kExitNoAnswer = 3;
 using ToolSetup = std::function<std::function<int()>(CLI::App&)>;
 
 // Parses the command line and runs the body. -h/--help prints the man page as text, --version the tool's
-// name and tpkit's version (version.hpp); both exit 0 before any other option is checked. With the
+// name and tpkit's version (version.hpp); both exit 0 before any other option is checked. A usage error
+// (CLI11's or the body's UsageError) is one line naming the option, exit 2. With the
 // environment variable TPKIT_CHECK_HELP=1, --help also checks that every option of the app is named
 // in the man page (the tool tests use this) and fails otherwise.
 int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& setup, const char* man_page);
@@ -52,6 +53,11 @@ class Progress {
 
 // Warnings go to stderr as "tool: warning: ..."; the tool name is set by run_tool.
 void warn(const std::string& message);
+
+// A success summary ("tool: ..." on stderr), printed by run_tool once the run's outputs are committed
+// and only then: a run that fails at commit (a target turned out to be a folder, a full disk) prints
+// its error, not a summary followed by the error. Lines are printed in the order given.
+void summary(const std::string& line);
 const std::string& tool_name();
 
 }  // namespace tpkit
