@@ -10,6 +10,7 @@ packages=(
   g++ cmake make pkg-config
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libtiff-dev libgeographiclib-dev
   libcli11-dev libceres-dev libnanoflann-dev libsqlite3-dev
+  nlohmann-json3-dev  # tp-convert reads OpenMVG's sfm_data.json with a JSON parser (a regex scan crashed on long objects)
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 if [ "${1:-}" = "--test" ]; then

@@ -55,6 +55,7 @@ void claim_all(const std::vector<std::string>& files, const std::vector<std::str
 long export_files(const Opts& o, const std::vector<tpkit::Matches>& ms) {
   const std::string& f = o.to;
   std::vector<std::string> names;
+  for (const auto& m : ms) tpkit::check_peer_pair(m);  // every format names files or records after the images
   if (f == "asp" || f == "asp-txt") {
     for (const auto& m : ms) names.push_back(tpkit::asp_match_file_name(o.out, m.image1.path, m.image2.path, f == "asp-txt"));
     claim_all(names, o.inputs);
@@ -157,8 +158,8 @@ int main(int argc, char** argv) {
             files = static_cast<long>(names.size());
           }
           if (!o->quiet)
-            std::cerr << "tp-convert: " << (o->to.empty() ? o->from + " -> tpkit" : "tpkit -> " + o->to) << ": " << records
-                      << " matches, " << files << " files written under " << o->out << "\n";
+            tpkit::summary((o->to.empty() ? o->from + " -> tpkit" : "tpkit -> " + o->to) + ": " + std::to_string(records) +
+                           " matches, " + std::to_string(files) + " files written under " + o->out);
           return 0;
         };
       },

@@ -8,6 +8,7 @@
 
 #include "binary_stream.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/interop/peer_keypoints.hpp"
 #include "tpkit/core/text_table.hpp"
 
@@ -60,23 +61,46 @@ AspPoint get_record(ByteReader& in) {
   for (uint64_t k = 0; k < ndesc; ++k) in.get<float>("descriptor");
   if (!std::isfinite(p.x) || !std::isfinite(p.y))
     throw InputError(in.source(), 0, "a record at byte " + std::to_string(in.offset()) + " holds a non-finite position");
+  if (!std::isfinite(p.scale))
+    throw InputError(in.source(), 0, "a record at byte " + std::to_string(in.offset()) + " holds a non-finite scale (the point's sigma)");
   return p;
 }
 
-// The two stems of PREFIX-STEM1__STEM2.EXT.
+// The two stems of PREFIX-STEM1__STEM2.EXT. The name is split at a "__": the one there is, or, when
+// there are several (a stem holding "__" itself), the one that `images` single out, a stem of theirs
+// ending the part before it (after a '-') or making up the part after it; else the name is ambiguous.
 std::pair<std::string, std::string> stems_of(const std::string& path, const std::vector<std::string>& images) {
   const std::string name = image_stem(path);
-  const auto sep = name.find("__");
-  if (sep == std::string::npos)
-    throw InputError(path, 0, "an ASP match file is named PREFIX-IMAGE1__IMAGE2.match: no '__' in the name");
+  std::vector<size_t> seps;
+  for (size_t p = name.find("__"); p != std::string::npos; p = name.find("__", p + 1)) seps.push_back(p);
+  if (seps.empty()) throw InputError(path, 0, "an ASP match file is named PREFIX-IMAGE1__IMAGE2.match: no '__' in the name");
+  // the longest stem of `images` that ends `head` on a '-' (or is all of it), or ""
+  auto image_ending = [&](const std::string& head) {
+    std::string first;
+    for (const auto& im : images) {
+      const std::string s = image_stem(im);
+      if (s.size() > first.size() && head.size() >= s.size() && head.compare(head.size() - s.size(), s.size(), s) == 0 &&
+          (head.size() == s.size() || head[head.size() - s.size() - 1] == '-'))
+        first = s;
+    }
+    return first;
+  };
+  auto is_image = [&](const std::string& stem) {
+    for (const auto& im : images)
+      if (image_stem(im) == stem) return true;
+    return false;
+  };
+  std::vector<size_t> named;  // splits that `images` support
+  for (size_t p : seps)
+    if (!image_ending(name.substr(0, p)).empty() || is_image(name.substr(p + 2))) named.push_back(p);
+  size_t sep = seps[0];
+  if (named.size() == 1) sep = named[0];
+  else if (seps.size() > 1)
+    throw InputError(path, 0, "the name holds '__' " + std::to_string(seps.size()) +
+                                  " times: cannot tell where IMAGE1 ends and IMAGE2 begins" +
+                                  (images.empty() ? " (name the images with --images)" : " (--images fits none or several)"));
   const std::string head = name.substr(0, sep), second = name.substr(sep + 2);
-  std::string first;
-  for (const auto& im : images) {
-    const std::string s = image_stem(im);
-    if (s.size() > first.size() && head.size() >= s.size() && head.compare(head.size() - s.size(), s.size(), s) == 0 &&
-        (head.size() == s.size() || head[head.size() - s.size() - 1] == '-'))
-      first = s;
-  }
+  std::string first = image_ending(head);
   if (first.empty()) {
     const auto dash = head.rfind('-');
     first = dash == std::string::npos ? head : head.substr(dash + 1);
@@ -122,18 +146,20 @@ void read_binary(Matches& m, const std::string& path) {
 }
 
 void read_text(Matches& m, const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open");
+  std::ifstream in = open_input_file(path, InputKind::file);
   std::string line;
   AspRecords recs;
-  for (long n = 1; std::getline(in, line); ++n) {
+  for (long n = 1; read_text_line(in, line, path, n); ++n) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream s(line);
     AspPoint a, b;
     std::string extra;
     if (!(s >> a.x >> a.y >> a.scale >> b.x >> b.y >> b.scale) || (s >> extra))
       throw InputError(path, n, "an ASP text match is six numbers: x1 y1 unc1 x2 y2 unc2");
-    if (!(a.scale > 0) || !(b.scale > 0)) throw InputError(path, n, "the uncertainties must be > 0");
+    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y))
+      throw InputError(path, n, "a position is not finite");
+    if (!(a.scale > 0) || !(b.scale > 0) || !std::isfinite(a.scale) || !std::isfinite(b.scale))
+      throw InputError(path, n, "the uncertainties must be finite and > 0");
     recs.add(a, b);
   }
   finish(m, recs);

@@ -12,6 +12,8 @@
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace fs = std::filesystem;
 
@@ -96,14 +98,19 @@ class Stmt {
     const unsigned char* t = sqlite3_column_text(s_, c);
     return t ? reinterpret_cast<const char*>(t) : "";
   }
-  // A blob column as values of T; InputError unless it holds exactly `count` of them.
+  // A blob column as rows x cols values of T; InputError unless it holds exactly that many (rows and
+  // cols come from the database: checked against the blob's size before they are multiplied, so that
+  // no product overflows).
   template <class T>
-  std::vector<T> blob(int c, long long count, const std::string& what) const {
-    const int bytes = sqlite3_column_bytes(s_, c);
-    if (count < 0 || static_cast<long long>(bytes) != count * static_cast<long long>(sizeof(T)))
+  std::vector<T> blob(int c, long long rows, long long cols, const std::string& what) const {
+    const long long bytes = sqlite3_column_bytes(s_, c);
+    const long long have = bytes / static_cast<long long>(sizeof(T));
+    if (rows < 0 || cols < 0) db_.fail(what + ": negative rows or cols (" + std::to_string(rows) + " x " + std::to_string(cols) + ")");
+    if ((cols > 0 && rows > have / cols) || rows * cols * static_cast<long long>(sizeof(T)) != bytes)
       db_.fail(what + ": the blob holds " + std::to_string(bytes) + " bytes, rows x cols say " +
-               std::to_string(count * static_cast<long long>(sizeof(T))));
-    std::vector<T> v(static_cast<size_t>(count));
+               (cols > 0 && rows > have / cols ? std::to_string(rows) + " x " + std::to_string(cols) + " values"
+                                               : std::to_string(rows * cols * static_cast<long long>(sizeof(T)))));
+    std::vector<T> v(static_cast<size_t>(rows * cols));
     if (bytes > 0) std::memcpy(v.data(), sqlite3_column_blob(s_, c), static_cast<size_t>(bytes));
     return v;
   }
@@ -229,12 +236,16 @@ std::map<long long, ColmapImage> read_images(Db& db) {
     auto it = images.find(id);
     if (it == images.end()) db.fail("keypoints of image_id " + std::to_string(id) + ", which the images table lacks");
     if (cols != 2 && cols != 4 && cols != 6) db.fail("keypoints of image_id " + std::to_string(id) + " have " + std::to_string(cols) + " columns, not 2, 4 or 6");
-    const std::vector<float> all = kp.blob<float>(3, rows * cols, "keypoints of image_id " + std::to_string(id));
+    const std::vector<float> all = kp.blob<float>(3, rows, cols, "keypoints of image_id " + std::to_string(id));
     ColmapImage& im = it->second;
     im.keypoints = rows;
     for (long long r = 0; r < rows; ++r) {
-      im.xy.push_back(all[static_cast<size_t>(r * cols)]);
-      im.xy.push_back(all[static_cast<size_t>(r * cols + 1)]);
+      const float x = all[static_cast<size_t>(r * cols)], y = all[static_cast<size_t>(r * cols + 1)];
+      if (!std::isfinite(x) || !std::isfinite(y))
+        db.fail("keypoints of image_id " + std::to_string(id) + ": keypoint " + std::to_string(r) + " is not finite (" +
+                format_number(x) + ", " + format_number(y) + ")");
+      im.xy.push_back(x);
+      im.xy.push_back(y);
     }
   }
   if (has_table(db, "tpkit_keypoint_ids")) {
@@ -243,7 +254,7 @@ std::map<long long, ColmapImage> read_images(Db& db) {
       auto it = images.find(q2.int64(0));
       if (it == images.end() || q2.int64(1) != it->second.keypoints)
         db.fail("table tpkit_keypoint_ids disagrees with the keypoints of image_id " + std::to_string(q2.int64(0)));
-      it->second.ids = q2.blob<int64_t>(2, q2.int64(1), "tpkit_keypoint_ids of image_id " + std::to_string(q2.int64(0)));
+      it->second.ids = q2.blob<int64_t>(2, q2.int64(1), 1, "tpkit_keypoint_ids of image_id " + std::to_string(q2.int64(0)));
     }
   }
   return images;
@@ -253,10 +264,43 @@ Matches pair_matches(Db& db, std::map<long long, ColmapImage>& images, long long
                      const std::vector<uint32_t>& data, const std::string& format) {
   const long long id2 = pair % kColmapMaxImageId, id1 = pair / kColmapMaxImageId;
   const std::string what = "pair_id " + std::to_string(pair);
+  // COLMAP's pair_id puts the smaller image id first: (1, 2) and (2, 1) are one pair, one id
+  if (id1 == id2) db.fail(what + " pairs image_id " + std::to_string(id1) + " with itself");
+  if (id1 > id2 || id1 < 0)
+    db.fail(what + " is not a COLMAP pair id: it decodes to image_id " + std::to_string(id1) + " then " +
+            std::to_string(id2) + ", and pair_id = 2147483647 min(id1, id2) + max(id1, id2) puts the smaller first");
   auto a = images.find(id1), b = images.find(id2);
   if (a == images.end() || b == images.end()) db.fail(what + " names an image that the images table lacks");
   if (cols != 2) db.fail(what + ": matches have " + std::to_string(cols) + " columns, not 2");
   Matches m = peer_matches(a->second.ref, b->second.ref, format, db.path());
+  // tpkit ids (tpkit_keypoint_ids): an id is one keypoint of its image. In image 1 of the tpkit file it
+  // stood at one position (the keypoint's); only image 2's positions are refined per match, so one id
+  // may stand at two positions there. A pair whose ids stand at two positions in both images was not
+  // written from tpkit matches (all ids equal, say): its ids would join points that are not one.
+  struct Repeat {
+    long long id = -1, record1 = -1, record2 = -1;
+  };
+  auto repeat_of = [&](const ColmapImage& im, bool first) {
+    Repeat out;
+    if (im.ids.empty()) return out;
+    std::map<long long, std::pair<uint32_t, long long>> seen;  // tpkit id -> (keypoint index, record)
+    for (long long r = 0; r < rows && out.id < 0; ++r) {
+      const uint32_t k = data[static_cast<size_t>(2 * r + (first ? 0 : 1))];
+      if (k >= im.keypoints) break;  // reported below
+      const auto [it, fresh] = seen.emplace(im.ids[k], std::make_pair(k, r));
+      const uint32_t j = it->second.first;
+      if (!fresh && (im.xy[2 * j] != im.xy[2 * k] || im.xy[2 * j + 1] != im.xy[2 * k + 1]))
+        out = {im.ids[k], it->second.second, r};
+    }
+    return out;
+  };
+  const Repeat r1 = repeat_of(a->second, true), r2 = repeat_of(b->second, false);
+  if (r1.id >= 0 && r2.id >= 0)
+    db.fail(what + ": tpkit_keypoint_ids give one id to two positions in both images (id " + std::to_string(r1.id) +
+            " of image_id " + std::to_string(id1) + " in matches " + std::to_string(r1.record1) + " and " +
+            std::to_string(r1.record2) + ", id " + std::to_string(r2.id) + " of image_id " + std::to_string(id2) +
+            " in matches " + std::to_string(r2.record1) + " and " + std::to_string(r2.record2) +
+            "): not ids of tpkit matches");
   RecordList recs;
   for (long long r = 0; r < rows; ++r) {
     const uint32_t i = data[static_cast<size_t>(2 * r)], j = data[static_cast<size_t>(2 * r + 1)];
@@ -358,7 +402,9 @@ void write_colmap_text(const std::string& folder, const PeerKeypoints& k) {
 
 std::vector<Matches> read_colmap_database(const std::string& path, bool verified) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "no such database file");
+  if (!fs::exists(path, ec)) throw InputError(path, 0, "no such database file");
+  check_input_file(path, InputKind::regular);
+  note_input(path);
   Db db(path, SQLITE_OPEN_READONLY);
   const std::string table = verified ? "two_view_geometries" : "matches";
   for (const std::string t : {"cameras", "images", "keypoints", table.c_str()})
@@ -370,7 +416,7 @@ std::vector<Matches> read_colmap_database(const std::string& path, bool verified
   std::vector<Matches> out;
   while (q.row()) {
     const long long pair = q.int64(0), rows = q.int64(1), cols = q.int64(2);
-    const auto data = q.blob<uint32_t>(3, rows * cols, table + " of pair_id " + std::to_string(pair));
+    const auto data = q.blob<uint32_t>(3, rows, cols, table + " of pair_id " + std::to_string(pair));
     out.push_back(pair_matches(db, images, pair, rows, cols, data, verified ? "colmap" : "colmap-raw"));
   }
   return out;

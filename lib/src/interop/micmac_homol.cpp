@@ -1,6 +1,7 @@
 #include "tpkit/interop/micmac_homol.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 
 #include "binary_stream.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/interop/peer_keypoints.hpp"
 #include "tpkit/core/text_table.hpp"
 
@@ -54,15 +56,17 @@ void read_dat(HomolRecords& out, const std::string& path) {
     if (np != 2) throw InputError(path, 0, "record " + std::to_string(i) + " has " + std::to_string(np) + " points, not 2");
     const double w = in.get<double>("weight");
     const double x1 = in.get<double>("x1"), y1 = in.get<double>("y1"), x2 = in.get<double>("x2"), y2 = in.get<double>("y2");
+    if (!std::isfinite(w) || !std::isfinite(x1) || !std::isfinite(y1) || !std::isfinite(x2) || !std::isfinite(y2))
+      throw InputError(path, 0, "record " + std::to_string(i) + " (byte " + std::to_string(kMicmacHeaderBytes + i * kMicmacRecordBytes) +
+                                    ") holds a non-finite " + (std::isfinite(w) ? "position" : "weight"));
     out.add(x1, y1, x2, y2, w);
   }
 }
 
 void read_txt(HomolRecords& out, const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open");
+  std::ifstream in = open_input_file(path, InputKind::file);
   std::string line;
-  for (long n = 1; std::getline(in, line); ++n) {
+  for (long n = 1; read_text_line(in, line, path, n); ++n) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream s(line);
     double x1, y1, x2, y2, w = 1;
@@ -74,6 +78,8 @@ void read_txt(HomolRecords& out, const std::string& path) {
     } else if (s >> extra) {
       throw InputError(path, n, "more than five fields");
     }
+    if (!std::isfinite(x1) || !std::isfinite(y1) || !std::isfinite(x2) || !std::isfinite(y2) || !std::isfinite(w))
+      throw InputError(path, n, "a field is not finite");
     out.add(x1, y1, x2, y2, w);
   }
 }

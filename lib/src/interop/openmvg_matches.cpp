@@ -1,13 +1,15 @@
 #include "tpkit/interop/openmvg_matches.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <regex>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/text_table.hpp"
 
 namespace fs = std::filesystem;
@@ -16,21 +18,43 @@ namespace tpkit {
 
 namespace {
 
+// cereal's JSON form of the views (see the header), keys in cereal's order; names escaped by the JSON
+// writer (a quote or a backslash in a file name stays a valid file).
 void write_sfm_data(const std::string& path, const PeerKeypoints& k) {
-  AtomicOutput out(path);
-  std::ostream& os = out.stream();
-  os << "{\n    \"sfm_data_version\": \"0.3\",\n    \"root_path\": \"\",\n    \"views\": [";
+  nlohmann::ordered_json doc;
+  doc["sfm_data_version"] = "0.3";
+  doc["root_path"] = "";
+  doc["views"] = nlohmann::ordered_json::array();
   for (size_t v = 0; v < k.images.size(); ++v) {
     const PeerImage& im = k.images[v];
-    os << (v ? "," : "") << "\n        {\n            \"key\": " << v
-       << ",\n            \"value\": {\n                \"polymorphic_id\": 1073741824,\n                \"ptr_wrapper\": {\n"
-       << "                    \"id\": " << 2147483649ull + v << ",\n                    \"data\": {\n"
-       << "                        \"local_path\": \"\",\n                        \"filename\": \"" << image_file_name(im.ref.path)
-       << "\",\n                        \"width\": " << im.ref.width << ",\n                        \"height\": " << im.ref.height
-       << ",\n                        \"id_view\": " << v << ",\n                        \"id_intrinsic\": 4294967295,\n"
-       << "                        \"id_pose\": " << v << "\n                    }\n                }\n            }\n        }";
+    nlohmann::ordered_json data;
+    data["local_path"] = "";
+    data["filename"] = image_file_name(im.ref.path);
+    data["width"] = im.ref.width;
+    data["height"] = im.ref.height;
+    data["id_view"] = v;
+    data["id_intrinsic"] = 4294967295ull;
+    data["id_pose"] = v;
+    nlohmann::ordered_json ptr;
+    ptr["id"] = 2147483649ull + v;
+    ptr["data"] = std::move(data);
+    nlohmann::ordered_json value;
+    value["polymorphic_id"] = 1073741824;
+    value["ptr_wrapper"] = std::move(ptr);
+    nlohmann::ordered_json view;
+    view["key"] = v;
+    view["value"] = std::move(value);
+    doc["views"].push_back(std::move(view));
   }
-  os << "\n    ],\n    \"intrinsics\": [],\n    \"extrinsics\": [],\n    \"structure\": [],\n    \"control_points\": []\n}\n";
+  for (const char* section : {"intrinsics", "extrinsics", "structure", "control_points"}) doc[section] = nlohmann::ordered_json::array();
+  std::string text;
+  try {
+    text = doc.dump(4);
+  } catch (const nlohmann::json::type_error&) {  // a name that is not UTF-8
+    throw InputError(path, 0, "an image file name is not valid UTF-8, which JSON requires");
+  }
+  AtomicOutput out(path);
+  out.stream() << text << '\n';
   out.commit();
 }
 
@@ -40,25 +64,48 @@ struct View {
   bool loaded = false;
 };
 
-// id_view -> image from sfm_data.json (the fields this module writes; any order inside a view).
+// id_view -> image from sfm_data.json, parsed as JSON (nlohmann::json): views[k].value.ptr_wrapper.data
+// holds filename, id_view and (optional) width, height; the other fields and sections are ignored.
 std::map<long long, View> read_sfm_views(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  const std::string text = s.str();
+  std::ifstream in = open_input_file(path, InputKind::regular);
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, 0, std::string("not valid JSON: ") + e.what());
+  }
+  if (!doc.is_object() || !doc.contains("views") || !doc["views"].is_array())
+    throw InputError(path, 0, "not an OpenMVG sfm_data file: no \"views\" array");
   std::map<long long, View> views;
-  const std::regex data_re(R"re("data"\s*:\s*\{([^{}]*)\})re");
-  const std::regex name_re(R"re("filename"\s*:\s*"([^"]*)")re"), w_re(R"re("width"\s*:\s*(\d+))re"),
-      h_re(R"re("height"\s*:\s*(\d+))re"), id_re(R"re("id_view"\s*:\s*(\d+))re");
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), data_re); it != std::sregex_iterator(); ++it) {
-    const std::string d = (*it)[1];
-    std::smatch name, w, h, id;
-    if (!std::regex_search(d, name, name_re) || !std::regex_search(d, id, id_re)) continue;
+  const nlohmann::json& list = doc["views"];
+  for (size_t k = 0; k < list.size(); ++k) {
+    const std::string where = "views[" + std::to_string(k) + "]";
+    const nlohmann::json* d = &list[k];
+    for (const char* key : {"value", "ptr_wrapper", "data"}) {
+      if (!d->is_object() || !d->contains(key)) throw InputError(path, 0, where + ": no value.ptr_wrapper.data object");
+      d = &(*d)[key];
+    }
+    if (!d->is_object()) throw InputError(path, 0, where + ": no value.ptr_wrapper.data object");
+    auto whole = [&](const char* key, bool required) -> long long {
+      if (!d->contains(key)) {
+        if (required) throw InputError(path, 0, where + ": no \"" + std::string(key) + "\"");
+        return 0;
+      }
+      const nlohmann::json& v = (*d)[key];
+      if (!v.is_number_unsigned() || v.get<unsigned long long>() > static_cast<unsigned long long>(1LL << 62))
+        throw InputError(path, 0, where + ": \"" + std::string(key) + "\" is not a whole number >= 0: " + v.dump());
+      return v.get<long long>();
+    };
+    if (!d->contains("filename") || !(*d)["filename"].is_string()) throw InputError(path, 0, where + ": no \"filename\" string");
     View v;
-    v.ref.path = name[1];
-    if (std::regex_search(d, w, w_re)) v.ref.width = std::stol(w[1]);
-    if (std::regex_search(d, h, h_re)) v.ref.height = std::stol(h[1]);
-    views[std::stoll(id[1])] = v;
+    v.ref.path = (*d)["filename"].get<std::string>();
+    v.ref.width = whole("width", false);
+    v.ref.height = whole("height", false);
+    const long long id = whole("id_view", true);
+    const auto [it, fresh] = views.emplace(id, v);
+    if (!fresh)
+      throw InputError(path, 0, where + ": view id " + std::to_string(id) + " is also that of " + it->second.ref.path +
+                                    ": one id names one view");
   }
   if (views.empty()) throw InputError(path, 0, "names no views (id_view, filename)");
   return views;
@@ -67,16 +114,18 @@ std::map<long long, View> read_sfm_views(const std::string& path) {
 void load_feat(View& v, const std::string& folder) {
   if (v.loaded) return;
   const std::string path = (fs::path(folder) / (image_stem(v.ref.path) + ".feat")).string();
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open the features of view " + v.ref.path);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, 0, "no such file: the features of view " + v.ref.path);
+  std::ifstream in = open_input_file(path, InputKind::file);
   std::string line;
-  for (long n = 1; std::getline(in, line); ++n) {
+  for (long n = 1; read_text_line(in, line, path, n); ++n) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream s(line);
     std::vector<double> f;
     for (double d; s >> d;) f.push_back(d);
     if (!s.eof() || (f.size() != 2 && f.size() != 4 && f.size() != 6))
       throw InputError(path, n, "a feature is x y [scale orientation] or x y a11 a12 a21 a22");
+    if (!std::isfinite(f[0]) || !std::isfinite(f[1])) throw InputError(path, n, "the position is not finite");
     v.x.push_back(f[0]);
     v.y.push_back(f[1]);
   }
@@ -123,13 +172,12 @@ std::vector<Matches> read_openmvg(const std::string& matches_path, const std::ve
     if (images.empty()) throw InputError(matches_path, 0, "no sfm_data.json beside it: name the views in order with --images");
     for (size_t v = 0; v < images.size(); ++v) views[static_cast<long long>(v)].ref.path = images[v];
   }
-  std::ifstream in(matches_path);
-  if (!in) throw InputError(matches_path, 0, "cannot open");
+  std::ifstream in = open_input_file(matches_path, InputKind::file);
   std::vector<Matches> out;
   std::string line;
   long n = 0;
   auto next = [&](std::vector<std::string>& f) {
-    while (std::getline(in, line)) {
+    while (read_text_line(in, line, matches_path, n + 1)) {
       ++n;
       std::istringstream s(line);
       f.clear();

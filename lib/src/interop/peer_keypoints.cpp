@@ -73,13 +73,17 @@ std::string image_file_name(const std::string& path) { return std::filesystem::p
 
 std::string image_stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
 
+void check_peer_pair(const Matches& m) {
+  if (m.image1.path.empty() || m.image2.path.empty())
+    throw InputError(m.source, 0, "the header names no image1 / image2 lines: a peer format needs the images");
+  if (m.image1.path == m.image2.path) throw InputError(m.source, 0, "pairs image " + m.image1.path + " with itself");
+}
+
 PeerKeypoints collect_peer_keypoints(const std::vector<Matches>& files, const std::vector<std::string>& order) {
   Builder b(order);
   for (size_t f = 0; f < files.size(); ++f) {
     const Matches& m = files[f];
-    if (m.image1.path.empty() || m.image2.path.empty())
-      throw InputError(m.source, 0, "the header names no image1 / image2 lines: a peer format needs the images");
-    if (m.image1.path == m.image2.path) throw InputError(m.source, 0, "pairs image " + m.image1.path + " with itself");
+    check_peer_pair(m);
     PeerPair p;
     p.image1 = b.image(m.image1);
     p.image2 = b.image(m.image2);
@@ -107,7 +111,37 @@ void assign_position_ids(std::vector<Matches>& files) {
     }
 }
 
+namespace {
+// The name as a message shows it: control characters as \n, \r, \t or \xHH.
+std::string shown(const std::string& name) {
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  for (unsigned char c : name) {
+    if (c == '\n') out += "\\n";
+    else if (c == '\r') out += "\\r";
+    else if (c == '\t') out += "\\t";
+    else if (c < 0x20 || c == 0x7f) out += std::string("\\x") + hex[c >> 4] + hex[c & 15];
+    else out += static_cast<char>(c);
+  }
+  return out;
+}
+
+// A name that reads back from "# imageN: NAME" as itself (the header reader trims the value).
+void check_image_name(const std::string& name, const std::string& source) {
+  if (name.empty()) throw InputError(source, 0, "names an image with an empty name");
+  for (unsigned char c : name)
+    if (c < 0x20 || c == 0x7f)
+      throw InputError(source, 0, "the image name '" + shown(name) +
+                                      "' holds a line break or another control character: it cannot go into a tpkit header");
+  if (name.front() == ' ' || name.back() == ' ')
+    throw InputError(source, 0, "the image name '" + name + "' begins or ends with a space: it cannot go into a tpkit header");
+}
+}  // namespace
+
 Matches peer_matches(const ImageRef& image1, const ImageRef& image2, const std::string& format, const std::string& source) {
+  check_image_name(image1.path, source);
+  check_image_name(image2.path, source);
+  if (image1.path == image2.path) throw InputError(source, 0, "pairs image " + image1.path + " with itself");
   Matches m;
   m.source = source;
   m.image1 = image1;

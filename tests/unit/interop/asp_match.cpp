@@ -111,5 +111,5 @@ TEST(AspMatch, BadInput) {
   fails_with("s-a__b.match", good + "x", "after the last record");
   fails_with("nounderscores.match", good, "no '__'");
   fails_with("t-a__b.txt", "1 2 0.5 3 4\n", "six numbers");
-  fails_with("u-a__b.txt", "1 2 0 3 4 1\n", "must be > 0");
+  fails_with("u-a__b.txt", "1 2 0 3 4 1\n", "must be finite and > 0");
 }

@@ -35,8 +35,9 @@ void write_asp_match_text(std::ostream& os, const Matches& m, double min_sigma);
 
 // Reads a .match (binary) or .txt (text) file; the images are named by the stems in the file name
 // (PREFIX-STEM1__STEM2: STEM1 is what follows the last '-' before "__"; a stem of `images` that ends
-// the part before "__" wins, so stems may hold '-'). Ids are left at the record index
-// (assign_position_ids gives the real ones).
+// the part before "__" wins, so stems may hold '-'; a name with several "__" is split where `images`
+// say, and refused when they do not). Ids are left at the record index (assign_position_ids gives the
+// real ones). Non-finite positions or scales are refused.
 Matches read_asp_match(const std::string& path, const std::vector<std::string>& images = {});
 
 }  // namespace tpkit

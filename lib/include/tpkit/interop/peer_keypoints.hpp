@@ -35,9 +35,13 @@ struct PeerKeypoints {
   std::vector<PeerPair> pairs;
 };
 
+// Throws InputError naming m.source unless the file names two images (image1, image2 header lines:
+// every peer format names its files or records after them) and they are two, not one image twice.
+void check_peer_pair(const Matches& m);
+
 // Builds the lists. `order` (image files, may be empty; each matched to the header image of the same
 // path, file name or stem) fixes the image numbering; images not in it follow in order of first
-// appearance. Throws InputError when a file pairs an image with itself, UsageError when an image of
+// appearance. Throws InputError for a file that check_peer_pair refuses, UsageError when an image of
 // `order` is in no file.
 PeerKeypoints collect_peer_keypoints(const std::vector<Matches>& files, const std::vector<std::string>& order = {});
 
@@ -51,7 +55,8 @@ std::string image_stem(const std::string& path);
 void assign_position_ids(std::vector<Matches>& files);
 
 // A matches file as read from a peer format: the two images, "# source-format:" and "# source:" lines,
-// no records yet.
+// no records yet. Throws InputError naming `source` when an image name cannot stand in a tpkit header
+// (empty, a line break or another control character, a space at either end) or both name one image.
 Matches peer_matches(const ImageRef& image1, const ImageRef& image2, const std::string& format, const std::string& source);
 
 // Records gathered one at a time by a reader, then stored in a Matches (ids, xy; extra untouched).
