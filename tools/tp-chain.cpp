@@ -1,6 +1,8 @@
 // tp-chain: pairwise matches files joined by (image, keypoint id) into multi-view tracks.
+#include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
@@ -14,7 +16,7 @@ namespace {
 struct Opts {
   std::vector<std::string> files, images;
   std::string out = "-";
-  int min_views = -1;
+  int min_views = 0;  // 0: not given (the option takes 2 or more); default 3, or 2 with two images
   double same = 0.01;
   bool quiet = false;
 };
@@ -27,7 +29,15 @@ int main(int argc, char** argv) {
         auto o = std::make_shared<Opts>();
         app.add_option("MATCHES", o->files, "matches files")->required();
         app.add_option("--images", o->images, "images of the output, in column order (first = reference)");
-        app.add_option("--min-views", o->min_views, "fewest views of a track (default: 3, or 2 with two images)");
+        app.add_option("--min-views", o->min_views, "fewest views of a track (default: 3, or 2 with two images)")
+            ->check(CLI::Validator(
+                [](std::string& v) -> std::string {
+                  char* end = nullptr;
+                  const long n = std::strtol(v.c_str(), &end, 10);
+                  if (v.empty() || *end != '\0') return "not a whole number: '" + v + "'";
+                  return n < 2 ? "must be at least 2, got '" + v + "'" : std::string();
+                },
+                "INT >= 2"));
         app.add_option("--same-position", o->same, "keypoints of one image closer than this are one point, pixels")
             ->check(tpkit::NonNegative);
         app.add_option("-o,--output", o->out, "output tracks file (- = stdout)");
@@ -44,7 +54,7 @@ int main(int argc, char** argv) {
                                         " and " + std::to_string(i + 1) + ")");
           co.images = o->images;
           co.same_position = o->same;
-          if (o->min_views < 0) {
+          if (o->min_views == 0) {
             size_t k = o->images.size();
             if (k == 0) {
               std::vector<std::string> seen;
@@ -61,11 +71,13 @@ int main(int argc, char** argv) {
           tpkit::Tracks t = tpkit::chain_tracks(ms, co, &st);
           tpkit::save_tracks(o->out, t);
           if (!o->quiet) {
-            std::cerr << "tp-chain: " << st.components << " components; tracks by views:";
-            for (const auto& kv : st.by_length) std::cerr << " " << kv.first << ":" << kv.second;
-            std::cerr << "; merged duplicates " << st.merged_duplicates << ", dropped (reference conflict) "
-                      << st.dropped_reference_conflicts << ", views dropped (conflict) " << st.views_dropped_conflicts
-                      << "; written " << st.written << " tracks with " << t.views() << " views\n";
+            std::ostringstream line;
+            line << st.components << " components; tracks by views:";
+            for (const auto& kv : st.by_length) line << " " << kv.first << ":" << kv.second;
+            line << "; merged duplicates " << st.merged_duplicates << ", dropped (reference conflict) "
+                 << st.dropped_reference_conflicts << ", views dropped (conflict) " << st.views_dropped_conflicts << "; written "
+                 << st.written << " tracks with " << t.views() << " views";
+            tpkit::summary(line.str());
           }
           return 0;
         };

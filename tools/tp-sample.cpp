@@ -51,6 +51,12 @@ int main(int argc, char** argv) {
           tpkit::check_outputs({{"-o", o->output}, {"--rest", o->rest}}, {o->input});
           auto opt = options_for(o->kind);
           auto t = tpkit::read_table_file(o->input, opt);
+          // the records must be those of the kind the header names (a tracks file under a matches header,
+          // say, is refused as every other tool refuses it)
+          const std::string kind = t.kind.empty() ? o->kind : t.kind;
+          if (kind == "matches") tpkit::matches_from_table(t);
+          else if (kind == "tracks") tpkit::tracks_from_table(t);
+          else if (kind == "points") tpkit::points_from_table(t);
           if (t.kind.empty()) t.kind = o->kind;
           tpkit::SampleOptions so;
           so.n = o->n;

@@ -131,8 +131,12 @@ Matches matches_from_table(const TextTable& t) {
   m.meta = t.meta;
   if (t.images.size() >= 1) m.image1 = t.images[0];
   if (t.images.size() >= 2) m.image2 = t.images[1];
+  if (!t.kind.empty() && (t.find("track") >= 0 || t.find("x3") >= 0))
+    throw InputError(t.source, 0, "a matches header over the columns of a tracks file (track, x3, ...): not a matches file");
   int cx1 = t.require("x1"), cy1 = t.require("y1"), cx2 = t.require("x2"), cy2 = t.require("y2");
-  int ci1 = t.find("id1"), ci2 = t.find("id2");
+  // ids from the record index only for headerless input (awk output); a file that says it is a matches
+  // file carries its keypoint ids, or the ids would join unrelated points
+  int ci1 = t.kind.empty() ? t.find("id1") : t.require("id1"), ci2 = t.kind.empty() ? t.find("id2") : t.require("id2");
   std::vector<int> own = {cx1, cy1, cx2, cy2, ci1, ci2};
   const size_t n = t.rows.size();
   m.xy.resize(n, 4);
@@ -159,8 +163,10 @@ Tracks tracks_from_table(const TextTable& t) {
   int k = 0;
   while (t.find("x" + std::to_string(k + 1)) >= 0) ++k;
   if (k < 2) throw InputError(t.source, 0, "a tracks file needs columns x1 y1 x2 y2 at least");
+  if (!t.kind.empty() && (t.find("id1") >= 0 || t.find("id2") >= 0))
+    throw InputError(t.source, 0, "a tracks header over the columns of a matches file (id1, id2): not a tracks file");
   std::vector<int> own;
-  int cid = t.find("track");
+  int cid = t.kind.empty() ? t.find("track") : t.require("track");
   own.push_back(cid);
   for (int v = 1; v <= k; ++v) {
     own.push_back(t.require("x" + std::to_string(v)));
