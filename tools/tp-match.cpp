@@ -1,9 +1,12 @@
 // tp-match: sub-pixel tie points between two images (SIFT + affine F RANSAC + least-squares matching),
 // or between every pair of several images.
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <optional>
 #include <thread>
 
@@ -106,8 +109,8 @@ int region_or_geometry_run(const Opts& o, const std::vector<tpkit::ImageSource>&
     if (!o.quiet) {
       long k = 0, c = 0;
       for (const auto& e : entries) k += e.keypoints, c += e.cached ? 1 : 0;
-      std::cerr << "tp-match: " << s.path << ": " << entries.size() << " detection tiles (" << c << " already cached), " << k
-                << " keypoints\n";
+      tpkit::summary(s.path + ": " + std::to_string(entries.size()) + " detection tiles (" + std::to_string(c) +
+                     " already cached), " + std::to_string(k) + " keypoints");
     }
     return 0;
   }
@@ -143,8 +146,16 @@ int main(int argc, char** argv) {
         app.add_option("--contrast", o->p.sift.contrast, "SIFT contrast threshold")->check(tpkit::Positive);
         app.add_option("--edge", o->p.sift.edge, "SIFT edge threshold")->check(tpkit::Positive);
         app.add_option("--stretch", [o](CLI::results_t r) {
-          o->p.sift.stretch_lo = std::stod(r.at(0));
-          o->p.sift.stretch_hi = std::stod(r.at(1));
+          double v[2] = {0, 0};
+          for (int k = 0; k < 2; ++k) {
+            const std::string& t = r.at(static_cast<size_t>(k));
+            char* end = nullptr;
+            v[k] = std::strtod(t.c_str(), &end);
+            if (t.empty() || *end != '\0' || !std::isfinite(v[k]))
+              throw CLI::ValidationError("--stretch", "LOW HIGH are percentiles, got '" + t + "'");
+          }
+          o->p.sift.stretch_lo = v[0];
+          o->p.sift.stretch_hi = v[1];
           return true;
         }, "low and high percentiles of the 8-bit rendering")->expected(2);
         app.add_option("--ratio", o->p.desc.ratio, "nearest-neighbour ratio test")->check(CLI::Range(0.1, 1.0));
@@ -243,7 +254,8 @@ int main(int argc, char** argv) {
           load_rpcs(*o);
           auto report = [&](const std::string& what, const tpkit::PairMatchStats& st) {
             if (!st.overlap)
-              tpkit::warn("no verified matches between " + what + " (do the images overlap?): writing a file with zero records");
+              tpkit::warn("no verified matches between " + what + " (" + tpkit::no_match_reason(st, o->p) +
+                          "): writing a file with zero records");
             if (st.rpc_fallback)
               tpkit::warn("the RPC epipolar curves of " + what + " held no geometry within --rpc-margin " +
                           tpkit::format_number(o->p.rpc_guide.margin) + " px; the images' own coarse stage found one: "
@@ -252,22 +264,24 @@ int main(int argc, char** argv) {
               tpkit::warn(what + " have no parallax (the same image, or views without a base): matches verified by a "
                           "2-D affine map; they carry no 3-D information");
             if (o->quiet) return;
-            std::cerr << "tp-match: " << (n > 2 ? what + ": " : std::string()) << "keypoints " << st.keypoints1
-                      << (st.cached1 ? " (cached)" : "") << " / " << st.keypoints2 << (st.cached2 ? " (cached)" : "")
-                      << ", putative " << st.putative << ", verified " << st.verified << " (rms " << st.ransac_rms << " px)";
-            if (o->p.grid > 0) std::cerr << ", after grid " << st.gridded;
+            std::ostringstream line;
+            line << (n > 2 ? what + ": " : std::string()) << "keypoints " << st.keypoints1 << (st.cached1 ? " (cached)" : "")
+                 << " / " << st.keypoints2 << (st.cached2 ? " (cached)" : "") << ", putative " << st.putative << ", verified "
+                 << st.verified << " (rms " << st.ransac_rms << " px)";
+            if (o->p.grid > 0) line << ", after grid " << st.gridded;
             if (o->p.refine) {
-              std::cerr << ", refined " << st.refined;
+              line << ", refined " << st.refined;
               const char* sep = " (dropped:";
               for (int k = 1; k < 8; ++k)
                 if (st.dropped[k]) {
-                  std::cerr << sep << " " << tpkit::to_string(static_cast<tpkit::LsmStatus>(k)) << " " << st.dropped[k];
+                  line << sep << " " << tpkit::to_string(static_cast<tpkit::LsmStatus>(k)) << " " << st.dropped[k];
                   sep = ",";
                 }
-              if (std::string(sep) == ",") std::cerr << ")";
+              if (std::string(sep) == ",") line << ")";
             }
-            std::cerr << "; seconds: detect " << st.seconds[0] << ", match " << st.seconds[1] << ", verify " << st.seconds[2]
-                      << ", refine " << st.seconds[3] << "\n";
+            line << "; seconds: detect " << st.seconds[0] << ", match " << st.seconds[1] << ", verify " << st.seconds[2]
+                 << ", refine " << st.seconds[3];
+            tpkit::summary(line.str());
           };
           if (n == 2 && (!o->region.empty() || !o->write_geometry.empty())) return region_or_geometry_run(*o, src, report);
           if (n == 2) {
@@ -289,7 +303,11 @@ int main(int argc, char** argv) {
                 report(f, st);
               },
               &detect_s);
-          if (!o->quiet) std::cerr << "tp-match: detection of the " << n << " images ended after " << detect_s << " s\n";
+          if (!o->quiet) {
+            std::ostringstream line;
+            line << "detection of the " << n << " images ended after " << detect_s << " s";
+            tpkit::summary(line.str());
+          }
           return 0;
         };
       },

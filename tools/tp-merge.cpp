@@ -15,6 +15,7 @@ struct Opts {
   std::vector<std::string> files;
   std::string out = "-";
   bool quiet = false;
+  tpkit::MergeOptions merge;
 };
 }  // namespace
 
@@ -25,17 +26,21 @@ int main(int argc, char** argv) {
         auto o = std::make_shared<Opts>();
         app.add_option("MATCHES", o->files, "matches files of one pair")->required();
         app.add_option("-o,--output", o->out, "output matches file (- = stdout)");
+        app.add_option("--same-position", o->merge.same_position,
+                       "records of one match closer than this are one, pixels; farther apart, a conflict")
+            ->check(tpkit::NonNegative);
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
           tpkit::check_outputs({{"-o", o->out}}, o->files);
           std::vector<tpkit::Matches> ms;
           for (const auto& f : o->files) ms.push_back(tpkit::read_matches(f));
           tpkit::MergeStats st;
-          const tpkit::Matches m = tpkit::merge_matches(ms, &st);
+          const tpkit::Matches m = tpkit::merge_matches(ms, &st, o->merge);
           tpkit::save_matches(o->out, m);
           if (!o->quiet)
-            std::cerr << "tp-merge: " << st.files << " files, " << st.records << " records: " << st.duplicates
-                      << " duplicates, " << st.conflicts << " conflicts dropped; written " << st.written << "\n";
+            tpkit::summary(std::to_string(st.files) + " files, " + std::to_string(st.records) + " records: " +
+                           std::to_string(st.duplicates) + " duplicates, " + std::to_string(st.conflicts) +
+                           " conflicts dropped; written " + std::to_string(st.written));
           return 0;
         };
       },

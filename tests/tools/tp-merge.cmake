@@ -25,7 +25,11 @@ tpkit_tool_test(tp-match.region-not-a-number
   EXPECT_FAIL STDERR_MATCH "whole pixels, got '1e2'" NO_FILE a.m)
 tpkit_tool_test(tp-match.geometry-other-pair
   COMMAND "${_scene} && tp-synth --out t --size 320 --seed 1 --supersample 1 >/dev/null && tp-match -q --write-geometry g t/view1.tif t/view2.tif && tp-match --geometry g --region 0 0 100 100 s/view1.tif s/view2.tif -o a.m"
-  EXPECT_FAIL STDERR_MATCH "g: image1 is 320x320 in the geometry but s/view1.tif is 640x640" NO_FILE a.m)
+  EXPECT_FAIL STDERR_MATCH "tp-match: g: a geometry of t/view1.tif and t/view2.tif, not of s/view1.tif and s/view2.tif" NO_FILE a.m)
+# the geometry of other images of the same size: sizes alone would let it through (issue 23)
+tpkit_tool_test(tp-match.geometry-other-images-same-size
+  COMMAND "${_scene} && tp-match -q --write-geometry g s/view1.tif s/view2.tif && tp-match --geometry g --region 0 0 100 100 s/view1.tif s/view3.tif -o a.m"
+  EXPECT_FAIL STDERR_MATCH "tp-match: g: a geometry of s/view1.tif and s/view2.tif, not of s/view1.tif and s/view3.tif" NO_FILE a.m)
 tpkit_tool_test(tp-match.geometry-without-region
   COMMAND "${_scene} && tp-match -q --write-geometry g s/view1.tif s/view2.tif && tp-match --geometry g s/view1.tif s/view2.tif -o a.m"
   EXPECT_FAIL STDERR_MATCH "--geometry goes with --region" NO_FILE a.m)

@@ -370,4 +370,20 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   return M;
 }
 
+std::string no_match_reason(const PairMatchStats& st, const PairMatchOptions& o) {
+  if (st.rpc_guided && st.keypoints1 > 0 && st.rpc.unlocalized >= st.keypoints1)
+    return "the RPC model of image 1 gives no epipolar curve for any of its " + std::to_string(st.keypoints1) +
+           " keypoints: is it the model of this image?";
+  if (st.rpc_guided && !st.rpc.narrowed) {
+    const std::string heights = format_number(st.rpc.h_lo) + ".." + format_number(st.rpc.h_hi) + " m";
+    return "the RPC epipolar curves over the heights " + heights +
+           (o.rpc_guide.height_given ? " (--height-range)" : " (the models' range)") + " held no geometry within " +
+           format_number(o.rpc_guide.margin) + " px: " + std::to_string(st.rpc.coarse_inliers) + " of " +
+           std::to_string(st.rpc.coarse_putative) + " coarse matches" +
+           (o.rpc_only ? "" : ", and the images' own coarse stage found none either") +
+           "; the models (a bias beyond --rpc-margin), the height range or the overlap may be at fault";
+  }
+  return "do the images overlap?";
+}
+
 }  // namespace tpkit

@@ -49,7 +49,7 @@ bool better(const Candidate& p, const Candidate& q) {
 
 }  // namespace
 
-Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats) {
+Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats, const MergeOptions& o) {
   if (files.empty()) throw UsageError("no matches file to merge");
   MergeStats st;
   st.files = static_cast<long>(files.size());
@@ -64,7 +64,10 @@ Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats) {
       const auto key = std::make_pair(m.id1[static_cast<size_t>(k)], m.id2[static_cast<size_t>(k)]);
       auto [it, fresh] = by_match.emplace(key, c);
       if (!fresh) {
-        ++st.duplicates;
+        // one match at two positions is a conflict: one of them is wrong
+        const Matches& kept = files[it->second.file];
+        const double apart = (kept.xy.row(it->second.row) - m.xy.row(k)).cwiseAbs().maxCoeff();
+        ++(apart > o.same_position ? st.conflicts : st.duplicates);
         if (better(c, it->second)) it->second = c;
       }
     }

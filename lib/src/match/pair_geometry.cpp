@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -174,6 +175,16 @@ void check_pair_geometry(const PairGeometry& G, const std::string& path, const I
                                     " in the geometry but " + s.path + " is " + std::to_string(s.info.width) + "x" +
                                     std::to_string(s.info.height) + ": a geometry of another pair?");
   };
+  // the images it names: the same path, or another path to the same file (a size alone would let the
+  // geometry of any two images of the same sizes through)
+  auto is = [](const ImageRef& r, const ImageSource& s) {
+    if (r.path == s.path) return true;
+    std::error_code ec;
+    return std::filesystem::equivalent(r.path, s.path, ec) && !ec;
+  };
+  if (!is(G.image1, a) || !is(G.image2, b))
+    throw InputError(path, 0, "a geometry of " + G.image1.path + " and " + G.image2.path + ", not of " + a.path + " and " +
+                                  b.path + " (made by tp-match --write-geometry for those images)");
   same(G.image1, a, "image1");
   same(G.image2, b, "image2");
   if (G.detector1 != detector_tag(sift, a) || G.detector2 != detector_tag(sift, b))

@@ -77,6 +77,12 @@ struct PairMatchStats {
 
 Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOptions& o, PairMatchStats* stats = nullptr);
 
+// Why a pair came out with no verified matches (stats.overlap false), in words for the warning that
+// says so: when the search regions came from the RPC models and their curves held no geometry, the
+// models (their bias beyond the margin), the height range searched or the overlap; when the RPC curves
+// gave nothing to the keypoints of image 1, the model of image 1; else the overlap.
+std::string no_match_reason(const PairMatchStats& st, const PairMatchOptions& o);
+
 // The same from keypoints already detected (detect_sift_cached with o.sift) of a and b; the pipeline
 // from step 2 on. The descriptors are released once matched (shallow copies keep the caller's).
 Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,

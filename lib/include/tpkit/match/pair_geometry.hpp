@@ -49,7 +49,8 @@ PairGeometry estimate_pair_geometry(const ImageSource& a, const ImageSource& b, 
 
 void save_pair_geometry(const std::string& path, const PairGeometry& G);
 PairGeometry read_pair_geometry(const std::string& path);
-// Throws InputError naming `path` when G was made for other images (path, size) or detector options.
+// Throws InputError naming `path` when G was made for other images (its image1/image2 paths name other
+// files than a and b, or sizes differ) or detector options.
 void check_pair_geometry(const PairGeometry& G, const std::string& path, const ImageSource& a, const ImageSource& b,
                          const SiftOptions& sift);
 
