@@ -1,7 +1,6 @@
 // tp-plan: the job list of a scaled-out tie-point run (pairs x regions, merge, chain) for make -j,
 // GNU parallel and Slurm job arrays.
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -21,19 +20,6 @@ struct Opts {
   bool quiet = false;
 };
 
-// One image path a line; blank lines and lines starting with '#' skipped; spaces are part of the name.
-std::vector<std::string> read_list(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw tpkit::InputError(path, 0, "cannot read the image list");
-  std::vector<std::string> out;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    out.push_back(line);
-  }
-  return out;
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -55,7 +41,7 @@ int main(int argc, char** argv) {
         return [o]() {
           std::vector<std::string> paths = o->images;
           if (!o->list.empty())
-            for (const auto& p : read_list(o->list)) paths.push_back(p);
+            for (const auto& p : tpkit::read_image_list(o->list)) paths.push_back(p);
           std::istringstream mo(o->match_options);
           for (std::string a; mo >> a;) {
             if (o->p.detect_tile > 0 && (a == "--tile" || a.rfind("--tile=", 0) == 0))
@@ -69,10 +55,11 @@ int main(int argc, char** argv) {
           const tpkit::Plan plan = tpkit::make_plan(images, o->p);
           tpkit::write_plan(plan, o->p);
           if (!o->quiet)
-            std::cerr << "tp-plan: " << images.size() << " images, " << plan.pairs.size() << " pairs, " << plan.detect.size()
-                      << " detection jobs, " << plan.tiles.size() << " region jobs; make -C " << tpkit::shell_quote(o->p.work) << " -f plan.mk -j N, or bash "
-                      << tpkit::shell_quote(o->p.work + "/run-parallel.sh") << " -j N, or bash "
-                      << tpkit::shell_quote(o->p.work + "/submit-slurm.sh") << "\n";
+            tpkit::summary(std::to_string(images.size()) + " images, " + std::to_string(plan.pairs.size()) + " pairs, " +
+                           std::to_string(plan.detect.size()) + " detection jobs, " + std::to_string(plan.tiles.size()) +
+                           " region jobs; make -C " + tpkit::shell_quote(o->p.work) + " -f plan.mk -j N, or bash " +
+                           tpkit::shell_quote(o->p.work + "/run-parallel.sh") + " -j N, or bash " +
+                           tpkit::shell_quote(o->p.work + "/submit-slurm.sh"));
           return 0;
         };
       },

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/core/tool_support.hpp"
 #include "tpkit/match/sift_tiles.hpp"
@@ -51,7 +53,7 @@ bool footprints_may_overlap(const PlanImage& a, const PlanImage& b) {
 }
 
 std::vector<PlanImage> plan_images(const std::vector<std::string>& paths) {
-  if (paths.size() < 2) throw UsageError("tp-plan needs two images or more, got " + std::to_string(paths.size()));
+  if (paths.size() < 2) throw UsageError("a plan needs two images or more, got " + std::to_string(paths.size()));
   std::vector<PlanImage> out;
   for (const auto& p : paths) {
     shell_quote(p);  // refuses a newline
@@ -61,6 +63,19 @@ std::vector<PlanImage> plan_images(const std::vector<std::string>& paths) {
     for (const auto& q : out)
       if (q.path == abs.string()) throw UsageError("the image " + p + " is listed twice");
     out.push_back({abs.string(), info.width, info.height, image_footprint(p, info.width, info.height)});
+  }
+  return out;
+}
+
+std::vector<std::string> read_image_list(const std::string& path) {
+  constexpr size_t kMaxPath = 4096;  // PATH_MAX
+  std::ifstream in = open_input_file(path, InputKind::file);
+  std::vector<std::string> out;
+  std::string line;
+  for (long n = 1; read_text_line(in, line, path, n, kMaxPath); ++n) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    out.push_back(line);
   }
   return out;
 }
@@ -129,13 +144,13 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
     const PlanImage &a = images[pr[0]], &b = images[pr[1]];
     const std::string name = pair_name(pr), geo = "geometry/" + name + ".geometry";
     const std::string imgs = " " + shell_quote(a.path) + " " + shell_quote(b.path);
-    p.geometry.push_back({geo, {}, tool(o, "tp-match") + quiet + match_args(o) + " --write-geometry " + in_work(o, geo) + imgs});
-    PlanJob merge{"pairs/" + name + ".matches", {}, tool(o, "tp-merge") + quiet + " -o " + in_work(o, "pairs/" + name + ".matches")};
+    p.geometry.push_back({geo, {}, {}, tool(o, "tp-match") + quiet + match_args(o) + " --write-geometry " + in_work(o, geo) + imgs});
+    PlanJob merge{"pairs/" + name + ".matches", {}, {}, tool(o, "tp-merge") + quiet + " -o " + in_work(o, "pairs/" + name + ".matches")};
     const auto regions = plan_regions(a.width, a.height, o.tile, o.overlap);
     for (size_t k = 0; k < regions.size(); ++k) {
       const auto& r = regions[k];
       const std::string out = "tiles/" + name + "/tile-" + std::to_string(k + 1) + ".matches";
-      p.tiles.push_back({out, {geo},
+      p.tiles.push_back({out, {geo}, {pr[0], pr[1]},
                          tool(o, "tp-match") + quiet + match_args(o) + " --geometry " + in_work(o, geo) + region_arg(r) + " --cache " + in_work(o, "cache") + " -o " + in_work(o, out) + imgs});
       merge.depends.push_back(out);
       merge.command += " " + in_work(o, out);
@@ -144,8 +159,8 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
     p.merge.push_back(merge);
   }
   // detection: every image of a pair once, through the geometry of its first pair (which holds its
-  // stretch), in the regions of its own pixels; the region jobs of every pair need all of it
-  std::vector<std::string> detect_files;
+  // stretch), in the regions of its own pixels; the region jobs of a pair need all of its two images'
+  p.image_detections.resize(images.size());
   for (size_t i = 0; i < images.size(); ++i) {
     const auto pr = std::find_if(p.pairs.begin(), p.pairs.end(), [&](const auto& q) { return q[0] == i || q[1] == i; });
     if (pr == p.pairs.end()) continue;
@@ -158,15 +173,14 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
       const auto& r = regions[k];
       if (tiles_starting_in(grid, r[0], r[1], r[2], r[3]).empty()) continue;  // a block without a tile of its own
       const std::string out = "detect/image-" + std::to_string(i + 1) + "/block-" + std::to_string(k + 1) + ".detection";
-      p.detect.push_back({out, {geo},
+      p.detect.push_back({out, {geo}, {},
                           tool(o, "tp-match") + quiet + match_args(o) + " --geometry " + in_work(o, geo) + " --detect " +
                               std::string((*pr)[0] == i ? "1" : "2") + region_arg(r) + " --cache " +
                               in_work(o, "cache") + " -o " + in_work(o, out) + imgs});
-      detect_files.push_back(out);
+      p.image_detections[i].push_back(out);
     }
   }
-  for (PlanJob& t : p.tiles) t.depends.insert(t.depends.end(), detect_files.begin(), detect_files.end());
-  PlanJob chain{"tracks.tracks", pair_files, tool(o, "tp-chain") + quiet + " --images"};
+  PlanJob chain{"tracks.tracks", pair_files, {}, tool(o, "tp-chain") + quiet + " --images"};
   for (size_t i = 0; i < images.size(); ++i)
     if (paired[i]) chain.command += " " + shell_quote(images[i].path);
   chain.command += " -o " + in_work(o, "tracks.tracks");
@@ -187,10 +201,19 @@ std::string plan_makefile(const Plan& p) {
     for (char ch : c) r += ch == '$' ? std::string("$$") : std::string(1, ch);
     return r;
   };
+  // each image's detection targets once (a region job names the variables of its two images)
+  auto detections_of = [](size_t i) { return "detect-image-" + std::to_string(i + 1); };
+  for (size_t i = 0; i < p.image_detections.size(); ++i) {
+    if (p.image_detections[i].empty()) continue;
+    s << detections_of(i) << " :=";
+    for (const auto& t : p.image_detections[i]) s << " " << t;
+    s << "\n";
+  }
   for (const auto* stage : {&p.geometry, &p.detect, &p.tiles, &p.merge, &p.chain})
     for (const PlanJob& j : *stage) {
       s << j.target << ":";
       for (const auto& d : j.depends) s << " " << d;
+      for (size_t i : j.detections) s << " $(" << detections_of(i) << ")";
       s << "\n\t" << dollars(j.command) << "\n";
     }
   return s.str();
@@ -221,6 +244,10 @@ std::string plan_slurm_submit(const Plan& p, const PlanOptions& o) {
        "# Prints each stage's job id.\n"
        "set -euo pipefail\n"
        "W=" << shell_quote(o.work) << "\n"
+       "# sbatch expands %x, %j, ... in --output: a '%' of the folder's path is written %%; a backslash in it\n"
+       "# would turn the expansion off (every job of a stage writing one log file)\n"
+       "case $W in *\\\\*) echo \"submit-slurm.sh: $W: a backslash in the path turns off sbatch's %a in --output\" >&2; exit 2 ;; esac\n"
+       "L=${W//\"%\"/\"%%\"}/logs\n"
        "wait=()\n"
        "if [ \"${1:-}\" = --wait ]; then wait=(--wait); shift; fi\n"
        "opts=(\"$@\")\n"
@@ -228,7 +255,7 @@ std::string plan_slurm_submit(const Plan& p, const PlanOptions& o) {
        "submit() {  # STAGE JOBS [--wait]\n"
        "  local id\n"
        "  id=$(sbatch --parsable \"${@:3}\" \"${dep[@]}\" \"${opts[@]}\" --job-name=\"tpkit-$1\" --array=\"1-$2\" \\\n"
-       "       --cpus-per-task=" << o.threads << " --output=\"$W/logs/$1-%a.log\" \"$W/slurm-array.sbatch\" \"$W/jobs/$1.jobs\")\n"
+       "       --cpus-per-task=" << o.threads << " --output=\"$L/$1-%a.log\" \"$W/slurm-array.sbatch\" \"$W/jobs/$1.jobs\")\n"
        "  id=${id%%;*}\n"
        "  echo \"$1 $id\"\n"
        "  dep=(--dependency=\"afterok:$id\")\n"
@@ -254,12 +281,42 @@ std::string plan_parallel_runner(const PlanOptions& o) {
          "done\n";
 }
 
+namespace {
+// A work folder already used: the same plan, else refused (see the header).
+void check_work_folder(const fs::path& W, const std::string& makefile) {
+  std::error_code ec;
+  if (!fs::exists(W, ec)) return;
+  if (!fs::is_directory(W, ec)) throw InputError(W.string(), 0, "cannot plan into it: not a folder");
+  const fs::path mk = W / "plan.mk";
+  if (fs::is_regular_file(mk, ec)) {
+    std::ifstream in(mk, std::ios::binary);
+    std::ostringstream old;
+    old << in.rdbuf();
+    if (old.str() == makefile) return;  // the same plan: its outputs are this plan's, make resumes it
+    throw UsageError(W.string() + ": holds another plan (its plan.mk differs: other images, another order or other "
+                                  "options), whose outputs would stand for other pairs: plan into a new folder, or empty this one");
+  }
+  for (const char* d : {"geometry", "detect", "tiles", "pairs", "tracks.tracks"}) {
+    const fs::path sub = W / d;
+    bool used = fs::is_regular_file(sub, ec);
+    if (fs::is_directory(sub, ec))
+      for (auto it = fs::recursive_directory_iterator(sub, ec); !used && it != fs::recursive_directory_iterator(); it.increment(ec))
+        used = !it->is_directory(ec);
+    if (used)
+      throw UsageError(W.string() + ": holds outputs of a plan (" + std::string(d) +
+                       ") but no plan.mk: plan into a new folder, or empty this one");
+  }
+}
+}  // namespace
+
 void write_plan(const Plan& p, const PlanOptions& o) {
   const fs::path W(o.work);
+  const std::string makefile = plan_makefile(p);
+  check_work_folder(W, makefile);
   for (const char* d : {"", "jobs", "cache", "geometry", "detect", "tiles", "pairs", "logs"}) create_output_dir((W / d).string());
   for (const PlanJob& j : p.detect) create_output_dir((W / j.target).parent_path().string());
   for (const auto& pr : p.pairs) create_output_dir((W / "tiles" / pair_name(pr)).string());
-  write_file_atomic((W / "plan.mk").string(), plan_makefile(p));
+  write_file_atomic((W / "plan.mk").string(), makefile);
   write_file_atomic((W / "jobs/geometry.jobs").string(), plan_job_file(p.geometry));
   write_file_atomic((W / "jobs/detect.jobs").string(), plan_job_file(p.detect));
   write_file_atomic((W / "jobs/tiles.jobs").string(), plan_job_file(p.tiles));

@@ -49,8 +49,11 @@ TEST(ScaleOutPlan, PairsFromFootprints) {
   EXPECT_EQ(p.detect[2].command,
             "tp-match -q --threads 1 --tile 768 --geometry '/w d/geometry/pair-1-3.geometry' --detect 2 --region 0 0 10 10 "
             "--cache '/w d/cache' -o '/w d/detect/image-3/block-1.detection' '/b' '/d'");
-  EXPECT_EQ(p.tiles[1].depends, (std::vector<std::string>{"geometry/pair-2-3.geometry", "detect/image-1/block-1.detection",
-                                                          "detect/image-2/block-1.detection", "detect/image-3/block-1.detection"}));
+  // a region job needs the geometry and the detections of its own two images only (the plan grows as
+  // pairs x regions, not pairs x regions x images)
+  EXPECT_EQ(p.tiles[1].depends, (std::vector<std::string>{"geometry/pair-2-3.geometry"}));
+  EXPECT_EQ(p.tiles[1].detections, (std::vector<size_t>{1, 2}));
+  EXPECT_EQ(p.image_detections[2], (std::vector<std::string>{"detect/image-3/block-1.detection"}));
   EXPECT_EQ(p.merge[0].depends, (std::vector<std::string>{"tiles/pair-1-3/tile-1.matches"}));
   EXPECT_EQ(p.chain[0].command,
             "tp-chain -q --images '/b' '/c' '/d' -o '/w d/tracks.tracks' '/w d/pairs/pair-1-3.matches' '/w d/pairs/pair-2-3.matches'");
@@ -64,8 +67,8 @@ TEST(ScaleOutPlan, MakefileDoublesDollars) {
   EXPECT_NE(mk.find("'/x/$$a'"), std::string::npos);
   EXPECT_EQ(mk.find("'/x/$a'"), std::string::npos);
   EXPECT_NE(mk.find("detect/image-2/block-1.detection: geometry/pair-1-2.geometry\n\t"), std::string::npos);
-  EXPECT_NE(mk.find("tiles/pair-1-2/tile-1.matches: geometry/pair-1-2.geometry detect/image-1/block-1.detection "
-                    "detect/image-2/block-1.detection\n\t"),
+  EXPECT_NE(mk.find("detect-image-1 := detect/image-1/block-1.detection\n"), std::string::npos);
+  EXPECT_NE(mk.find("tiles/pair-1-2/tile-1.matches: geometry/pair-1-2.geometry $(detect-image-1) $(detect-image-2)\n\t"),
             std::string::npos);
   EXPECT_NE(mk.find("pairs/pair-1-2.matches: tiles/pair-1-2/tile-1.matches\n"), std::string::npos);
   EXPECT_THROW(make_plan({a}, o), UsageError);

@@ -59,17 +59,25 @@ struct PlanOptions {
 struct PlanJob {
   std::string target;                     // output, relative to the work folder
   std::vector<std::string> depends;       // targets it needs, relative to the work folder
+  std::vector<size_t> detections;         // and the detection jobs of these images (0-based) it needs
   std::string command;                    // one shell command line
 };
 
 struct Plan {
   std::vector<std::array<size_t, 2>> pairs;  // 0-based image indices
   std::vector<PlanJob> geometry, detect, tiles, merge, chain;
+  std::vector<std::vector<std::string>> image_detections;  // per image: the targets of its detection jobs
 };
 
 // Image sizes read from the files; throws InputError for an unreadable image, UsageError for fewer
 // than two images or no overlapping pair.
 std::vector<PlanImage> plan_images(const std::vector<std::string>& paths);
+
+// The image list of --list: one path a line (spaces are part of it, a trailing '\r' is not), blank
+// lines and lines starting with '#' skipped. A regular file or a pipe; InputError for a folder, a
+// device, binary content (a NUL byte) or a line longer than PATH_MAX (4096 bytes), found as the line
+// is read (a device such as /dev/zero fails at once).
+std::vector<std::string> read_image_list(const std::string& path);
 Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o);
 
 // The regions [x0, y0, w, h] of a width x height image: a grid of tile-sized cells (the last ones
@@ -81,12 +89,18 @@ std::string shell_quote(const std::string& text);
 
 // The engines' files, as text:
 // Makefile fragment: targets relative to the work folder, `make -C WORK -f plan.mk -j N` ($ doubled).
+// The detection targets of image I are listed once, in the variable detect-image-I, and a region job
+// of pair I-J depends on $(detect-image-I) $(detect-image-J): the plan grows with pairs x regions, not
+// with pairs x regions x images.
 std::string plan_makefile(const Plan& p);
 // A GNU parallel job file: one command a line (`parallel < FILE`).
 std::string plan_job_file(const std::vector<PlanJob>& jobs);
 // The Slurm array job: runs line $SLURM_ARRAY_TASK_ID of the job file named by its argument.
 std::string plan_sbatch_script();
 // Submits the five stages as job arrays, each after the previous (afterok); --wait waits for the last.
+// The logs' --output pattern has the work folder's '%' doubled (Slurm expands %x, %j, ... in it) and the
+// script refuses a work folder whose path holds a backslash (which turns the expansion of %a off: every
+// job of a stage would write one log).
 std::string plan_slurm_submit(const Plan& p, const PlanOptions& o);
 // Runs the five job files with GNU parallel, stage after stage; arguments go to parallel.
 std::string plan_parallel_runner(const PlanOptions& o);
@@ -94,6 +108,10 @@ std::string plan_parallel_runner(const PlanOptions& o);
 // Writes WORK/plan.mk, WORK/jobs/{geometry,detect,tiles,merge,chain}.jobs, WORK/slurm-array.sbatch,
 // WORK/submit-slurm.sh, WORK/run-parallel.sh and the output folders (cache, geometry, detect/image-I,
 // tiles/pair-I-J, pairs, logs), all in the run's output transaction.
+// A work folder already used is taken only for the same plan (plan.mk the same: same images in the
+// same order, same options), whose outputs it may then resume; the outputs of another plan would stand
+// for other pairs, images or regions (make would call them up to date), so such a folder is refused
+// (UsageError), as is one that holds outputs (geometry, detect, tiles, pairs, tracks.tracks) but no plan.
 void write_plan(const Plan& p, const PlanOptions& o);
 
 }  // namespace tpkit
