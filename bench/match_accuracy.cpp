@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <optional>
@@ -102,26 +103,39 @@ int main(int argc, char** argv) {
       auto need = [&](int k) {
         if (i + k >= argc) throw std::runtime_error("missing value after " + a);
       };
+      // the next argument as a number of option `a` (std::stod alone would say only "stod")
+      auto num = [&]() {
+        const std::string v = argv[++i];
+        char* end = nullptr;
+        const double d = std::strtod(v.c_str(), &end);
+        if (v.empty() || *end != '\0' || !std::isfinite(d)) throw std::runtime_error(a + ": not a number: '" + v + "'");
+        return d;
+      };
+      auto whole = [&]() {
+        const double d = num();
+        if (d != std::floor(d) || std::fabs(d) > 1e9) throw std::runtime_error(a + ": not a whole number: '" + argv[i] + "'");
+        return static_cast<int>(d);
+      };
       if (a == "--synth") need(1), synth = argv[++i];
       else if (a == "--tracks") need(1), tracks = argv[++i];
-      else if (a == "--check") need(2), cmed = std::stod(argv[++i]), cp90 = std::stod(argv[++i]);
-      else if (a == "--check-rmse") need(1), crmse = std::stod(argv[++i]);
-      else if (a == "--threads") need(1), threads = std::stoi(argv[++i]);
-      else if (a == "--window") need(1), window = std::stoi(argv[++i]);
-      else if (a == "--taper") need(1), taper = std::stod(argv[++i]);
+      else if (a == "--check") need(2), cmed = num(), cp90 = num();
+      else if (a == "--check-rmse") need(1), crmse = num();
+      else if (a == "--threads") need(1), threads = whole();
+      else if (a == "--window") need(1), window = whole();
+      else if (a == "--taper") need(1), taper = num();
       else if (a == "--l2") l2 = true;
       else if (a == "--global") global = true;
       else if (a == "--dump") need(1), dump = argv[++i];
-      else if (a == "--quadratic") need(1), quad = std::stoi(argv[++i]);
-      else if (a == "--epipolar-curvature") need(1), epic = std::stoi(argv[++i]);
-      else if (a == "--support") need(1), cut = std::stod(argv[++i]);
-      else if (a == "--adaptive") need(1), adaptive = std::stoi(argv[++i]);
-      else if (a == "--taper-min") need(1), tmin = std::stod(argv[++i]);
-      else if (a == "--taper-max") need(1), tmax = std::stod(argv[++i]);
-      else if (a == "--curvature-ref") need(1), cref = std::stod(argv[++i]);
-      else if (a == "--tolerance") need(1), tol = std::stod(argv[++i]);
-      else if (a == "--stage-tolerance") need(1), stol = std::stod(argv[++i]);
-      else if (a == "--stage-iterations") need(1), sit = std::stoi(argv[++i]);
+      else if (a == "--quadratic") need(1), quad = whole();
+      else if (a == "--epipolar-curvature") need(1), epic = whole();
+      else if (a == "--support") need(1), cut = num();
+      else if (a == "--adaptive") need(1), adaptive = whole();
+      else if (a == "--taper-min") need(1), tmin = num();
+      else if (a == "--taper-max") need(1), tmax = num();
+      else if (a == "--curvature-ref") need(1), cref = num();
+      else if (a == "--tolerance") need(1), tol = num();
+      else if (a == "--stage-tolerance") need(1), stol = num();
+      else if (a == "--stage-iterations") need(1), sit = whole();
       else if (a == "--render8") need(2), r_in = argv[++i], r_out = argv[++i];
       else {
         std::fprintf(stderr, "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n");
