@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# The README's command blocks, run as a new user runs them: taken from README.md itself, in order, in one
+# shell (a block may use what an earlier one set: PATH, D), from a scratch top-level folder that holds the
+# repository's files (linked), build/ (the build under test) and ../shared beside it. Every ```sh block
+# runs, except one right after a line
+#     <!-- readme-test: not run: REASON -->
+# (the test prints it with its reason). A failing command fails the test, naming its README line.
+# Then the figures the README states for these runs are checked on the files the blocks wrote.
+#   readme_blocks.sh REPO BUILD_DIR SHARED_DIR WORK_DIR
+set -euo pipefail
+[ $# -eq 4 ] || { echo "usage: $0 REPO BUILD_DIR SHARED_DIR WORK_DIR" >&2; exit 2; }
+repo=$1 build=$2 shared=$3 work=$4
+source "$(dirname "$0")/scratch_top.sh"
+readme=$repo/README.md
+scratch_top "$repo" "$build" "$shared" "$work"
+
+# ---- the blocks -------------------------------------------------------------------------------------
+# blocks/NNN-LINE.sh for each block that runs; skipped.txt "LINE: REASON" for the others
+mkdir -p "$work/blocks"
+awk -v dir="$work/blocks" -v skipped="$work/blocks/skipped.txt" '
+  /^<!-- readme-test: not run: / { reason = $0; sub(/^<!-- readme-test: not run: /, "", reason); sub(/ -->$/, "", reason); next }
+  !inside && /^```sh$/ {
+    inside = 1; n++; start = NR + 1
+    if (reason != "") { skip = 1; print start ": " reason > skipped }
+    else { skip = 0; file = sprintf("%s/%03d-%d.sh", dir, n, start) }
+    reason = ""; next
+  }
+  inside && /^```$/ { inside = 0; next }
+  inside { if (!skip) print > file; next }
+  /[^ ]/ { reason = "" }
+' "$readme"
+touch "$work/blocks/skipped.txt"
+blocks=("$work"/blocks/[0-9]*.sh)
+[ -e "${blocks[0]}" ] || { echo "readme: README.md: no command block to run" >&2; exit 1; }
+while read -r line; do echo "readme: README.md:$line (not run)"; done < "$work/blocks/skipped.txt"
+
+# one shell for all blocks, as a user pastes them one after the other
+{
+  echo 'set -eEo pipefail'
+  echo 'trap '\''echo "readme: README.md:$((readme_line + LINENO - block_start)): failed: $BASH_COMMAND" >&2'\'' ERR'
+  for b in "${blocks[@]}"; do
+    line=${b##*-}; line=${line%.sh}
+    echo "echo '== README.md:$line' >&2"
+    echo "readme_line=$line; block_start=\$((LINENO + 1))"
+    cat "$b"
+  done
+} > "$work/blocks/all.sh"
+bash "$work/blocks/all.sh" 2>&1 | tee "$work/blocks/all.log"
+
+# ---- what the README says these runs give ---------------------------------------------------------
+fail() { echo "readme: $*" >&2; exit 1; }
+records() { grep -vc '^#' "$1"; }
+header() { awk -v k="# $1:" 'index($0, k) == 1 { print $3; exit }' "$2"; }
+within() { awk -v v="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(v >= lo && v <= hi) }'; }
+n=$(records triplet.tracks)
+within "$n" 7000 7600 || fail "triplet.tracks: $n triplets, the README says about 7300"
+rmse=$(header rmse_px fit-ml.eval)
+within "$rmse" 0.08 0.12 || fail "fit-ml.eval: rmse $rmse px, the README says about 0.10 px"
+grep -q '^# verdict: accepted' ab.homography || fail "ab.homography: not accepted"
+for p in 1-2 1-3 2-3; do
+  back=from-colmap/img_0${p%-*}__img_0${p#*-}.matches
+  [ -f "$back" ] && [ "$(records "$back")" = "$(records "pair-$p.matches")" ] ||
+    fail "$back: not the records of pair-$p.matches"
+done
+# "RMS 0.564 px before, 0.1003 px after --model affine"
+read -r before after < <(sed -n 's/^rpc-adjust: .*model affine: rms \([0-9.]*\) px before, \([0-9.]*\) px after.*/\1 \2/p' "$work/blocks/all.log")
+within "${before:-0}" 0.55 0.58 && within "${after:-0}" 0.095 0.105 ||
+  fail "rpc-adjust: rms ${before:-?} px before, ${after:-?} px after; the README says 0.564 and 0.1003"
+n=$(records marseille.points)
+within "$n" 7000 7600 || fail "marseille.points: $n ground points for the 7292 inlier tracks of the README"
+echo "readme: ${#blocks[@]} blocks ran; $(wc -l < "$work/blocks/skipped.txt") not run; figures as stated"
