@@ -81,6 +81,11 @@ long export_files(const Opts& o, const std::vector<tpkit::Matches>& ms) {
     }
     return static_cast<long>(names.size());
   }
+  // COLMAP's -o is the folder of database.db and the importer's text form: a name of a database file
+  // would become a folder of that name
+  if (f == "colmap" && o.out.size() >= 3 && o.out.compare(o.out.size() - 3, 3, ".db") == 0)
+    throw tpkit::UsageError("-o " + o.out + ": --to colmap writes a folder (database.db and the text form in it), not a "
+                            "database file: name the folder");
   tpkit::PeerKeypoints k = tpkit::collect_peer_keypoints(ms, o.images);
   tpkit::size_images(k, o.images);
   tpkit::create_output_dir(o.out);

@@ -30,6 +30,10 @@ tpkit_tool_test(tp-convert.colmap-round-trip
   COMMAND "${_cin} && tp-convert --to colmap ab.m ac.m -o col && head -2 col/keypoints/A.tif.txt | cut -c1-12 && cat col/matches.txt && tp-convert --from colmap --colmap-matches raw col/database.db -o back"
   STDOUT_MATCH "^2 128\n10.75 21 1 0\nA.tif B.tif\n0 0\n1 1\n\nA.tif C.tif\n0 0\n\n$"
   CHECK_FILE back/A__B.matches FILE_MATCH "# image1: A.tif 100 80\n# image2: B.tif 90 90\n# source-format: colmap-raw\n.*# keypoints: 2 2\n# columns: id1 x1 y1 id2 x2 y2\n1 10.25 20.5 7 11.75 21.125\n2 30 40 8 31.5 40.25\n$")
+# -o names the folder: a database file's name (X.db) would have become a folder of that name
+tpkit_tool_test(tp-convert.colmap-output-named-db
+  COMMAND "${_cin} && tp-convert --to colmap ab.m ac.m -o x.db"
+  EXPECT_FAIL STDERR_MATCH "^tp-convert: -o x.db: --to colmap writes a folder [(]database.db and the text form in it[)]" NO_FILE x.db)
 tpkit_tool_test(tp-convert.colmap-no-verified-pairs
   COMMAND "${_cin} && tp-convert --to colmap ab.m -o col && tp-convert --from colmap col/database.db -o back"
   EXPECT_FAIL STDERR_MATCH "col/database.db: holds no image pair with matches" NO_FILE back)
