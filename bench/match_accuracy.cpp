@@ -98,6 +98,8 @@ int main(int argc, char** argv) {
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
     int adaptive = -1, sit = -1, epic = -1;
     double stol = -1;
+    const char* usage =
+        "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       auto need = [&](int k) {
@@ -138,8 +140,8 @@ int main(int argc, char** argv) {
       else if (a == "--stage-iterations") need(1), sit = whole();
       else if (a == "--render8") need(2), r_in = argv[++i], r_out = argv[++i];
       else {
-        std::fprintf(stderr, "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n");
-        return 2;
+        std::fputs(usage, a == "--help" || a == "-h" ? stdout : stderr);
+        return a == "--help" || a == "-h" ? 0 : 2;
       }
     }
     if (!r_in.empty()) {

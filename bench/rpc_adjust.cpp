@@ -114,6 +114,22 @@ void synthetic_case(const char* name, int images, long tracks, int min_views, in
 }  // namespace
 
 int main(int argc, char** argv) {
+  const char* usage = "usage: bench_rpc_adjust [TRACKS IMAGE1 IMAGE2 ...]  (no arguments: the synthetic cases only)\n";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::fputs(usage, stdout);
+      return 0;
+    }
+    if (a.size() > 1 && a[0] == '-') {
+      std::fprintf(stderr, "bench_rpc_adjust: %s: no such option\n%s", a.c_str(), usage);
+      return 2;
+    }
+  }
+  if (argc == 2 || argc == 3) {  // tracks without two images: say so rather than run the synthetic cases alone
+    std::fprintf(stderr, "bench_rpc_adjust: real tracks need the tracks file and two images or more\n%s", usage);
+    return 2;
+  }
   synthetic_case("synthetic triplet (1 thread)", 3, 7000, 3, 3, 1);
   if (argc >= 4) {
     std::vector<std::string> paths(argv + 2, argv + argc);

@@ -16,8 +16,13 @@
 #include "tpkit/core/text_table.hpp"
 
 int main(int argc, char** argv) {
+  const char* usage = "usage: bench_rpc_truth TRUTH.tracks MODEL1 MODEL2 MODEL3 [GROUND DEM]\n";
+  if (argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::fputs(usage, stdout);
+    return 0;
+  }
   if (argc != 5 && argc != 7) {
-    std::fprintf(stderr, "usage: bench_rpc_truth TRUTH.tracks MODEL1 MODEL2 MODEL3 [GROUND DEM]\n");
+    std::fputs(usage, stderr);
     return 2;
   }
   const tpkit::Tracks t = tpkit::read_tracks(argv[1]);
