@@ -5,7 +5,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc 2>/dev/null || echo 2)
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+read -r -a cache_flags <<< "$(bash scripts/compiler-cache.sh)"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${cache_flags[@]}" >/dev/null
 targets=()
 for t in "$@"; do targets+=(--target "$t"); done
 cmake --build build -j"$jobs" "${targets[@]}"

@@ -10,7 +10,8 @@
 # /var/cache/tpkit-fresh), made again when older than $TPKIT_FRESH_MAX_AGE_DAYS (default 7) or when the
 # host's sources change. Downloaded .deb files are kept in the cache's archives/ folder between runs
 # (TPKIT_FRESH_APT_CACHE=0 turns that off): a download cache only, every package is still installed by
-# the project's own scripts in every run. Variables named TPKIT_* and CI are passed into the root.
+# the project's own scripts in every run; so is a compiler cache, $cache/ccache (TPKIT_FRESH_CCACHE=0
+# turns it off; see below). Variables named TPKIT_* and CI are passed into the root.
 # Run as root; installs mmdebstrap on the host when it is missing. Uncommitted changes are not seen.
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: $0 'COMMAND'" >&2; exit 2; }
@@ -49,6 +50,7 @@ cleanup() {
     sleep 0.2
     umount -R "$root/work/shared" 2>/dev/null || umount -lR "$root/work/shared" 2>/dev/null || true
     umount -R "$root/var/cache/apt/archives" 2>/dev/null || umount -lR "$root/var/cache/apt/archives" 2>/dev/null || true
+    umount -R "$root/var/cache/ccache" 2>/dev/null || umount -lR "$root/var/cache/ccache" 2>/dev/null || true
     umount -R "$root/dev" 2>/dev/null || umount -lR "$root/dev" 2>/dev/null || true
     umount -R "$root/sys" 2>/dev/null || umount -lR "$root/sys" 2>/dev/null || true
     umount -R "$root/proc" 2>/dev/null || umount -lR "$root/proc" 2>/dev/null || true
@@ -127,6 +129,19 @@ if [ "${TPKIT_FRESH_APT_CACHE:-1}" != 0 ]; then
   mount --bind "$cache/archives" "$root/var/cache/apt/archives"
 fi
 
+# a compiler cache shared by the roots, in $cache/ccache (TPKIT_FRESH_CCACHE=0 turns it off): the
+# build scripts compile through ccache when it is installed (scripts/compiler-cache.sh), so the demo
+# root's build takes the objects the test root's identical compile commands made, and a later run those
+# of the sources that did not change. A hit is the object the same compiler made from the same
+# preprocessed source and flags: it changes no result, and every root still installs and builds.
+ccache_env=()
+if [ "${TPKIT_FRESH_CCACHE:-1}" != 0 ]; then
+  mkdir -p "$cache/ccache" "$root/var/cache/ccache"
+  [ -f "$cache/ccache/ccache.conf" ] || printf 'max_size = 8G\n' > "$cache/ccache/ccache.conf"
+  mount --bind "$cache/ccache" "$root/var/cache/ccache"
+  ccache_env=(CCACHE_DIR=/var/cache/ccache)
+fi
+
 mkdir -p "$root/work/shared"
 mount --bind "$shared" "$root/work/shared"
 mount -o remount,bind,ro "$root/work/shared"
@@ -134,7 +149,7 @@ git clone --quiet --no-local "$repo" "$root/work/tpkit"
 git -C "$root/work/tpkit" checkout --quiet --detach "$head"
 say "clone: $(git -C "$root/work/tpkit" log -1 --format='%h %s' | cut -c1-90)"
 
-envs=(HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 TERM=dumb)
+envs=(HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 TERM=dumb "${ccache_env[@]}")
 while IFS='=' read -r name _; do
   case $name in TPKIT_FRESH_*) ;; TPKIT_*|CI) envs+=("$name=${!name}") ;; esac
 done < <(env)

@@ -8,6 +8,7 @@
 set -euo pipefail
 packages=(
   g++ cmake make pkg-config
+  ccache  # the build scripts compile through it: a rebuild (and CI's fresh roots, which share one) compiles only what changed
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libtiff-dev libgeographiclib-dev
   libcli11-dev libceres-dev libnanoflann-dev libsqlite3-dev
   nlohmann-json3-dev  # tp-convert reads OpenMVG's sfm_data.json with a JSON parser (a regex scan crashed on long objects)

@@ -14,9 +14,10 @@ stamp() { echo "== $1 ($(( $(date +%s) - start )) s)"; }
 stamp "Debian packages (scripts/install-deps.sh --test)"
 bash scripts/install-deps.sh --test
 jobs=$(nproc 2>/dev/null || echo 2)
+read -r -a cache_flags <<< "$(bash scripts/compiler-cache.sh)"
 
 stamp "Release build"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${cache_flags[@]}" >/dev/null
 cmake --build build -j"$jobs"
 
 if [ "${TPKIT_SKIP_ASAN:-0}" != 1 ]; then
@@ -24,7 +25,7 @@ if [ "${TPKIT_SKIP_ASAN:-0}" != 1 ]; then
   # -O1 -g1 (line tables only): the sanitizer build was half of CI's time at -O2 -g; a heavy source file
   # (rpc_adjust.cpp, Ceres) compiles in 22 s instead of 59 s, and the reports still name file and line
   cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
-    -DTPKIT_SANITIZE=ON -DTPKIT_BENCH=OFF >/dev/null
+    -DTPKIT_SANITIZE=ON -DTPKIT_BENCH=OFF "${cache_flags[@]}" >/dev/null
   cmake --build build-asan -j"$jobs"
   stamp "sanitizer tests"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
@@ -36,7 +37,7 @@ fi
 fuzz_seconds=${TPKIT_FUZZ_SECONDS:-20}
 if [ "$fuzz_seconds" != 0 ]; then
   stamp "libFuzzer targets of the readers"
-  cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DTPKIT_FUZZ=ON -DTPKIT_TESTS=OFF -DTPKIT_BENCH=OFF >/dev/null
+  cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DTPKIT_FUZZ=ON -DTPKIT_TESTS=OFF -DTPKIT_BENCH=OFF "${cache_flags[@]}" >/dev/null
   cmake --build build-fuzz -j"$jobs" --target fuzz_readers
   for kind in matches tracks points trifocal homography cameras; do
     corpus=$(mktemp -d)
@@ -49,4 +50,5 @@ fi
 
 stamp "Release tests (all)"
 ctest --test-dir build -j"$jobs" --output-on-failure --timeout 1200
+command -v ccache >/dev/null && echo "compiler cache: $(ccache --print-stats 2>/dev/null | awk '$1 == "direct_cache_hit" || $1 == "preprocessed_cache_hit" { h += $2 } $1 == "cache_miss" { m = $2 } END { printf "%d hits, %d misses", h, m }')"
 stamp "done"
