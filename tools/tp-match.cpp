@@ -257,9 +257,7 @@ int main(int argc, char** argv) {
               tpkit::warn("no verified matches between " + what + " (" + tpkit::no_match_reason(st, o->p) +
                           "): writing a file with zero records");
             if (st.rpc_fallback)
-              tpkit::warn("the RPC epipolar curves of " + what + " held no geometry within --rpc-margin " +
-                          tpkit::format_number(o->p.rpc_guide.margin) + " px; the images' own coarse stage found one: "
-                          "the models disagree with the images by more than that (rpc-adjust corrects them)");
+              tpkit::warn("the RPC epipolar curves of " + what + " " + tpkit::rpc_fallback_reason(st, o->p));
             if (st.no_parallax)
               tpkit::warn(what + " have no parallax (the same image, or views without a base): matches verified by a "
                           "2-D affine map; they carry no 3-D information");

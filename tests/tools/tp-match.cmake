@@ -90,6 +90,11 @@ tpkit_tool_test(tp-match.range-message-short
 tpkit_tool_test(tp-match.same-image-twice
   COMMAND "tp-synth --out s --size 384 --seed 4 --relief 10 --points 10 >/dev/null 2>&1 && tp-match s/view1.tif s/view1.tif -q -o same.m && grep -q '^# verified: [0-9]* (no parallax: 2-D affine map RANSAC' same.m && awk '!/^#/ { n++ @SEMI@ d = ($2 - $5) ^ 2 + ($3 - $6) ^ 2 @SEMI@ if (d > 1e-4) bad++ } END { print n, \"matches\" @SEMI@ exit !(n > 1000 && bad == 0) }' same.m"
   STDOUT_MATCH "^[0-9]+ matches" STDERR_MATCH "have no parallax")
+# a --height-range that misses the terrain is named as the cause, not the overlap (nor the models alone)
+tpkit_tool_test(tp-match.height-range-missing-the-terrain
+  COMMAND "tp-match ${_pl}/img_01.tif ${_pl}/img_02.tif --height-range 5000 5100 --rpc-guided -q -o none.m && tp-match ${_pl}/img_01.tif ${_pl}/img_02.tif --height-range 5000 5100 -q -o some.m"
+  STDERR_MATCH "no verified matches between [^\n]* [(]the RPC epipolar curves over the heights 5000..5100 m [(]--height-range[)] held no geometry[^\n]*\n[^\n]*curves of [^\n]* over the heights 5000..5100 m [(]--height-range[)] held no geometry within --rpc-margin 10 px; the images' own coarse stage found one: the height range misses the terrain"
+  CHECK_FILE none.m FILE_MATCH "# columns: ")
 # RPC-guided search (rpc_guided_matching.hpp): on the Pléiades pair the models in tag 50844 give the
 # regions, and the matches are the guided search's to a fraction of a percent; --no-rpc restores the
 # coarse stage; a crop has no model of its own, --rpc gives it one (the crop at the origin keeps the

@@ -75,3 +75,7 @@ tpkit_tool_test(tp-synth.bad-origin
 tpkit_tool_test(tp-synth.bad-rpc-bias
   COMMAND "tp-synth --out out --rpc-bias 4:1,2"
   EXPECT_FAIL STDERR_MATCH "^tp-synth: --rpc-bias: the view must be 1, 2 or 3" NO_FILE out)
+# interrupted before it commits, a run leaves no folder it made (an empty scene folder stayed)
+tpkit_tool_test(tp-synth.interrupted-leaves-no-folder
+  COMMAND "(tp-synth --out new/scene --size 3000 --relief 10 --points 20 & pid=$! @SEMI@ sleep 2 @SEMI@ kill -TERM $pid @SEMI@ wait $pid @SEMI@ echo killed $?) && test ! -e new && echo nothing-left"
+  STDOUT_MATCH "killed 143\nnothing-left")

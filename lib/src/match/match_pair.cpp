@@ -386,4 +386,14 @@ std::string no_match_reason(const PairMatchStats& st, const PairMatchOptions& o)
   return "do the images overlap?";
 }
 
+std::string rpc_fallback_reason(const PairMatchStats& st, const PairMatchOptions& o) {
+  const std::string heights = format_number(st.rpc.h_lo) + ".." + format_number(st.rpc.h_hi) + " m";
+  return "over the heights " + heights + (o.rpc_guide.height_given ? " (--height-range)" : " (the models' range)") +
+         " held no geometry within --rpc-margin " + format_number(o.rpc_guide.margin) +
+         " px; the images' own coarse stage found one: " +
+         (o.rpc_guide.height_given ? "the height range misses the terrain, or the models disagree with the images by more than the margin"
+                                   : "the models disagree with the images by more than that") +
+         " (rpc-adjust corrects models)";
+}
+
 }  // namespace tpkit

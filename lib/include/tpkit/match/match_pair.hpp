@@ -83,6 +83,11 @@ Matches match_pair(const ImageSource& a, const ImageSource& b, const PairMatchOp
 // gave nothing to the keypoints of image 1, the model of image 1; else the overlap.
 std::string no_match_reason(const PairMatchStats& st, const PairMatchOptions& o);
 
+// Why the RPC curves gave way to the images' own coarse stage (stats.rpc_fallback), in words that follow
+// "the RPC epipolar curves of A and B": the heights searched (a --height-range that misses the terrain)
+// or the models' bias beyond the margin.
+std::string rpc_fallback_reason(const PairMatchStats& st, const PairMatchOptions& o);
+
 // The same from keypoints already detected (detect_sift_cached with o.sift) of a and b; the pipeline
 // from step 2 on. The descriptors are released once matched (shallow copies keep the caller's).
 Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
