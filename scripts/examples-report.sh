@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Collects the tables and figures of Makefile.examples into one Markdown page (stdout).
-#   examples-report.sh OUT NAME "IMAGES" "NPOINTS" "METHODS"
+#   examples-report.sh OUT NAME "IMAGES" "NPOINTS" "METHODS" TERRAIN
+# (TERRAIN: the folder of the plain and mountain scenes, which every report shares)
 set -euo pipefail
-out=$1 name=$2 images=$3 npoints=$4 methods=$5
-rel() { echo "${1#"$out"/}"; }
+[ $# -eq 6 ] || { echo "usage: $0 OUT NAME IMAGES NPOINTS METHODS TERRAIN" >&2; exit 2; }
+out=$1 name=$2 images=$3 npoints=$4 methods=$5 terrain=$6
+rel() { realpath -m --relative-to="$out" "$1"; }
 count() { grep -vc '^#' "$1" 2>/dev/null || echo 0; }
 echo "# tpkit experiments: $name"
 echo
@@ -29,7 +31,7 @@ for n in $npoints local global; do
   done
 done
 for s in plain mountain; do
-  f=$out/$s/fit-100-ml.svg
+  f=$terrain/$s/fit-100-ml.svg
   [ -f "$f" ] && echo "- $s terrain, 100 points, ml: ![]($(rel "$f"))"
 done
 echo
