@@ -90,6 +90,10 @@ tpkit_tool_test(tp-match.range-message-short
 tpkit_tool_test(tp-match.same-image-twice
   COMMAND "tp-synth --out s --size 384 --seed 4 --relief 10 --points 10 >/dev/null 2>&1 && tp-match s/view1.tif s/view1.tif -q -o same.m && grep -q '^# verified: [0-9]* (no parallax: 2-D affine map RANSAC' same.m && awk '!/^#/ { n++ @SEMI@ d = ($2 - $5) ^ 2 + ($3 - $6) ^ 2 @SEMI@ if (d > 1e-4) bad++ } END { print n, \"matches\" @SEMI@ exit !(n > 1000 && bad == 0) }' same.m"
   STDOUT_MATCH "^[0-9]+ matches" STDERR_MATCH "have no parallax")
+# an option of two values takes two: the images after it are the images (CLI11 took all four and failed)
+tpkit_tool_test(tp-match.height-range-before-the-images
+  COMMAND "tp-match --height-range 0 100 ${_pl}/img_01.tif ${_pl}/img_02.tif -q -o hr.m"
+  CHECK_FILE hr.m FILE_MATCH "rpc-guided: epipolar curves over 0..100 m")
 # a --height-range that misses the terrain is named as the cause, not the overlap (nor the models alone)
 tpkit_tool_test(tp-match.height-range-missing-the-terrain
   COMMAND "tp-match ${_pl}/img_01.tif ${_pl}/img_02.tif --height-range 5000 5100 --rpc-guided -q -o none.m && tp-match ${_pl}/img_01.tif ${_pl}/img_02.tif --height-range 5000 5100 -q -o some.m"

@@ -268,6 +268,16 @@ std::string undocumented_options(const CLI::App& app, const std::string& page) {
   return missing;
 }
 
+// Every option that takes a fixed number of values (--height-range LO HI, --region X0 Y0 W H, ...) takes
+// exactly that many: CLI11 lets a vector option go on taking the arguments that follow, so that
+// `--height-range 0 100 IMG1 IMG2` swallowed the images and failed with "At Most 2 required but received 4".
+void fix_value_counts(CLI::App& app) {
+  for (CLI::Option* opt : app.get_options()) {
+    const int lo = opt->get_items_expected_min(), hi = opt->get_items_expected_max();
+    if (lo == hi && hi > 1) opt->allow_extra_args(false);
+  }
+}
+
 // Checks added to every option of a number type, whatever the tool declared: floating-point options
 // take finite numbers only (NaN passes every `x < limit` check and would be written into headers; Inf is
 // never a meaningful size, threshold or level); unsigned ones (seeds, counts) refuse a negative value,
@@ -306,6 +316,7 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
     app.set_version_flag("--version", tool + " (tpkit) " + version_full(), "print the version and exit");
     auto body = setup(app);
     guard_number_options(app);
+    fix_value_counts(app);
     try {
       app.parse(argc, argv);
     } catch (const CLI::CallForHelp&) {
