@@ -112,4 +112,8 @@ TEST(AspMatch, BadInput) {
   fails_with("nounderscores.match", good, "no '__'");
   fails_with("t-a__b.txt", "1 2 0.5 3 4\n", "six numbers");
   fails_with("u-a__b.txt", "1 2 0 3 4 1\n", "must be finite and > 0");
+  // non-finite values (issue 23: a NaN scale went into the sigma column): the first record's scale at byte 36
+  std::string nan_scale = good;
+  nan_scale.replace(36, 4, std::string("\0\0\xc0\x7f", 4));
+  fails_with("v-a__b.match", nan_scale, "holds a non-finite scale");
 }

@@ -207,3 +207,41 @@ TEST(ColmapDatabase, BadDatabases) {
   EXPECT_THROW(write_colmap_database(dir + "/nosize.db", collect_peer_keypoints({nosize})), InputError);
   EXPECT_FALSE(std::filesystem::exists(dir + "/nosize.db"));
 }
+
+// What an outside hostile-input campaign fed the reader (issue 23): each database is a good one with one
+// field forged. Before: a rows x cols product that overflowed to the blob's size read past it (SIGSEGV);
+// NaN keypoints, names that break a header, a pair of an image with itself, a pair id with the larger
+// image first and tpkit ids that join unrelated points were all taken.
+TEST(ColmapDatabase, HostileDatabases) {
+  const std::string dir = tpkit_test::scratch_dir("colmap-hostile");
+  const PeerKeypoints good = collect_peer_keypoints({tpkit_test::sample_matches("A", "B", 10, 1)});
+  auto forged = [&](const std::string& name, const std::string& sql) {
+    const std::string path = dir + "/" + name + ".db";
+    write_colmap_database(path, good);
+    Sql s(path);
+    char* err = nullptr;
+    EXPECT_EQ(sqlite3_exec(s.db, sql.c_str(), nullptr, nullptr, &err), SQLITE_OK) << (err ? err : "") << ": " << sql;
+    sqlite3_free(err);
+    return path;
+  };
+  auto fails_with = [&](const std::string& path, const std::string& what) {
+    tpkit_test::expect_input_error([&] { read_colmap_database(path, true); }, path, what);
+  };
+  fails_with(forged("overflow", "UPDATE keypoints SET rows = 4611686018427387905, cols = 4, data = zeroblob(16) WHERE image_id = 1"),
+             "the blob holds 16 bytes, rows x cols say 4611686018427387905 x 4 values");
+  fails_with(forged("negative", "UPDATE keypoints SET rows = -1 WHERE image_id = 1"), "negative rows or cols");
+  fails_with(forged("nan", "UPDATE keypoints SET data = X'0000C07F' || substr(data, 5) WHERE image_id = 1"),
+             "keypoints of image_id 1: keypoint 0 is not finite");
+  fails_with(forged("inf", "UPDATE keypoints SET data = substr(data, 1, 4) || X'0000807F' || substr(data, 9) WHERE image_id = 2"),
+             "keypoints of image_id 2: keypoint 0 is not finite");
+  fails_with(forged("newline", "UPDATE images SET name = 'A' || char(10) || '# image2: x' WHERE image_id = 1"),
+             "holds a line break or another control character");
+  fails_with(forged("empty-name", "UPDATE images SET name = '' WHERE image_id = 2"), "names an image with an empty name");
+  fails_with(forged("self", "UPDATE two_view_geometries SET pair_id = 2147483647 + 1"), "pairs image_id 1 with itself");
+  fails_with(forged("larger-first", "UPDATE two_view_geometries SET pair_id = 2 * 2147483647 + 1"),
+             "is not a COLMAP pair id: it decodes to image_id 2 then 1");
+  fails_with(forged("ids-equal", "UPDATE tpkit_keypoint_ids SET data = zeroblob(length(data))"),
+             "tpkit_keypoint_ids give one id to two positions in both images");
+  // the good one still reads
+  EXPECT_EQ(read_colmap_database(forged("good", "SELECT 1"), true).at(0).size(), 10u);
+}

@@ -118,5 +118,9 @@ TEST(MicmacHomol, BadInput) {
   fails_with("B4.tif.dat", dim, "dim is 3");
   fails_with("B5.tif.txt", "1 2 3\n", "x1 y1 x2 y2");
   fails_with("B6.tif.txt", "1 2 3 4 w\n", "weight is not a number");
+  // non-finite values (issue 23: they went into the matches file): the weight at byte 12, x1 at byte 20
+  const std::string nan = std::string("\0\0\0\0\0\0\xf8\x7f", 8), inf = std::string("\0\0\0\0\0\0\xf0\x7f", 8);
+  fails_with("B7.tif.dat", good.substr(0, 12) + nan + good.substr(20), "record 0 (byte 8) holds a non-finite weight");
+  fails_with("B8.tif.dat", good.substr(0, 20) + inf + good.substr(28), "record 0 (byte 8) holds a non-finite position");
   EXPECT_THROW(read_micmac_homol_folder(dir + "/nothing"), InputError);
 }

@@ -86,3 +86,33 @@ TEST(OpenmvgMatches, BadInput) {
   fails_with("0 1 2\n", "two view ids");
   fails_with("0 1\nx\n", "not an index");
 }
+
+// sfm_data.json read as JSON (issue 23: a std::regex scan recursed per character and crashed on a view
+// whose "data" object held 300 000 characters); one id names one view.
+TEST(OpenmvgMatches, SfmDataAsJson) {
+  const std::string dir = tpkit_test::scratch_dir("openmvg-json");
+  std::ofstream(dir + "/a.feat") << "1 2 1 0\n";
+  std::ofstream(dir + "/b.feat") << "3 4 1 0\n";
+  std::ofstream(dir + "/matches.f.txt") << "0 1\n1\n0 0\n";
+  auto view = [](int id, const std::string& name, const std::string& extra) {
+    return "{\"key\": " + std::to_string(id) + ", \"value\": {\"polymorphic_id\": 1073741824, \"ptr_wrapper\": {\"id\": " +
+           std::to_string(2147483649 + id) + ", \"data\": {" + extra + "\"local_path\": \"\", \"filename\": \"" + name +
+           "\", \"width\": 100, \"height\": 80, \"id_view\": " + std::to_string(id) + ", \"id_intrinsic\": 0, \"id_pose\": " +
+           std::to_string(id) + "}}}}";
+  };
+  auto sfm = [&](const std::string& views) {
+    std::ofstream(dir + "/sfm_data.json") << "{\"sfm_data_version\": \"0.3\", \"root_path\": \"\", \"views\": [" << views
+                                          << "], \"intrinsics\": [], \"extrinsics\": []}\n";
+  };
+  const std::string long_field = "\"note\": \"" + std::string(300000, 'x') + "\", ";
+  sfm(view(0, "a.tif", long_field) + ", " + view(1, "b.tif", ""));
+  const auto ms = read_openmvg(dir + "/matches.f.txt");
+  ASSERT_EQ(ms.size(), 1u);
+  EXPECT_EQ(ms[0].image1.path, "a.tif");
+  EXPECT_EQ(ms[0].image2.width, 100);
+  EXPECT_DOUBLE_EQ(ms[0].xy(0, 2), 3);
+  sfm(view(0, "a.tif", "") + ", " + view(0, "b.tif", ""));
+  tpkit_test::expect_input_error([&] { read_openmvg(dir + "/matches.f.txt"); }, dir + "/sfm_data.json", "view id 0 is also that of a.tif");
+  sfm(view(0, "a.tif", "") + ", {\"key\": 1");
+  tpkit_test::expect_input_error([&] { read_openmvg(dir + "/matches.f.txt"); }, dir + "/sfm_data.json", "not valid JSON");
+}
