@@ -255,8 +255,9 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--section") && i + 1 < argc) section = argv[++i];
     else if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|scale|all] [--max-n N] [--family K] [--n N [--first T]] [--paper-cost] [--verbose]\n");
-      return 2;
+      const bool help = !std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h");
+      std::fprintf(help ? stdout : stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|scale|all] [--max-n N] [--family K] [--n N [--first T]] [--paper-cost] [--verbose]\n");
+      return help ? 0 : 2;
     }
   }
   if (first < 0 || (first > 0 && (only_n <= 0 || section != "unrelated"))) {

@@ -13,7 +13,7 @@ packages=(
   libcli11-dev libceres-dev libnanoflann-dev libsqlite3-dev
   nlohmann-json3-dev  # tp-convert reads OpenMVG's sfm_data.json with a JSON parser (a regex scan crashed on long objects)
   libgtest-dev libgmock-dev libbenchmark-dev
-  dpkg-dev  # dpkg-shlibdeps: the Debian package's runtime dependencies (scripts/package.sh)
+  dpkg-dev file  # dpkg-shlibdeps and file (CPack calls it to find the binaries): the Debian package's runtime dependencies (scripts/package.sh)
 )
 if [ "${1:-}" = "--test" ]; then
   # the sanitizer build and the fuzzers of the test suite use clang and its runtimes
