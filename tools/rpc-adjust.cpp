@@ -31,18 +31,10 @@ struct Opts {
   bool write_tiff = false;
 };
 
-std::string num(double v, int digits = 4) {
-  std::ostringstream os;
-  os.precision(digits);
-  os << v;
-  return os.str();
-}
 
 std::vector<AdjustImage> load_images(const Opts& o, std::vector<RpcSource>& sources) {
   auto overrides = parse_rpc_overrides(o.rpc);
-  for (const auto& kv : overrides)
-    if (std::find(o.images.begin(), o.images.end(), kv.first) == o.images.end())
-      throw UsageError("--rpc " + kv.first + "=...: not one of the images");
+  check_rpc_overrides(overrides, o.images);
   std::vector<AdjustImage> out;
   std::set<std::string> stems;
   for (const auto& path : o.images) {
@@ -88,7 +80,7 @@ void write_points(const std::string& path, const Opts& o, const std::vector<Adju
   write_header(os, "ground", 1, refs, meta, cols);
   for (size_t t = 0; t < tracks.size(); ++t) {
     if (!r.initial_ok[t]) continue;
-    Eigen::Vector3d c = conv(r.ground[t]);
+    Eigen::Vector3d c = conv(r.ground[t], tracks[t].id);
     write_record(os, {static_cast<double>(tracks[t].id), c[0], c[1], c[2], r.sigma_h[t],
                       static_cast<double>(tracks[t].views.size()), r.rms_after[t], static_cast<double>(r.flagged[t])});
   }
@@ -145,7 +137,11 @@ std::vector<RpcFit> write_models(const Opts& o, const std::vector<AdjustImage>& 
   h_hi += margin;
   std::vector<RpcFit> fits(images.size());
   parallel_for(images.size(), o.threads, [&](size_t i) {
-    fits[i] = fold_bias(images[i].model, r.bias[i], images[i].width, images[i].height, h_lo, h_hi);
+    try {
+      fits[i] = fold_bias(images[i].model, r.bias[i], images[i].width, images[i].height, h_lo, h_hi);
+    } catch (const NumericalError& e) {
+      throw NumericalError(images[i].path + ": the adjusted model cannot be fitted: " + e.what());
+    }
   });
   for (size_t i = 0; i < images.size(); ++i) {
     std::string stem = (fs::path(o.out) / fs::path(images[i].path).stem()).string();
@@ -188,9 +184,14 @@ int run(const Opts& o) {
   ao.progress = isatty(2);
   if (!o.height_prior.empty() && !o.dem.empty()) throw UsageError("--height-prior and --dem exclude each other");
   if (!o.height_prior.empty()) ao.height = parse_height_prior(o.height_prior);
-  if (!o.dem.empty()) ao.height = dem_height_prior(read_geotiff_grid(o.dem), o.dem_sigma);
+  if (!o.dem.empty() && o.dem_sigma < kMinHeightSigma)
+    throw UsageError("--dem-sigma " + format_figure(o.dem_sigma) + ": below " + format_figure(kMinHeightSigma) + " m (no DEM is that good; the cost would overflow)");
   std::vector<RpcSource> sources;
   std::vector<AdjustImage> images = load_images(o, sources);
+  if (!o.dem.empty()) {
+    const GeoBounds scene = models_bounds(images);
+    ao.height = dem_height_prior(read_geotiff_grid(o.dem, &scene), o.dem_sigma);
+  }
   const std::vector<AdjustTrack> tracks = gather_tracks(o.tracks, o.images);
   const std::vector<AdjustTrack> check = gather_tracks(o.check, o.images);
 
@@ -219,16 +220,16 @@ int run(const Opts& o) {
   long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
   long used = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
   std::cerr << "rpc-adjust: " << used << " tracks, " << r.obs_image.size() << " observations, model " << o.model
-            << ": rms " << num(residual_rms(r, false)) << " px before, " << num(residual_rms(r, true)) << " px after";
-  if (check_n > 0) std::cerr << ", held-out " << num(check_rms) << " px (" << check_n << " observations)";
+            << ": rms " << format_figure(residual_rms(r, false)) << " px before, " << format_figure(residual_rms(r, true)) << " px after";
+  if (check_n > 0) std::cerr << ", held-out " << format_figure(check_rms) << " px (" << check_n << " observations)";
   std::cerr << "; " << r.iterations << " iterations\n";
   double worst_refit = 0;
   for (const auto& f : fits) worst_refit = std::max(worst_refit, f.max_px);
-  std::cerr << "rpc-adjust: adjusted models refitted to the biased ones within " << num(worst_refit, 3) << " px\n";
+  std::cerr << "rpc-adjust: adjusted models refitted to the biased ones within " << format_figure(worst_refit, 3) << " px\n";
   if (used < static_cast<long>(tracks.size()))
     warn(std::to_string(tracks.size() - used) + " tracks could not be intersected with the delivered models (left out)");
   if (flagged > 0)
-    warn(std::to_string(flagged) + " tracks keep an RMS residual above --flag " + num(o.flag) +
+    warn(std::to_string(flagged) + " tracks keep an RMS residual above --flag " + format_figure(o.flag) +
          " px after the robust fit (flagged in ground.points and rpc.residuals)");
   return 0;
 }

@@ -23,6 +23,7 @@ struct Opts {
   std::vector<std::string> images, tracks, rpc;
   std::string crs = "geographic", output = "-";
   int threads = 1;
+  double flag = 2;
 };
 
 int run(const Opts& o) {
@@ -34,33 +35,21 @@ int run(const Opts& o) {
   inputs.insert(inputs.end(), o.tracks.begin(), o.tracks.end());
   check_outputs({{"-o", o.output}}, inputs);
   auto overrides = parse_rpc_overrides(o.rpc);
+  check_rpc_overrides(overrides, o.images);
   std::vector<RpcSource> src;
   std::vector<ImageRef> refs;
+  std::vector<AdjustImage> images;
   for (const auto& im : o.images) {
     ImageInfo info = image_info(im);
     refs.push_back({im, info.width, info.height});
     src.push_back(load_image_rpc(im, overrides));
+    images.push_back({im, info.width, info.height, src.back().model, false});
   }
   const auto tracks = gather_tracks(o.tracks, o.images);
   if (tracks.empty()) throw InputError(o.tracks[0], 0, "no tracks");
-  std::vector<RpcIntersection> x(tracks.size());
-  parallel_for(tracks.size(), o.threads, [&](size_t t) {
-    std::vector<RpcObservation> v;
-    for (const auto& [i, xy] : tracks[t].views) v.push_back({&src[i].model, nullptr, xy});
-    x[t] = intersect_rpc(v);
-  });
-  double sum = 0;
-  long n = 0, failed = 0;
-  for (size_t t = 0; t < tracks.size(); ++t) {
-    if (!x[t].ok) {
-      ++failed;
-      continue;
-    }
-    sum += x[t].rms_px * x[t].rms_px * tracks[t].views.size();
-    n += static_cast<long>(tracks[t].views.size());
-  }
-  if (n == 0) throw NumericalError("no track could be intersected with the images' RPCs (do they overlap?)");
-  const double sigma0 = std::sqrt(sum / (2.0 * n));
+  check_tracks(images, tracks);
+  const GroundSolution g = ground_points(images, tracks, {o.flag, o.threads});
+  const double sigma0 = g.sigma0;
   GroundConverter conv(crs, src[0].model.lon_off, src[0].model.lat_off);
   Meta meta;
   meta_set(meta, "crs", conv.description());
@@ -70,22 +59,32 @@ int run(const Opts& o) {
   meta_set(meta, "rms_px", "RMS over the track's views of the residual, projected minus observed (pixels)");
   meta_set(meta, "sigma_h", "standard deviation of h (m) for the image noise sigma0 = " + format_number(sigma0) +
                                 " px (per coordinate, from all residuals)");
+  meta_set(meta, "flagged", "bits: 1 rms_px above --flag " + format_number(o.flag) +
+                                " px, 2 outside a model's validity box (normalized coordinate beyond 1.1)");
   std::vector<std::string> cols = {"track"};
   for (const auto& c : conv.columns()) cols.push_back(c);
-  cols.insert(cols.end(), {"sigma_h", "views", "rms_px"});
+  cols.insert(cols.end(), {"sigma_h", "views", "rms_px", "flagged"});
   std::ostringstream os;
   write_header(os, "ground", 1, refs, meta, cols);
   for (size_t t = 0; t < tracks.size(); ++t) {
-    if (!x[t].ok) continue;
-    Eigen::Vector3d c = conv(x[t].llh);
-    write_record(os, {static_cast<double>(tracks[t].id), c[0], c[1], c[2], x[t].sigma_h1 * sigma0,
-                      static_cast<double>(tracks[t].views.size()), x[t].rms_px});
+    const RpcIntersection& x = g.points[t];
+    if (!x.ok) continue;
+    Eigen::Vector3d c = conv(x.llh, tracks[t].id);
+    write_record(os, {static_cast<double>(tracks[t].id), c[0], c[1], c[2], x.sigma_h1 * sigma0,
+                      static_cast<double>(tracks[t].views.size()), x.rms_px, static_cast<double>(g.flags[t])});
   }
-  os << "# points: " << tracks.size() - failed << '\n';
-  os << "# rms_px: " << format_number(std::sqrt(sum / n)) << '\n';
+  os << "# points: " << g.intersected << '\n';
+  os << "# rms_px: " << format_number(g.rms_px) << '\n';
+  os << "# flagged_residual: " << g.residual_flagged << '\n';
+  os << "# flagged_outside_box: " << g.outside_box << '\n';
   write_file_atomic(o.output, os.str());
-  std::cerr << "tp-ground: " << tracks.size() - failed << " ground points, residual rms " << std::sqrt(sum / n) << " px\n";
+  std::cerr << "tp-ground: " << g.intersected << " ground points, residual rms " << g.rms_px << " px\n";
+  const long failed = static_cast<long>(tracks.size()) - g.intersected;
   if (failed) warn(std::to_string(failed) + " tracks could not be intersected (left out)");
+  if (g.residual_flagged)
+    warn(std::to_string(g.residual_flagged) + " tracks have an RMS residual above --flag " + format_number(o.flag) + " px (flagged 1)");
+  if (g.outside_box)
+    warn(std::to_string(g.outside_box) + " points lie outside the models' validity box (flagged 2): their coordinates are extrapolated");
   return 0;
 }
 }  // namespace
@@ -100,6 +99,8 @@ int main(int argc, char** argv) {
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--crs", o->crs, "output coordinates: geographic, utm or ecef");
         app.add_option("--threads", o->threads, "threads");
+        app.add_option("--flag", o->flag, "flag tracks whose RMS residual exceeds this (px); most above it: refused")
+            ->check(Positive);
         app.add_option("-o,--output", o->output, "ground file, - for stdout");
         return [o]() { return run(*o); };
       },

@@ -50,9 +50,7 @@ void load_rpcs(Opts& o) {
   o.rpc_of.assign(o.images.size(), nullptr);
   if (o.no_rpc || o.global) return;
   const auto overrides = tpkit::parse_rpc_overrides(o.rpc_files);
-  for (const auto& kv : overrides)
-    if (std::find(o.images.begin(), o.images.end(), kv.first) == o.images.end())
-      throw tpkit::UsageError("--rpc " + kv.first + "=" + kv.second + ": " + kv.first + " is not one of the images");
+  tpkit::check_rpc_overrides(overrides, o.images);
   o.rpc.reserve(o.images.size());
   for (size_t k = 0; k < o.images.size(); ++k) {
     if (o.rpc_guided) {

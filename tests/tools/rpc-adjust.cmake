@@ -24,3 +24,23 @@ tpkit_tool_test(rpc-adjust.bad-model
 tpkit_tool_test(rpc-adjust.held-out
   COMMAND "${synth_biased} && tp-sample --help >/dev/null && (grep '^#' syn/truth.tracks @SEMI@ grep -v '^#' syn/truth.tracks | awk 'NR % 2 == 1') > fit.tracks && (grep '^#' syn/truth.tracks @SEMI@ grep -v '^#' syn/truth.tracks | awk 'NR % 2 == 0') > check.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks fit.tracks --check check.tracks --fixed syn/view1.tif -o adj"
   STDERR_MATCH "held-out [0-9.e-]+ px \\(600 observations\\)")
+# A result is written only when the solution is sound (issue 23): another image's model leaves most tracks
+# above --flag and fails with the figures; a header naming one image twice, a view off its image (1e300
+# made the cost infinite and Ceres stop at once, biases 0), sigmas below a millimetre and a DEM off the
+# scene are refused; nothing is left in -o. More in the unit test rpc.RpcTrust.
+tpkit_tool_test(rpc-adjust.another-images-model
+  COMMAND "${synth_biased} && ${adjust} --rpc syn/view2.tif=syn/view3_rpc.txt -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: [0-9]+ of 400 tracks keep an RMS above 1 px after the fit \\(rms [0-9.]+ px before, [0-9.]+ px after, [0-9]+ iterations\\)" NO_FILE adj)
+tpkit_tool_test(rpc-adjust.one-image-twice
+  COMMAND "${synth_biased} && sed 's/^# image2: view2.tif/# image2: view1.tif/' syn/truth.tracks > syn/twice.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/twice.tracks -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/twice.tracks: image1 and image2 are both syn/view1.tif: a track views each image once" NO_FILE adj)
+tpkit_tool_test(rpc-adjust.view-off-the-image
+  COMMAND "${synth_biased} && awk '!/^#/ && ++n == 3 { $4 = 1e300 } { print }' syn/truth.tracks > syn/off.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/off.tracks -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/off.tracks:[0-9]+: track [0-9]+: view 2 at \\(1e\\+300, " NO_FILE adj)
+tpkit_tool_test(rpc-adjust.sigmas-below-a-millimetre
+  COMMAND "${synth_biased} && (${adjust} --height-prior 200+-1e-300 -o adj @SEMI@ echo \"rc \$?\") && ${adjust} --dem syn/truth.dem.tif --dem-sigma 1e-300 -o adj"
+  EXPECT_FAIL STDOUT_MATCH "^rc 2\n" STDERR_MATCH "--height-prior: S = 1e-300 m is below 0.001 m.*\n.*--dem-sigma 1e-300: below 0.001 m" NO_FILE adj)
+tpkit_tool_test(rpc-adjust.threads-under-address-limit
+  COMMAND "${synth_biased} && (ulimit -v 4000000 && ${adjust} --threads 1024 -o b 2> err) && cat err >&2 && ! grep -E 'WARNING|preprocessor' err"
+  STDERR_MATCH "rpc-adjust: warning: the system refused a worker thread .*\nrpc-adjust: 400 tracks, 1200 observations, model affine: rms 8.207 px before, 0.000[0-9]+ px after"
+  CHECK_FILE b/rpc.bias FILE_MATCH "# tpkit rpc-bias" LABELS rlimit)

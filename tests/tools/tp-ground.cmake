@@ -3,7 +3,7 @@ tpkit_tool_test(tp-ground.truth-heights
   COMMAND "tp-synth -o syn --size 512 --points 300 && tp-ground syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks -o g.points && paste <(grep -v '^#' syn/truth.tracks) <(grep -v '^#' g.points) | awk '{ d = $13 - $17 @SEMI@ s += d * d @SEMI@ e = ($11 - $15) * 81000 @SEMI@ t += e * e @SEMI@ n++ } END { print (sqrt(s / n) < 0.01 && sqrt(t / n) < 0.01 ? \"ground ok\" : \"ground off\"), sqrt(s / n), sqrt(t / n) }'"
   STDOUT_MATCH "^ground ok "
   CHECK_FILE g.points
-  FILE_MATCH "^# tpkit ground 1\n.*# crs: EPSG:4979 .*# model1: syn/view1.tif \\(tiff\\)\n.*# columns: track lon lat h sigma_h views rms_px\n")
+  FILE_MATCH "^# tpkit ground 1\n.*# crs: EPSG:4979 .*# model1: syn/view1.tif \\(tiff\\)\n.*# columns: track lon lat h sigma_h views rms_px flagged\n.*# flagged_residual: 0\n# flagged_outside_box: 0\n")
 tpkit_tool_test(tp-ground.ecef
   COMMAND "tp-synth -o syn --size 256 --relief 20 --points 50 && tp-ground syn/view1.tif syn/view2.tif --tracks syn/truth.tracks --crs ecef -o g.points"
   EXPECT_FAIL STDERR_MATCH "tp-ground: syn/truth.tracks: image3 'view3.tif' is not one of the images given")
@@ -11,7 +11,30 @@ tpkit_tool_test(tp-ground.ecef-coordinates
   COMMAND "tp-synth -o syn --size 256 --relief 20 --points 50 && tp-ground syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --crs ecef -o g.points && grep -v '^#' g.points | awk '{ r = sqrt($2^2 + $3^2 + $4^2) @SEMI@ if (r < 6.36e6 || r > 6.37e6) bad++ } END { print bad + 0 }'"
   STDOUT_MATCH "^0\n"
   CHECK_FILE g.points
-  FILE_MATCH "# crs: EPSG:4978 .*# columns: track X Y Z sigma_h views rms_px\n")
+  FILE_MATCH "# crs: EPSG:4978 .*# columns: track X Y Z sigma_h views rms_px flagged\n")
 tpkit_tool_test(tp-ground.bad-crs
   COMMAND "tp-ground a.tif b.tif --tracks t --crs lambert"
   EXPECT_FAIL STDERR_MATCH "^tp-ground: --crs: expected geographic, utm or ecef")
+# What is written is what the models can stand behind (issue 23): a model that cannot be right is refused as
+# it is read; another image's model (every track ~8 px off) and biased models fail with the count and the
+# median instead of writing points; a view off its image and an --rpc naming no image are refused; points
+# outside the models' validity box are flagged 2 and counted (unit test rpc.RpcTrust).
+set(ground3 "tp-ground syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks")
+set(synth_plain "tp-synth -o syn --size 256 --relief 20 --points 60")
+tpkit_tool_test(tp-ground.another-images-model
+  COMMAND "${synth_plain} && ${ground3} --rpc syn/view2.tif=syn/view3_rpc.txt -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: [0-9]+ of 60 tracks have an RMS residual above --flag 2 px \\(median [0-9.]+ px\\): the RPC models of syn/view1.tif, syn/view2.tif, syn/view3.tif do not fit" NO_FILE g.points)
+tpkit_tool_test(tp-ground.biased-models
+  COMMAND "tp-synth -o syn --size 256 --relief 20 --points 60 --rpc-bias 2:12,-9 && ${ground3} -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tracks have an RMS residual above --flag 2 px .*rpc-adjust first" NO_FILE g.points)
+tpkit_tool_test(tp-ground.impossible-models
+  COMMAND "${synth_plain} && sed 's/^LAT_OFF: .*/LAT_OFF: 95/' syn/view2_rpc.txt > lat_rpc.txt && sed 's/^LINE_SCALE: /LINE_SCALE: -/' syn/view2_rpc.txt > neg_rpc.txt && sed 's/^\\(SAMP_DEN_COEFF_[0-9]*\\): .*/\\1: 0/@SEMI@ s/^SAMP_DEN_COEFF_2: 0/SAMP_DEN_COEFF_2: 1/' syn/view2_rpc.txt > pole_rpc.txt && sed 's/^\\(LINE_NUM_COEFF_[0-9]*\\): .*/\\1: 0/' syn/view2_rpc.txt > zero_rpc.txt && for m in lat neg pole zero @SEMI@ do ${ground3} --rpc syn/view2.tif=\${m}_rpc.txt -o g.points @SEMI@ echo \"rc \$?\" @SEMI@ done"
+  STDOUT_MATCH "^rc 1\nrc 1\nrc 1\nrc 1\n$"
+  STDERR_MATCH "lat_rpc.txt: LAT_OFF 95 is not a latitude\n.*neg_rpc.txt: LINE_SCALE is -[0-9.]+: an RPC scale must be positive\n.*pole_rpc.txt: SAMP_DEN_COEFF: the denominator vanishes in the model's validity box .*: a pole\n.*zero_rpc.txt: an RPC numerator is all zeros\n"
+  NO_FILE g.points)
+tpkit_tool_test(tp-ground.view-off-the-image
+  COMMAND "${synth_plain} && awk '!/^#/ && ++n == 7 { $4 = 100000 } { print }' syn/truth.tracks > off.tracks && tp-ground syn/view1.tif syn/view2.tif syn/view3.tif --tracks off.tracks -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: off.tracks:[0-9]+: track [0-9]+: view 2 at \\(1e\\+05, [-0-9.e]+\\) is off syn/view2.tif \\(256 x 256 pixels\\)" NO_FILE g.points)
+tpkit_tool_test(tp-ground.rpc-for-no-image
+  COMMAND "${synth_plain} && ${ground3} --rpc syn/view02.tif=syn/view2_rpc.txt -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: --rpc syn/view02.tif=syn/view2_rpc.txt: syn/view02.tif is not one of the images" NO_FILE g.points)

@@ -3,10 +3,12 @@
 #include <OpenImageIO/imageio.h>
 #include <tiffio.h>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -14,6 +16,7 @@
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/input_file.hpp"
+#include "tpkit/core/text_table.hpp"
 #include "tpkit/core/version.hpp"
 
 namespace tpkit {
@@ -178,7 +181,8 @@ void rpc_tag_extender(TIFF* tif) {
   static const TIFFFieldInfo geo[] = {
       {33550, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelPixelScaleTag")},
       {33922, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelTiepointTag")},
-      {34735, -1, -1, TIFF_SHORT, FIELD_CUSTOM, 1, 1, const_cast<char*>("GeoKeyDirectoryTag")}};
+      {34735, -1, -1, TIFF_SHORT, FIELD_CUSTOM, 1, 1, const_cast<char*>("GeoKeyDirectoryTag")},
+      {42113, -1, -1, TIFF_ASCII, FIELD_CUSTOM, 1, 0, const_cast<char*>("GDALNoDataTag")}};
   for (const auto& g : geo)
     if (!TIFFFindField(tif, g.field_tag, TIFF_ANY)) TIFFMergeFieldInfo(tif, &g, 1);
   if (parent_extender) parent_extender(tif);
@@ -316,6 +320,37 @@ void write_image_u16(const std::string& path, long width, long height, const std
   write_whole(path, width, height, data, TypeDesc::UINT16);
 }
 
+namespace {
+// The field type (TIFF type code: 11 FLOAT, 12 DOUBLE, ...) of `tag` in the first directory of a classic or
+// Big TIFF, 0 when absent or unreadable. libtiff converts a FLOAT array to the DOUBLE it was registered
+// with, silently, so the type on disk is read here.
+int tiff_first_ifd_tag_type(const std::string& path, uint16_t tag) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char h[16];
+  if (!in.read(reinterpret_cast<char*>(h), 16)) return 0;
+  const bool le = h[0] == 'I';
+  auto u = [&](const unsigned char* p, int n) {
+    uint64_t v = 0;
+    for (int k = 0; k < n; ++k) v |= uint64_t(p[le ? k : n - 1 - k]) << (8 * k);
+    return v;
+  };
+  const uint64_t magic = u(h + 2, 2);
+  if (magic != 42 && magic != 43) return 0;
+  const bool big = magic == 43;
+  const uint64_t ifd = big ? u(h + 8, 8) : u(h + 4, 4);
+  const int count_size = big ? 8 : 2, entry_size = big ? 20 : 12;
+  unsigned char c[8];
+  if (!in.seekg(static_cast<std::streamoff>(ifd)) || !in.read(reinterpret_cast<char*>(c), count_size)) return 0;
+  const uint64_t n = u(c, count_size);
+  for (uint64_t e = 0; e < n && e < 65536; ++e) {
+    unsigned char d[20];
+    if (!in.read(reinterpret_cast<char*>(d), entry_size)) return 0;
+    if (u(d, 2) == tag) return static_cast<int>(u(d + 2, 2));
+  }
+  return 0;
+}
+}  // namespace
+
 std::optional<RpcTagValues> read_rpc_tag(const std::string& path) {
   register_rpc_tag();
   note_input(path);
@@ -335,6 +370,12 @@ std::optional<RpcTagValues> read_rpc_tag(const std::string& path) {
     out = r;
   }
   TIFFClose(tif);
+  if (out) {
+    const int type = tiff_first_ifd_tag_type(path, TIFFTAG_RPCCOEFFICIENT);
+    if (type != 0 && type != TIFF_DOUBLE)
+      throw InputError(path, 0, "RPC tag 50844 is stored as " + std::string(type == TIFF_FLOAT ? "FLOAT" : "TIFF type " + std::to_string(type)) +
+                                    ", not DOUBLE: its values have lost their precision (give the model in a sidecar or with --rpc)");
+  }
   return out;
 }
 
@@ -411,7 +452,7 @@ void write_geotiff_grid(const std::string& path, const GeoGrid& g) {
   finish_output(tmp, path);
 }
 
-GeoGrid read_geotiff_grid(const std::string& path) {
+GeoGrid read_geotiff_grid(const std::string& path, const GeoBounds* within) {
   // georeferencing through libtiff (OIIO does not expose the GeoTIFF tags), pixels through OIIO
   register_rpc_tag();
   note_input(path);
@@ -432,6 +473,20 @@ GeoGrid read_geotiff_grid(const std::string& path) {
   if (TIFFGetField(tif, 34735, &nk, &k) && k && nk >= 4)
     for (int e = 0; e < k[3] && 4 + 4 * e + 3 < nk; ++e)
       if (k[4 + 4 * e + 1] == 0) keys[k[4 + 4 * e]] = k[4 + 4 * e + 3];
+  // GDAL's no-data value (tag 42113, ASCII): a sample equal to it is no height
+  std::optional<double> nodata;
+  char* nd = nullptr;
+  if (TIFFGetField(tif, 42113, &nd) && nd) {
+    std::string t(nd);
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    while (end && *end && std::isspace(static_cast<unsigned char>(*end))) ++end;
+    if (end == t.c_str() || (end && *end)) {
+      TIFFClose(tif);
+      throw InputError(path, 0, "GDAL_NODATA tag 42113: '" + t + "' is not a number");
+    }
+    nodata = v;
+  }
   TIFFClose(tif);
   if (!geo) throw InputError(path, 0, "no GeoTIFF georeferencing (ModelPixelScale and ModelTiepoint tags)");
   auto key = [&](int id, int def) { return keys.count(id) ? keys[id] : def; };
@@ -448,10 +503,36 @@ GeoGrid read_geotiff_grid(const std::string& path) {
   double shift = key(1025, 1) == 2 ? 0.0 : 0.5;
   g.lon0 = tie[3] + (shift - tie[0]) * g.dlon;
   g.lat0 = tie[4] - (shift - tie[1]) * g.dlat;
-  Raster r = read_band(path, 0);
+  // the samples within the bounds (and two beyond, for interpolation), clipped to the grid: a DEM of a
+  // country is not read whole for one scene, and a header declaring more samples than the file holds
+  // fails on the part that is read
+  const ImageInfo info = image_info(path);
+  long x0 = 0, y0 = 0, x1 = info.width, y1 = info.height;
+  if (within) {
+    x0 = std::max(0L, static_cast<long>(std::floor((within->lon0 - g.lon0) / g.dlon)) - 2);
+    x1 = std::min(info.width, static_cast<long>(std::ceil((within->lon1 - g.lon0) / g.dlon)) + 3);
+    y0 = std::max(0L, static_cast<long>(std::floor((g.lat0 - within->lat1) / g.dlat)) - 2);
+    y1 = std::min(info.height, static_cast<long>(std::ceil((g.lat0 - within->lat0) / g.dlat)) + 3);
+    if (x1 <= x0 || y1 <= y0)
+      throw InputError(path, 0, "the DEM (lon " + format_number(g.lon0) + " .. " + format_number(g.lon0 + (info.width - 1) * g.dlon) +
+                                    ", lat " + format_number(g.lat0 - (info.height - 1) * g.dlat) + " .. " + format_number(g.lat0) +
+                                    ") does not cover the scene (lon " + format_number(within->lon0) + " .. " +
+                                    format_number(within->lon1) + ", lat " + format_number(within->lat0) + " .. " +
+                                    format_number(within->lat1) + ")");
+  }
+  constexpr long kMaxSamples = 400L * 1000 * 1000;
+  if ((x1 - x0) > kMaxSamples / std::max(1L, y1 - y0))
+    throw InputError(path, 0, "the DEM window of " + std::to_string(x1 - x0) + " x " + std::to_string(y1 - y0) +
+                                  " samples is larger than " + std::to_string(kMaxSamples) + " samples");
+  Raster r = read_region(path, 0, x0, y0, x1 - x0, y1 - y0);
+  g.lon0 += x0 * g.dlon;
+  g.lat0 -= y0 * g.dlat;
   g.width = r.width;
   g.height = r.height;
   g.data = std::move(r.data);
+  if (nodata)
+    for (float& v : g.data)
+      if (v == static_cast<float>(*nodata)) v = NAN;
   return g;
 }
 

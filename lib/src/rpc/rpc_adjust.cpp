@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <thread>
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/formats.hpp"
@@ -112,15 +113,29 @@ std::vector<RpcObservation> observations(const std::vector<AdjustImage>& images,
   return v;
 }
 
+}  // namespace
+
 void check_tracks(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks) {
   for (const auto& t : tracks) {
-    if (t.views.size() < 2) throw InputError(t.source, 0, "track " + std::to_string(t.id) + " has fewer than two views");
-    for (const auto& [i, xy] : t.views)
-      if (i < 0 || i >= static_cast<int>(images.size()))
-        throw InputError(t.source, 0, "track " + std::to_string(t.id) + " names an image out of range");
+    const std::string id = "track " + std::to_string(t.id);
+    if (t.views.size() < 2) throw InputError(t.source, t.line, id + " has fewer than two views");
+    std::vector<char> seen(images.size(), 0);
+    for (size_t k = 0; k < t.views.size(); ++k) {
+      const auto& [i, xy] = t.views[k];
+      if (i < 0 || i >= static_cast<int>(images.size())) throw InputError(t.source, t.line, id + " names an image out of range");
+      if (seen[i]++) throw InputError(t.source, t.line, id + " views " + images[i].path + " twice");
+      const AdjustImage& im = images[i];
+      // a tie point lies on its image (a pixel's edge is 0.5 px from its centre; one more pixel of slack)
+      if (im.width > 0 && !(xy[0] >= -1.5 && xy[0] <= im.width + 0.5 && xy[1] >= -1.5 && xy[1] <= im.height + 0.5))
+        throw InputError(t.source, t.line, id + ": view " + std::to_string(k + 1) + " at (" + format_number(xy[0]) + ", " +
+                                               format_number(xy[1]) + ") is off " + im.path + " (" + std::to_string(im.width) +
+                                               " x " + std::to_string(im.height) + " pixels)");
+    }
   }
   if (tracks.empty()) throw NumericalError("no tracks to adjust the RPCs with");
 }
+
+namespace {
 
 // Initial ground points: the zero-bias least-squares intersection of every track.
 void initial_points(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
@@ -171,6 +186,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   for (int k = 0; k < 6; ++k)
     if (!used[k]) constant_terms.push_back(k);
   std::vector<char> image_seen(ni, 0);
+  long with_height = 0;
   for (size_t t = 0; t < nt; ++t) {
     if (!r.initial_ok[t]) continue;
     double* g = r.ground[t].data();
@@ -189,10 +205,15 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     }
     if (o.height.at) {
       double h;
-      if (o.height.at(r.ground[t][0], r.ground[t][1], h, nullptr))
+      if (o.height.at(r.ground[t][0], r.ground[t][1], h, nullptr)) {
         problem.AddResidualBlock(new HeightPriorCost(&o.height, h), nullptr, g);
+        ++with_height;
+      }
     }
   }
+  if (o.height.at && with_height == 0)
+    throw NumericalError("the height prior reaches none of the " + std::to_string(usable) +
+                         " tie points (a DEM off the scene, or only no-data where they are)");
   BiasPriorCost prior;
   for (int k = 0; k < 6; ++k)
     prior.inv_sigma[k] = 1.0 / (k % 3 == 0 ? o.prior_shift_px : o.prior_linear * kLinearScale);
@@ -206,7 +227,9 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
 
   ceres::Solver::Options so;
   so.linear_solver_type = ni <= 200 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
-  so.num_threads = std::max(1, o.threads);
+  // Ceres aborts on a thread it cannot start, and warns on stderr (glog) beyond the machine's cores
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  so.num_threads = o.threads > 1 ? std::min(startable_threads(o.threads), cores) : 1;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = 1e-12;
   so.gradient_tolerance = 1e-14;
@@ -222,6 +245,9 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   r.iterations = static_cast<int>(summary.iterations.size());
   r.solver_report = summary.BriefReport();
   if (!summary.IsSolutionUsable()) throw NumericalError("the adjustment failed: " + summary.BriefReport());
+  if (!std::isfinite(summary.initial_cost) || !std::isfinite(summary.final_cost))
+    throw NumericalError("the adjustment's cost is not finite (initial " + format_figure(summary.initial_cost) +
+                         "): an observation or a prior sigma is out of range");
 
   r.bias.resize(ni);
   for (size_t i = 0; i < ni; ++i) r.bias[i] = images[i].fixed ? ImageBias{} : from_block(block[i]);
@@ -256,6 +282,13 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     r.flagged[t] = r.rms_after[t] > o.flag_px;
   }
   r.sigma0 = std::sqrt(sum / std::max(1L, 2 * count));
+  // a fit that leaves most tracks above the flag threshold adjusted nothing that can be trusted
+  const long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
+  if (2 * flagged > usable)
+    throw NumericalError(std::to_string(flagged) + " of " + std::to_string(usable) + " tracks keep an RMS above " +
+                         format_figure(o.flag_px) + " px after the fit (rms " + format_figure(residual_rms(r, false)) +
+                         " px before, " + format_figure(residual_rms(r, true)) + " px after, " +
+                         std::to_string(r.iterations) + " iterations): wrong models, wrong tracks, or a --flag too tight");
   for (size_t t = 0; t < nt; ++t)
     if (r.initial_ok[t]) r.sigma_h[t] = r.sigma0 * height_sigma_unit(observations(images, &r.bias, tracks[t]), r.ground[t]);
   return r;
@@ -286,6 +319,55 @@ double held_out_rms(const std::vector<AdjustImage>& images, const std::vector<Im
   }
   if (n_out) *n_out = n;
   return n ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+namespace {
+bool outside_validity_box(const RpcModel& m, const Eigen::Vector3d& llh) {
+  const double L = (llh[0] - m.lon_off) / m.lon_scale, P = (llh[1] - m.lat_off) / m.lat_scale,
+               H = (llh[2] - m.height_off) / m.height_scale;
+  return !(std::fabs(L) <= 1.1 && std::fabs(P) <= 1.1 && std::fabs(H) <= 1.1);
+}
+}  // namespace
+
+GroundSolution ground_points(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                             const GroundOptions& o) {
+  GroundSolution g;
+  g.points.resize(tracks.size());
+  g.flags.assign(tracks.size(), 0);
+  parallel_for(tracks.size(), o.threads, [&](size_t t) { g.points[t] = intersect_rpc(observations(images, nullptr, tracks[t])); });
+  double sum = 0;
+  long n = 0;
+  std::vector<double> rms;
+  for (size_t t = 0; t < tracks.size(); ++t) {
+    const RpcIntersection& x = g.points[t];
+    if (!x.ok) continue;
+    ++g.intersected;
+    sum += x.rms_px * x.rms_px * tracks[t].views.size();
+    n += static_cast<long>(tracks[t].views.size());
+    rms.push_back(x.rms_px);
+    if (x.rms_px > o.flag_px) g.flags[t] |= kGroundResidual, ++g.residual_flagged;
+    for (const auto& [i, xy] : tracks[t].views)
+      if (outside_validity_box(images[i].model, x.llh)) {
+        g.flags[t] |= kGroundOutsideBox;
+        ++g.outside_box;
+        break;
+      }
+  }
+  std::string names;
+  for (const auto& im : images) names += (names.empty() ? "" : ", ") + im.path;
+  if (n == 0)
+    throw NumericalError("no track could be intersected with the RPC models of " + names +
+                         " (do the models belong to these images, and do the images overlap?)");
+  g.rms_px = std::sqrt(sum / n);
+  g.sigma0 = std::sqrt(sum / (2.0 * n));
+  if (2 * g.residual_flagged > g.intersected) {
+    std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
+    throw NumericalError(std::to_string(g.residual_flagged) + " of " + std::to_string(g.intersected) +
+                         " tracks have an RMS residual above --flag " + format_figure(o.flag_px) + " px (median " +
+                         format_figure(rms[rms.size() / 2]) + " px): the RPC models of " + names +
+                         " do not fit the tracks (another image's model? offsets swapped? biased models: rpc-adjust first)");
+  }
+  return g;
 }
 
 RpcFit fold_bias(const RpcModel& m, const ImageBias& bias, long width, long height, double h_lo, double h_hi) {
@@ -347,6 +429,10 @@ std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, co
       if (i < 0)
         throw InputError(t.source, 0, "image" + std::to_string(k + 1) + " '" + t.images[k].path + "' is " +
                                           (i == -2 ? "ambiguous among" : "not one of") + " the images given");
+      for (size_t j = 0; j < map.size(); ++j)
+        if (map[j] == i)
+          throw InputError(t.source, 0, "image" + std::to_string(j + 1) + " and image" + std::to_string(k + 1) + " are both " +
+                                            images[i] + ": a track views each image once");
       map.push_back(i);
     }
     if (static_cast<int>(map.size()) != t.views())
@@ -356,6 +442,7 @@ std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, co
       AdjustTrack a;
       a.source = t.source;
       a.id = t.id[r];
+      a.line = r < t.line.size() ? t.line[r] : 0;
       for (int v = 0; v < t.views(); ++v) a.views.emplace_back(map[v], t.point(r, v));
       out.push_back(std::move(a));
     }
@@ -383,6 +470,9 @@ HeightPrior parse_height_prior(const std::string& text) {
   }
   if (u1 == 0 || u1 != h.size() || u2 != s.size() || !std::isfinite(hv) || !(sv > 0) || !std::isfinite(sv))
     throw UsageError("--height-prior: expected H+-S (metres above the ellipsoid, S > 0), got '" + text + "'");
+  if (sv < kMinHeightSigma)
+    throw UsageError("--height-prior: S = " + format_number(sv) + " m is below " + format_number(kMinHeightSigma) +
+                     " m (no height is known that well; the adjustment's cost would overflow)");
   HeightPrior p;
   p.sigma = sv;
   p.at = [hv](double, double, double& out, double* grad) {
@@ -391,6 +481,18 @@ HeightPrior parse_height_prior(const std::string& text) {
     return true;
   };
   return p;
+}
+
+GeoBounds models_bounds(const std::vector<AdjustImage>& images) {
+  GeoBounds b{INFINITY, -INFINITY, INFINITY, -INFINITY};
+  for (const auto& im : images) {
+    const RpcModel& m = im.model;
+    b.lon0 = std::min(b.lon0, m.lon_off - m.lon_scale);
+    b.lon1 = std::max(b.lon1, m.lon_off + m.lon_scale);
+    b.lat0 = std::min(b.lat0, m.lat_off - m.lat_scale);
+    b.lat1 = std::max(b.lat1, m.lat_off + m.lat_scale);
+  }
+  return b;
 }
 
 HeightPrior dem_height_prior(const GeoGrid& dem, double sigma) {

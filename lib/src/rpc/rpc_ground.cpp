@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 
@@ -144,6 +145,15 @@ Eigen::Vector3d GroundConverter::operator()(const Eigen::Vector3d& llh) const {
     }
   }
   return llh;
+}
+
+Eigen::Vector3d GroundConverter::operator()(const Eigen::Vector3d& llh, long long track) const {
+  try {
+    return (*this)(llh);
+  } catch (const GeographicLib::GeographicErr& e) {
+    throw NumericalError("track " + std::to_string(track) + " at lon " + format_figure(llh[0], 9) + ", lat " +
+                         format_figure(llh[1], 9) + ": not in " + description() + ": " + e.what());
+  }
 }
 
 std::vector<std::string> GroundConverter::columns() const {

@@ -1,5 +1,6 @@
 #include "tpkit/rpc/rpc_io.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
@@ -25,13 +27,22 @@ namespace {
 
 // ---------------------------------------------------------------- shared helpers
 
+// The whole of an RPC file: a regular file or a pipe, at most kMaxRpcFile bytes (a model is a few KB; a
+// device such as /dev/zero or a wrong path to an image must not fill memory), without a UTF-8 byte order
+// mark (Windows editors put one before the first key).
+constexpr size_t kMaxRpcFile = size_t(16) << 20;
 std::string read_whole(const std::string& path) {
-  note_input(path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "cannot open");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  std::ifstream in = open_input_file(path, InputKind::file, true);
+  std::string s;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    s.append(buf, static_cast<size_t>(in.gcount()));
+    if (s.size() > kMaxRpcFile)
+      throw InputError(path, 0, "larger than " + std::to_string(kMaxRpcFile >> 20) + " MiB: not an RPC model");
+  }
+  if (in.bad()) throw InputError(path, 0, "read error");
+  if (s.compare(0, 3, "\xEF\xBB\xBF") == 0) s.erase(0, 3);
+  return s;
 }
 
 std::string trim(const std::string& s) {
@@ -80,17 +91,44 @@ const PolyField kPolys[] = {
     {"SAMP_DEN_COEFF", "sampDenCoef", &RpcModel::samp_den},
 };
 
-// Checks what makes a model unusable (zero scales, all-zero denominators).
+// Checks what makes a model unusable, whatever its form: a value that is not finite (the tag holds raw
+// doubles), a scale that is not positive, offsets off the globe, an all-zero numerator or denominator, and
+// a denominator that vanishes or changes sign in the model's validity box (the normalized cube [-1, 1]^3,
+// sampled on a 9^3 grid): a pole there sends every point near it anywhere.
 void check_model(const RpcModel& m, const std::string& file) {
-  const double scales[] = {m.line_scale, m.samp_scale, m.lat_scale, m.lon_scale, m.height_scale};
-  for (double s : scales)
-    if (!(s != 0)) throw InputError(file, 0, "an RPC scale is 0");
+  for (double v : rpc_tag_values(m))
+    if (!std::isfinite(v)) throw InputError(file, 0, "an RPC value is not finite (" + format_number(v) + ")");
+  const std::pair<const char*, double> scales[] = {{"LINE_SCALE", m.line_scale}, {"SAMP_SCALE", m.samp_scale},
+                                                   {"LAT_SCALE", m.lat_scale},   {"LONG_SCALE", m.lon_scale},
+                                                   {"HEIGHT_SCALE", m.height_scale}};
+  for (const auto& [name, s] : scales)
+    if (!(s > 0)) throw InputError(file, 0, std::string(name) + " is " + format_number(s) + ": an RPC scale must be positive");
+  if (!(std::fabs(m.lat_off) <= 90)) throw InputError(file, 0, "LAT_OFF " + format_number(m.lat_off) + " is not a latitude");
+  if (!(std::fabs(m.lon_off) <= 360)) throw InputError(file, 0, "LONG_OFF " + format_number(m.lon_off) + " is not a longitude");
+  if (!(std::fabs(m.lat_off) + m.lat_scale <= 90.5))
+    throw InputError(file, 0, "LAT_OFF " + format_number(m.lat_off) + " +- LAT_SCALE " + format_number(m.lat_scale) + " leaves the globe");
   auto zero = [](const RpcPoly& p) {
     for (double c : p)
       if (c != 0) return false;
     return true;
   };
   if (zero(m.line_den) || zero(m.samp_den)) throw InputError(file, 0, "an RPC denominator is all zeros");
+  if (zero(m.line_num) || zero(m.samp_num)) throw InputError(file, 0, "an RPC numerator is all zeros");
+  for (const auto& [name, den] : {std::make_pair("LINE_DEN_COEFF", &m.line_den), std::make_pair("SAMP_DEN_COEFF", &m.samp_den)}) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (int a = 0; a < 9; ++a)
+      for (int b = 0; b < 9; ++b)
+        for (int c = 0; c < 9; ++c) {
+          double t[20];
+          rpc_terms(-1 + a * 0.25, -1 + b * 0.25, -1 + c * 0.25, t);
+          const double d = rpc_eval(*den, t);
+          lo = std::min(lo, d);
+          hi = std::max(hi, d);
+        }
+    if (lo * hi <= 0 || std::min(std::fabs(lo), std::fabs(hi)) < 1e-6 * std::max(std::fabs(lo), std::fabs(hi)))
+      throw InputError(file, 0, std::string(name) + ": the denominator vanishes in the model's validity box (from " +
+                                    format_number(lo) + " to " + format_number(hi) + "): a pole");
+  }
 }
 
 std::string join_poly(const RpcPoly& p, const char* sep) {
@@ -260,6 +298,7 @@ RpcModel parse_rpb(const std::string& text, const std::string& file) {
 struct XmlLeaf {
   std::string text;
   long line;
+  long repeated_at = 0;  // the line of a second leaf of the same path (0: none)
 };
 std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file) {
   std::map<std::string, XmlLeaf> out;
@@ -318,7 +357,10 @@ std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::strin
     if (closing) {
       if (stack.empty() || stack.back() != name)
         throw InputError(file, tag_line, "</" + name + "> does not close <" + (stack.empty() ? "" : stack.back()) + ">");
-      if (!had_child) out[path()] = {trim(text), tag_line};
+      if (!had_child) {
+        auto [it, fresh] = out.emplace(path(), XmlLeaf{trim(text), tag_line});
+        if (!fresh && !it->second.repeated_at) it->second.repeated_at = tag_line;
+      }
       stack.pop_back();
       had_child = true;
       text.clear();
@@ -370,7 +412,11 @@ RpcModel parse_dimap(const std::string& text, const std::string& file) {
   auto find = [&](const std::vector<std::string>& names) -> const std::pair<const std::string, XmlLeaf>* {
     for (const auto& n : names) {
       auto it = leaves.find(base + n);
-      if (it != leaves.end()) return &*it;
+      if (it == leaves.end()) continue;
+      if (it->second.repeated_at)
+        throw InputError(file, it->second.repeated_at,
+                         it->first + " given twice (first at line " + std::to_string(it->second.line) + ")");
+      return &*it;
     }
     return nullptr;
   };
@@ -682,6 +728,12 @@ std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::st
       throw UsageError("--rpc: image '" + v.substr(0, eq) + "' given twice");
   }
   return out;
+}
+
+void check_rpc_overrides(const std::map<std::string, std::string>& overrides, const std::vector<std::string>& images) {
+  for (const auto& kv : overrides)
+    if (std::find(images.begin(), images.end(), kv.first) == images.end())
+      throw UsageError("--rpc " + kv.first + "=" + kv.second + ": " + kv.first + " is not one of the images");
 }
 
 }  // namespace tpkit

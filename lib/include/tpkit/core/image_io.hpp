@@ -84,6 +84,11 @@ void write_geotiff_grid(const std::string& path, const GeoGrid& grid);
 // Reads a single-band GeoTIFF with OIIO, its georeferencing from the GeoTIFF tags OIIO exposes
 // (geotiff:ModelPixelScale, geotiff:ModelTiePoint; geographic WGS84 only, PixelIsArea converted to sample
 // centres). InputError for a file without them or in another coordinate system.
-GeoGrid read_geotiff_grid(const std::string& path);
+// Samples equal to the GDAL_NODATA tag (42113) are NaN. With `within`, only the samples covering those
+// bounds (two more on each side) are read; InputError when the grid does not reach them.
+struct GeoBounds {
+  double lon0, lon1, lat0, lat1;  // degrees, lon0 < lon1, lat0 < lat1
+};
+GeoGrid read_geotiff_grid(const std::string& path, const GeoBounds* within = nullptr);
 
 }  // namespace tpkit

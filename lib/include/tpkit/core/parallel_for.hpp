@@ -21,6 +21,11 @@ constexpr int kMaxThreads = 1024;
 // Says on stderr, the first time in a process, that only `started` of `wanted` workers could start.
 void report_thread_shortfall(int wanted, int started);
 
+// How many threads (the calling one included, at most `wanted`) the system lets run at once now: for a
+// library that starts its own pool and aborts when one is refused (Ceres' num_threads). Reports a
+// shortfall as parallel_for does.
+int startable_threads(int wanted);
+
 // Starts a thread running `f`, or returns false (after report_thread_shortfall) when the system refuses
 // one; the caller then does the work itself.
 template <class F>

@@ -74,6 +74,8 @@ TextTable read_table_file(const std::string& path, const ReadOptions& opt);
 
 // Shortest decimal form that reads back to exactly the same double.
 std::string format_number(double v);
+// A figure for a message: `digits` significant digits ("%.*g"), e.g. 21.06 for a median of 21.059228...
+std::string format_figure(double v, int digits = 4);
 // Integer-valued doubles (ids) are written without a decimal point.
 std::string format_id(double v);
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "tpkit/rpc/rpc_bias.hpp"
+#include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/rpc/rpc_model.hpp"
 
 namespace tpkit {
@@ -31,6 +32,7 @@ struct AdjustImage {
 // One track: views (image index, observed pixel) of one ground point; where it came from for messages.
 struct AdjustTrack {
   std::string source;
+  long line = 0;  // in source (0: unknown)
   long long id = 0;
   std::vector<std::pair<int, Eigen::Vector2d>> views;
 };
@@ -69,8 +71,14 @@ struct AdjustResult {
   std::string solver_report;
 };
 
-// Throws NumericalError when no track has two views on the images, InputError for a track view that
-// names an image out of range.
+// InputError (the track's file and line) for a track with fewer than two views, a view of an image out of
+// range, two views of one image, or a view off its image (images with a size); NumericalError for none.
+void check_tracks(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks);
+
+// Throws what check_tracks throws; NumericalError when no track can be intersected, when the cost is not
+// finite (an observation or a prior out of range), when the DEM or height prior reaches none of the
+// points, or when most tracks stay above flag_px after the fit (the models, the tracks or --flag are
+// wrong: the figures are in the message).
 AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                          const AdjustOptions& options);
 
@@ -82,18 +90,47 @@ double residual_rms(const AdjustResult& r, bool after, int image = -1);
 double held_out_rms(const std::vector<AdjustImage>& images, const std::vector<ImageBias>& bias,
                     const std::vector<AdjustTrack>& tracks, long* n = nullptr);
 
+// Ground points of tracks on the delivered models (tp-ground): each track intersected on its own
+// (rpc_ground.hpp intersect_rpc), flagged, and the run refused when the models do not fit the tracks.
+enum GroundFlag : int {
+  kGroundResidual = 1,     // RMS residual above flag_px
+  kGroundOutsideBox = 2,   // outside a view's validity box (normalized ground coordinate beyond +-1.1)
+};
+struct GroundOptions {
+  double flag_px = 2;
+  int threads = 1;
+};
+struct GroundSolution {
+  std::vector<RpcIntersection> points;  // per track (ok false: not intersected)
+  std::vector<int> flags;               // per track, GroundFlag bits
+  long intersected = 0, residual_flagged = 0, outside_box = 0;
+  double rms_px = 0, sigma0 = 0;        // over the intersected tracks' observations: RMS of |r|, and per coordinate
+};
+// NumericalError when no track can be intersected, or when most tracks have an RMS above flag_px (the
+// message gives the count and median: a wrong model, swapped offsets, another image's model).
+GroundSolution ground_points(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                             const GroundOptions& options);
+
 // Tracks of several files on one set of images: each file's image k is matched to one of `images` (same
 // path as written, the same file, relative to the tracks file's folder or not, or else the one image of that
 // file name); InputError (file: imageK 'PATH' is not one of the images) otherwise. Track ids are the files'.
 std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, const std::vector<std::string>& images);
 
-// Height prior from "H+-S" / "H±S" / "H,S" (metres); UsageError naming --height-prior otherwise.
+// The smallest sigma of a height prior (m): a millimetre; below it the weights overflow the cost.
+constexpr double kMinHeightSigma = 1e-3;
+
+// Height prior from "H+-S" / "H±S" / "H,S" (metres, S >= kMinHeightSigma); UsageError naming --height-prior otherwise.
 HeightPrior parse_height_prior(const std::string&);
 
 // Height prior from a DEM (image_io.hpp GeoGrid, heights above the ellipsoid), bilinear between its
 // samples; no prior off the grid or next to no-data samples. sigma in metres.
 struct GeoGrid;
 HeightPrior dem_height_prior(const GeoGrid& dem, double sigma);
+
+// The ground the images' models are valid on: the union of their boxes (lon_off +- lon_scale, lat_off +-
+// lat_scale), degrees; what a DEM must cover.
+struct GeoBounds;
+GeoBounds models_bounds(const std::vector<AdjustImage>& images);
 
 // Figure: per image, the residual vectors at the observed points before (zero bias) and after the
 // adjustment, exaggerated by one common factor (scale bar), over the image extent.

@@ -49,6 +49,9 @@ class GroundConverter {
  public:
   GroundConverter(GroundCrs crs, double lon0, double lat0);
   Eigen::Vector3d operator()(const Eigen::Vector3d& llh) const;
+  // The same; NumericalError naming the track for a point the system cannot hold (UTM: too far from the
+  // zone; GeographicLib's own message follows).
+  Eigen::Vector3d operator()(const Eigen::Vector3d& llh, long long track) const;
   // Column names of the three coordinates: lon lat h | easting northing h | X Y Z.
   std::vector<std::string> columns() const;
   // The "# crs:" value, e.g. "EPSG:4979 (WGS 84 geographic 3D: lon lat degrees, h metres above the ellipsoid)".

@@ -75,5 +75,7 @@ std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map
 RpcSource load_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
 // "--rpc IMG=FILE" values -> map image -> file; UsageError for a value without '='.
 std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::string>& values);
+// UsageError for an --rpc IMAGE=FILE whose IMAGE is not one of `images` (as written): a typo is not ignored.
+void check_rpc_overrides(const std::map<std::string, std::string>& overrides, const std::vector<std::string>& images);
 
 }  // namespace tpkit
