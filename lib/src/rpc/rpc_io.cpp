@@ -91,6 +91,12 @@ const PolyField kPolys[] = {
     {"SAMP_DEN_COEFF", "sampDenCoef", &RpcModel::samp_den},
 };
 
+bool zero(const RpcPoly& p) {
+  for (double c : p)
+    if (c != 0) return false;
+  return true;
+}
+
 // Checks what makes a model unusable, whatever its form: a value that is not finite (the tag holds raw
 // doubles), a scale that is not positive, offsets off the globe, an all-zero numerator or denominator, and
 // a denominator that vanishes or changes sign in the model's validity box (the normalized cube [-1, 1]^3,
@@ -107,11 +113,6 @@ void check_model(const RpcModel& m, const std::string& file) {
   if (!(std::fabs(m.lon_off) <= 360)) throw InputError(file, 0, "LONG_OFF " + format_number(m.lon_off) + " is not a longitude");
   if (!(std::fabs(m.lat_off) + m.lat_scale <= 90.5))
     throw InputError(file, 0, "LAT_OFF " + format_number(m.lat_off) + " +- LAT_SCALE " + format_number(m.lat_scale) + " leaves the globe");
-  auto zero = [](const RpcPoly& p) {
-    for (double c : p)
-      if (c != 0) return false;
-    return true;
-  };
   if (zero(m.line_den) || zero(m.samp_den)) throw InputError(file, 0, "an RPC denominator is all zeros");
   if (zero(m.line_num) || zero(m.samp_num)) throw InputError(file, 0, "an RPC numerator is all zeros");
   for (const auto& [name, den] : {std::make_pair("LINE_DEN_COEFF", &m.line_den), std::make_pair("SAMP_DEN_COEFF", &m.samp_den)}) {
@@ -475,11 +476,6 @@ RpcModel parse_dimap(const std::string& text, const std::string& file) {
   }
   check_model(m, file);
   if (m.has_direct) {
-    auto zero = [](const RpcPoly& p) {
-      for (double c : p)
-        if (c != 0) return false;
-      return true;
-    };
     if (zero(m.lon_den) || zero(m.lat_den)) throw InputError(file, 0, "a Direct_Model denominator is all zeros");
   }
   return m;
