@@ -2,8 +2,14 @@
 // setup (Navy et al. 2005, section 6), robustness to extra/missing points, the correspondence-free
 // search, and time against the cluster size. Prints plain tables on stdout.
 //
-//   bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|scale|all] [--max-n N]
-//                 [--family K] [--n N [--first T]] [--paper-cost] [--verbose]
+//   bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|few|scale|all] [--max-n N]
+//                 [--family K] [--n N [--first T]] [--paper-cost] [--model auto|similarity|affine|homography] [--verbose]
+//
+// --model: the model of the families', the unrelated pairs' and the few-points cases' solves, as
+// cluster-homog --model (cluster_solve.hpp; default auto, the tool's default). --section few: astroalign's
+// TestFewSources (2 to 6 stars at integer positions under a 50 degree rotation and a (10, -20) shift in a
+// 512 x 512 frame; 2 must be refused), random similarities of 3 to 6 such stars, and unrelated
+// 3 to 6 stars (false accepts).
 //
 // --family K runs only the K-th family (1-based) of --section families (the one after the last: the
 // unrelated pairs); --n N runs --section unrelated at N points only, with --trials trials (a 95% bound of
@@ -31,6 +37,7 @@
 #include "tpkit/cluster/cluster_cost.hpp"
 #include "tpkit/cluster/cluster_optimize.hpp"
 #include "tpkit/cluster/cluster_search.hpp"
+#include "tpkit/cluster/cluster_solve.hpp"
 #include "tpkit/cluster/cluster_synth.hpp"
 #include "tpkit/cluster/cluster_verdict.hpp"
 #include "tpkit/cluster/physical_homography.hpp"
@@ -41,11 +48,32 @@ namespace {
 
 bool g_paper_cost = false;  // --paper-cost
 bool g_verbose = false;     // --verbose: the failed trials of the families on stderr
+std::string g_model = "auto";  // --model
 // cluster-homog's default cost: the trim chosen from the data (or the paper's cost with --paper-cost)
 CostOptions tool_default_cost() {
   CostOptions co;
   co.trim_from_data = !g_paper_cost;
   return co;
+}
+
+// What cluster-homog does from scratch with --model g_model (math parameterization): the chosen map and
+// its verdict. domain: the field of B (its image's area; 0: hull B).
+struct ToolAnswer {
+  Eigen::Matrix3d H = Eigen::Matrix3d::Identity();
+  Verdict verdict;
+  long hypotheses = 0;
+  std::string method;
+};
+ToolAnswer solve_as_tool(const ClusterCost& cost, uint64_t seed, double domain = 0) {
+  SolveOptions so;
+  so.optimize.param = Parameterization::Math;
+  so.optimize.seed = seed;
+  so.automatic = g_model == "auto";
+  so.model = g_model == "similarity" ? ClusterModel::Similarity : g_model == "affine" ? ClusterModel::Affine : ClusterModel::Homography;
+  so.domain_area_b = domain;
+  const ClusterSolution sol = solve_clusters(cost, OptimizeStart{}, so);
+  return {sol.chosen.H, sol.chosen.verdict, sol.hypotheses,
+          std::string(cluster_model_name(sol.chosen.model)) + ", " + sol.chosen.method};
 }
 
 double cpu_now() {
@@ -154,13 +182,11 @@ void family_case(const char* label, int n, double aniso, double proj, double unm
     o.param = Parameterization::Math;
     o.seed = static_cast<uint64_t>(t + 1);
     const auto t0 = std::chrono::steady_clock::now();
-    OptimizeResult r;
+    ToolAnswer r;
     bool accepted = false;
     try {
-      r = optimize_clusters(cost, OptimizeStart{}, o);
-      VerdictOptions vo;
-      vo.hypotheses = std::max(1L, r.evaluations);
-      accepted = judge_homography(cost, r.H, vo).accepted;
+      r = solve_as_tool(cost, o.seed);
+      accepted = r.verdict.accepted;
     } catch (const std::exception&) {
     }
     secs += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -178,7 +204,7 @@ void family_case(const char* label, int n, double aniso, double proj, double unm
     for (const MutualPair& mp : mutual_pairs(cost, cp.truth))
       if (mp.d <= 1) truth_pairs.emplace_back(mp.ia, mp.ib);
     VerdictOptions vo;
-    vo.hypotheses = std::max(1L, r.evaluations);
+    vo.hypotheses = std::max(1L, r.hypotheses);
     const Eigen::Matrix3d oracle = fit_on_pairs(cost, cp.truth, truth_pairs);
     const bool determined = judge_homography(cost, oracle, vo).accepted &&
                             homography_rms_difference(oracle, cp.truth, extent_grid(cp.A)) <= 0.5;
@@ -212,10 +238,7 @@ void unrelated_case(int n, int trials, int first = 0) {
     o.param = Parameterization::Math;
     o.seed = static_cast<uint64_t>(t + 1);
     try {
-      OptimizeResult r = optimize_clusters(cost, OptimizeStart{}, o);
-      VerdictOptions vo;
-      vo.hypotheses = std::max(1L, r.evaluations);
-      const Verdict v = judge_homography(cost, r.H, vo);
+      const Verdict v = solve_as_tool(cost, o.seed).verdict;
       accepted += v.accepted;
       odds.push_back(v.log10_odds);
     } catch (const std::exception&) {  // no usable hypothesis at all: no answer, so no false accept
@@ -236,6 +259,130 @@ void unrelated_case(int n, int trials, int first = 0) {
   std::fflush(stdout);
 }
 
+// Stars at integer pixels as astroalign's simulate_image_pair gives them: the reference positions
+// shifted by the crop (-5, -5); the new ones rotated by `angle` about the frame centre (256, 256), shifted
+// by (tx, ty), truncated to integers and cropped likewise. B is shuffled; the truth is the generating map
+// followed by the truncation's mean shift.
+struct StarPair {
+  Eigen::MatrixX2d A, B;
+  Eigen::Matrix3d truth;
+};
+StarPair star_pair(const std::vector<Eigen::Vector2d>& ref, double angle, double scale, double tx, double ty, uint64_t seed) {
+  const double c = scale * std::cos(angle), s = scale * std::sin(angle);
+  Eigen::Matrix3d T0, R, T1, crop;
+  T0 << 1, 0, -256, 0, 1, -256, 0, 0, 1;
+  R << c, -s, 0, s, c, 0, 0, 0, 1;
+  T1 << 1, 0, 256 + tx, 0, 1, 256 + ty, 0, 0, 1;
+  crop << 1, 0, -5, 0, 1, -5, 0, 0, 1;
+  StarPair sp;
+  const Eigen::Matrix3d M = T1 * R * T0;  // uncropped reference -> uncropped new
+  // truncation moves a new star by -0.5 px per axis on average: the truth includes that shift
+  Eigen::Matrix3d bias;
+  bias << 1, 0, -0.5, 0, 1, -0.5, 0, 0, 1;
+  sp.truth = bias * crop * M * crop.inverse();
+  const int n = static_cast<int>(ref.size());
+  sp.A.resize(n, 2), sp.B.resize(n, 2);
+  std::vector<int> order(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
+  std::mt19937_64 rng(seed);
+  std::shuffle(order.begin(), order.end(), rng);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d& p = ref[static_cast<size_t>(i)];
+    sp.A.row(i) << p.x() - 5, p.y() - 5;
+    const Eigen::Vector3d q = M * Eigen::Vector3d(p.x(), p.y(), 1);
+    sp.B.row(order[static_cast<size_t>(i)]) << std::trunc(q.x()) - 5, std::trunc(q.y()) - 5;
+  }
+  return sp;
+}
+
+// One few-stars case: refused (fewer points than a model needs), accepted within 1 px of the truth over
+// A's points (astroalign's tolerance on the translation), accepted within 3 px (imprecise: the integer
+// positions' +-0.5 px on 3 stars), accepted wrong (further: other correspondences), or rejected.
+enum class FewOutcome { Refused, Right, Imprecise, Wrong, Rejected };
+FewOutcome few_case(const StarPair& sp, std::string* what = nullptr) {
+  try {
+    const ClusterModel least = g_model == "auto" || g_model == "similarity" ? ClusterModel::Similarity
+                               : g_model == "affine"                       ? ClusterModel::Affine
+                                                                           : ClusterModel::Homography;
+    validate_cluster(sp.A, "A", least);
+    validate_cluster(sp.B, "B", least);
+  } catch (const std::exception& e) {
+    if (what) *what = e.what();
+    return FewOutcome::Refused;
+  }
+  ClusterCost cost(sp.A, sp.B, tool_default_cost());
+  ToolAnswer r;
+  try {
+    r = solve_as_tool(cost, 1, 512.0 * 512.0);
+  } catch (const std::exception& e) {
+    if (what) *what = e.what();
+    return FewOutcome::Rejected;
+  }
+  const double err = homography_max_difference(r.H, sp.truth, sp.A);
+  if (what) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s, log10 odds %.2f, %d of %d matched within %.3f px, max error at A's points %.3f px",
+                  r.method.c_str(), r.verdict.log10_odds, r.verdict.inliers, r.verdict.candidates, r.verdict.radius_px, err);
+    *what = buf;
+  }
+  if (!r.verdict.accepted) return FewOutcome::Rejected;
+  return err <= 1 ? FewOutcome::Right : err <= 3 ? FewOutcome::Imprecise : FewOutcome::Wrong;
+}
+
+void few_section(int trials) {
+  const std::vector<Eigen::Vector2d> stars = {{100, 150}, {120, 200}, {400, 200}, {400, 320}, {200, 210}, {200, 350}};
+  const double kPi = 3.14159265358979323846;
+  std::printf("== few stars (astroalign TestFewSources), --model %s, field 512 x 512\n", g_model.c_str());
+  int passed = 0;
+  for (int n = 2; n <= 6; ++n) {
+    const std::vector<Eigen::Vector2d> ref(stars.begin(), stars.begin() + n);
+    std::string what;
+    const FewOutcome out = few_case(star_pair(ref, 50 * kPi / 180, 1, 10, -20, 77 + static_cast<uint64_t>(n)), &what);
+    const bool pass = n == 2 ? out == FewOutcome::Refused : out == FewOutcome::Right;
+    passed += pass;
+    std::printf("astroalign %d stars: %s (%s)\n", n,
+                out == FewOutcome::Refused     ? "refused"
+                : out == FewOutcome::Right     ? "accepted, right"
+                : out == FewOutcome::Imprecise ? "accepted, imprecise"
+                : out == FewOutcome::Wrong     ? "accepted WRONG"
+                                               : "rejected",
+                what.c_str());
+  }
+  std::printf("astroalign cases passed: %d of 5 (2 stars must be refused); as its 10 tests (find_transform and register on the same positions): %d of 10\n",
+              passed, 2 * passed);
+  std::mt19937_64 rng(2024);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int n = 3; n <= 6; ++n) {
+    int right = 0, imprecise = 0, wrong = 0, rejected = 0, false_accepts = 0;
+    for (int t = 0; t < trials; ++t) {
+      // stars uniform in the central 400 x 400 of the frame, a random rotation, scale 0.8..1.25, a shift
+      // of up to 40 px: they stay in the frame
+      std::vector<Eigen::Vector2d> ref;
+      for (int i = 0; i < n; ++i) ref.emplace_back(56 + std::floor(400 * u(rng)), 56 + std::floor(400 * u(rng)));
+      const double angle = 2 * kPi * u(rng), scale = std::exp(std::log(0.8) + (std::log(1.25) - std::log(0.8)) * u(rng));
+      std::string what;
+      const FewOutcome out = few_case(star_pair(ref, angle, scale, 80 * u(rng) - 40, 80 * u(rng) - 40, rng()), &what);
+      if (g_verbose && out != FewOutcome::Right) std::fprintf(stderr, "%d stars, trial %d: %s\n", n, t, what.c_str());
+      right += out == FewOutcome::Right, imprecise += out == FewOutcome::Imprecise, wrong += out == FewOutcome::Wrong;
+      rejected += out == FewOutcome::Rejected || out == FewOutcome::Refused;
+      // unrelated: two independent draws of n stars over the frame
+      StarPair un;
+      un.A.resize(n, 2), un.B.resize(n, 2);
+      for (int i = 0; i < n; ++i) {
+        un.A.row(i) << std::floor(507 * u(rng)), std::floor(507 * u(rng));
+        un.B.row(i) << std::floor(507 * u(rng)), std::floor(507 * u(rng));
+      }
+      un.truth = Eigen::Matrix3d::Identity();
+      const FewOutcome o2 = few_case(un);
+      false_accepts += o2 == FewOutcome::Right || o2 == FewOutcome::Imprecise || o2 == FewOutcome::Wrong;
+    }
+    std::printf("random similarities, %d stars, %d trials: right (<= 1 px) %d, imprecise (1-3 px) %d, accepted WRONG %d, rejected %d;"
+                " unrelated %d stars: false accepts %d of %d\n",
+                n, trials, right, imprecise, wrong, rejected, n, false_accepts, trials);
+  }
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -253,15 +400,20 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--paper-cost")) g_paper_cost = true;
     else if (!std::strcmp(argv[i], "--verbose")) g_verbose = true;
     else if (!std::strcmp(argv[i], "--section") && i + 1 < argc) section = argv[++i];
+    else if (!std::strcmp(argv[i], "--model") && i + 1 < argc) g_model = argv[++i];
     else if (!std::strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = std::atol(argv[++i]);
     else {
       const bool help = !std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h");
-      std::fprintf(help ? stdout : stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|scale|all] [--max-n N] [--family K] [--n N [--first T]] [--paper-cost] [--verbose]\n");
+      std::fprintf(help ? stdout : stderr, "usage: bench_cluster [--trials N] [--section paper|robust|scratch|verdict|families|unrelated|few|scale|all] [--max-n N] [--family K] [--n N [--first T]] [--paper-cost] [--model auto|similarity|affine|homography] [--verbose]\n");
       return help ? 0 : 2;
     }
   }
   if (first < 0 || (first > 0 && (only_n <= 0 || section != "unrelated"))) {
     std::fprintf(stderr, "bench_cluster: --first %d: needs --section unrelated --n N and a trial index >= 0\n", first);
+    return 2;
+  }
+  if (g_model != "auto" && g_model != "similarity" && g_model != "affine" && g_model != "homography") {
+    std::fprintf(stderr, "bench_cluster: --model %s: auto, similarity, affine or homography\n", g_model.c_str());
     return 2;
   }
   bool all = section == "all";
@@ -353,6 +505,7 @@ int main(int argc, char** argv) {
     if (family == 0 || family == k + 1)
       for (int n : {10, 100, 1000, 5000}) unrelated_case(n, n >= 5000 ? std::max(1, trials / 4) : trials);
   }
+  if (all || section == "few") few_section(trials);
   if (section == "unrelated") {  // false accepts (issue 15: <= 0.1% for 10..5000 points): --trials at n <= 100,
                                  // a quarter of them at 1000, a twentieth at 5000
     std::printf("== unrelated clusters from scratch: false accepts of the verdict (goal <= 0.1%%)\n");

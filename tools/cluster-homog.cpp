@@ -1,5 +1,7 @@
 // cluster-homog: the homography between two point clusters with no known correspondences
 // (Navy et al. 2005), see man/cluster-homog.1. Options -> library (cluster_*.hpp) -> files.
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <sstream>
@@ -8,6 +10,7 @@
 #include "tpkit/cluster/cluster_init.hpp"
 #include "tpkit/cluster/cluster_optimize.hpp"
 #include "tpkit/cluster/cluster_scan.hpp"
+#include "tpkit/cluster/cluster_solve.hpp"
 #include "tpkit/cluster/cluster_verdict.hpp"
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
@@ -18,7 +21,7 @@ extern const char* const tpkit_man_page;
 
 namespace {
 struct Opts {
-  std::string a, b, out = "-", init, pairs, scan, plot, param = "physical", optimizer = "default";
+  std::string a, b, out = "-", init, pairs, scan, plot, param = "physical", optimizer = "default", model = "auto";
   uint64_t seed = 1;
   double trim = 0, truncate = 0, target = 0.25;
   long max_iterations = 10000;
@@ -29,6 +32,16 @@ struct Opts {
 };
 
 std::string num(double v) { return tpkit::format_number(v); }
+
+// The field of cluster B for the verdict: its image (w x h pixels, from the points file's image line) when
+// every point lies in it; else 0 (the hull of B).
+double cluster_field_area(const tpkit::Points& B) {
+  if (B.images.empty() || B.images.front().width <= 0 || B.images.front().height <= 0) return 0;
+  const double w = static_cast<double>(B.images.front().width), h = static_cast<double>(B.images.front().height);
+  for (Eigen::Index i = 0; i < B.xy.rows(); ++i)
+    if (!(B.xy(i, 0) >= -0.5 && B.xy(i, 0) <= w - 0.5 && B.xy(i, 1) >= -0.5 && B.xy(i, 1) <= h - 0.5)) return 0;
+  return w * h;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -42,6 +55,8 @@ int main(int argc, char** argv) {
     app.add_option("--init", o->init, "key = value file of starting values");
     app.add_option("--optimizer", o->optimizer, "default | random | none")
         ->check(CLI::IsMember({"default", "random", "none"}));
+    app.add_option("--model", o->model, "auto | similarity | affine | homography (auto: the simplest the verdict accepts)")
+        ->check(CLI::IsMember({"auto", "similarity", "affine", "homography"}));
     app.add_option("--seed", o->seed, "seed of every random choice");
     CLI::Option* trim_opt = app.add_option("--trim", o->trim, "fraction of the largest distances left out in each direction (default: from the data)");
     CLI::Option* truncate_opt = app.add_option("--truncate", o->truncate, "distances capped at this many pixels");
@@ -64,9 +79,19 @@ int main(int argc, char** argv) {
       if (!(o->truncate >= 0)) throw UsageError("--truncate must be >= 0");
       if (!(o->target >= 0)) throw UsageError("--target must be >= 0");
       if (o->max_iterations < 0) throw UsageError("--max-iterations must be >= 0");
+      // the models other than the homography are the default optimizer's (cluster_solve.hpp); a scan and
+      // the paper's optimizers work on the homography
+      const bool homography_only = !o->scan.empty() || o->optimizer != "default";
+      if (homography_only && o->model != "auto" && o->model != "homography")
+        throw UsageError("--model " + o->model + " needs the default optimizer and no --scan");
+      const bool automatic = o->model == "auto" && !homography_only;
+      const ClusterModel model = o->model == "similarity" ? ClusterModel::Similarity
+                                 : o->model == "affine"   ? ClusterModel::Affine
+                                                          : ClusterModel::Homography;
+      const ClusterModel least = automatic ? ClusterModel::Similarity : model;  // fewest points needed
       Points A = read_points(o->a), B = read_points(o->b);
-      validate_cluster(A.xy, o->a);
-      validate_cluster(B.xy, o->b);
+      validate_cluster(A.xy, o->a, least);
+      validate_cluster(B.xy, o->b, least);
       OptimizeStart start;
       if (!o->init.empty()) {
         ClusterInit ci = read_cluster_init_file(o->init);
@@ -88,7 +113,31 @@ int main(int argc, char** argv) {
       const bool from_data = trim_opt->count() == 0 && truncate_opt->count() == 0;
       CostOptions co{o->trim, o->truncate, from_data};
       ClusterCost cost(A.xy, B.xy, co);
-      OptimizeResult r = optimize_clusters(cost, start, oo);
+      const double domain_b = cluster_field_area(B);
+      OptimizeResult r;
+      ClusterSolution sol;
+      if (homography_only) {
+        r = optimize_clusters(cost, start, oo);
+      } else {
+        SolveOptions so;
+        so.optimize = oo;
+        so.automatic = automatic;
+        so.model = model;
+        so.domain_area_b = domain_b;
+        const auto t0 = std::chrono::steady_clock::now();
+        sol = solve_clusters(cost, start, so);
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (sol.has_homography_search) r = sol.search;
+        r.H = sol.chosen.H;
+        r.cost = sol.cost;
+        r.evaluations = sol.hypotheses;
+        r.reached_target = r.cost <= o->target;
+        r.seconds = seconds;  // every model's search
+        if (!sol.has_homography_search) r.start_cost = std::nan("");
+        r.method = std::string(cluster_model_name(sol.chosen.model)) + ": " + sol.chosen.method;
+        // physical parameters describe the homography search's answer only
+        if (!(sol.has_homography_search && sol.chosen.model == ClusterModel::Homography)) r.has_physical = false;
+      }
 
       Homography h;
       if (!A.images.empty()) h.images.push_back(A.images.front());
@@ -101,6 +150,18 @@ int main(int argc, char** argv) {
       m.emplace_back("method", "cluster-homog (Navy et al. 2005, eq. 3 cost)");
       m.emplace_back("cluster1", o->a + " (" + std::to_string(A.size()) + " points)");
       m.emplace_back("cluster2", o->b + " (" + std::to_string(B.size()) + " points)");
+      if (!homography_only) {
+        std::string odds;
+        for (const ModelCandidate& c : sol.candidates)
+          odds += std::string(odds.empty() ? "" : ", ") + cluster_model_name(c.model) + " " +
+                  (std::isfinite(c.verdict.log10_odds) ? num(std::round(c.verdict.log10_odds * 100) / 100) : "-inf");
+        m.emplace_back("model", std::string(cluster_model_name(sol.chosen.model)) +
+                                    (automatic ? " (auto: the fewest parameters the verdict accepts that match as well as the richer; "
+                                               : " (") +
+                                    "log10 odds " + odds + ")");
+      } else {
+        m.emplace_back("model", "homography");
+      }
       m.emplace_back("parameterization", o->param + (o->free_intrinsics ? " (20 free)" : ""));
       m.emplace_back("optimizer", o->optimizer + " (" + r.method + ")");
       m.emplace_back("seed", std::to_string(o->seed));
@@ -134,9 +195,14 @@ int main(int argc, char** argv) {
       // points match than chance gives (cluster_verdict.hpp); never depends on --trim or --truncate
       Verdict verdict;
       if (o->scan.empty()) {
-        VerdictOptions vo;
-        vo.hypotheses = std::max(1L, r.evaluations);
-        verdict = judge_homography(cost, r.H, vo);
+        if (homography_only) {
+          VerdictOptions vo;
+          vo.hypotheses = std::max(1L, r.evaluations);
+          vo.domain_area_b = domain_b;
+          verdict = judge_homography(cost, r.H, vo);
+        } else {
+          verdict = sol.chosen.verdict;
+        }
         m.emplace_back("verdict", verdict.accepted ? "accepted" : "rejected");
         if (!verdict.degenerate.empty()) m.emplace_back("degenerate", verdict.degenerate);
         if (!verdict.undetermined.empty()) m.emplace_back("undetermined", verdict.undetermined);

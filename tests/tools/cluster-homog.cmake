@@ -91,7 +91,31 @@ set(_six_b "printf '%s %s\\n' 275.285 737.466 498.442 226.745 616.295 474.648 88
 tpkit_tool_test(cluster-homog.six-points-accepted
   COMMAND "${_six_a} && ${_six_b} && cluster-homog a6.points b6.points --param math -o h.homography"
   STDERR_MATCH "verdict: accepted \\(6 of 6 points matched"
-  CHECK_FILE h.homography FILE_MATCH "optimizer: default \\(exhaustive\\+least squares\\).*# verdict: accepted\n.*# inliers: 6 of 6 ")
+  CHECK_FILE h.homography FILE_MATCH "# model: homography .*optimizer: default \\(homography: exhaustive\\+least squares\\).*# verdict: accepted\n.*# inliers: 6 of 6 ")
 tpkit_tool_test(cluster-homog.four-points-undetermined
-  COMMAND "${_six_a} && ${_six_b} && head -4 a6.points > a4.points && sed -n '1p@SEMI@2p@SEMI@4p@SEMI@6p' b6.points > b4.points && cluster-homog a4.points b4.points -o h.homography @SEMI@ echo exit $?"
+  COMMAND "${_six_a} && ${_six_b} && head -4 a6.points > a4.points && sed -n '1p@SEMI@2p@SEMI@4p@SEMI@6p' b6.points > b4.points && cluster-homog a4.points b4.points --model homography -o h.homography @SEMI@ echo exit $?"
   STDOUT_MATCH "exit 3" STDERR_MATCH "verdict: rejected \\(h is not determined: only 4 points" NO_FILE h.homography)
+# lower models (cluster_model.hpp, cluster_solve.hpp): astroalign's TestFewSources stars (integer
+# positions, a 50 degree rotation and a (10, -20) shift in a 512 x 512 frame) are a similarity the
+# verdict accepts from 3 stars; 2 are refused; --model other than homography needs the default optimizer
+set(_stars_a "printf '# tpkit points 1\\n# image1: ref.tif 512 512\\n# columns: x y\\n95 145\\n115 195\\n395 195\\n' > a3.points")
+set(_stars_b "printf '# tpkit points 1\\n# image1: new.tif 512 512\\n# columns: x y\\n216 90\\n396 305\\n241 43\\n' > b3.points")
+tpkit_tool_test(cluster-homog.three-stars-similarity
+  COMMAND "${_stars_a} && ${_stars_b} && cluster-homog a3.points b3.points -o h.homography"
+  STDERR_MATCH "verdict: accepted \\(3 of 3 points matched"
+  CHECK_FILE h.homography FILE_MATCH "# model: similarity \\(auto: .*log10 odds similarity 3\\.[0-9]+, affine .*# verdict: accepted\n.*\n0\\.64[0-9]* -0\\.76[0-9]* [0-9.]+\n0\\.76[0-9]* 0\\.64[0-9]* -?[0-9.]+\n0 0 1")
+tpkit_tool_test(cluster-homog.three-stars-hull-only
+  COMMAND "${_stars_a} && ${_stars_b} && grep -v image1 b3.points > bare.points && cluster-homog a3.points bare.points -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 3" STDERR_MATCH "verdict: rejected \\(3 of 3 points matched within 0\\.359 px.*log10 odds 1\\.[0-9]" NO_FILE h.homography)
+tpkit_tool_test(cluster-homog.two-stars-refused
+  COMMAND "printf '95 145\\n115 195\\n' > a2.points && printf '216 90\\n241 43\\n' > b2.points && cluster-homog a2.points b2.points -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 1" STDERR_MATCH "cluster-homog: a2.points: the cluster has 2 points@SEMI@ a similarity needs at least 3" NO_FILE h.homography)
+tpkit_tool_test(cluster-homog.three-points-not-a-homography
+  COMMAND "${_stars_a} && ${_stars_b} && cluster-homog a3.points b3.points --model homography -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 1" STDERR_MATCH "the cluster has 3 points@SEMI@ a homography needs at least 4" NO_FILE h.homography)
+tpkit_tool_test(cluster-homog.model-needs-default-optimizer
+  COMMAND "${_stars_a} && ${_stars_b} && cluster-homog a3.points b3.points --model similarity --optimizer none -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 2" STDERR_MATCH "--model similarity needs the default optimizer and no --scan" NO_FILE h.homography)
+tpkit_tool_test(cluster-homog.four-points-auto-rejected
+  COMMAND "${_six_a} && ${_six_b} && head -4 a6.points > a4.points && sed -n '1p@SEMI@2p@SEMI@4p@SEMI@6p' b6.points > b4.points && cluster-homog a4.points b4.points -o h.homography @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 3" STDERR_MATCH "verdict: rejected" NO_FILE h.homography)

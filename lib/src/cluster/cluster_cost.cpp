@@ -224,10 +224,16 @@ std::vector<NnPair> ClusterCost::pairs(const Eigen::Matrix3d& H) const {
   return out;
 }
 
-void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source) {
-  if (pts.rows() < 4)
+int cluster_min_points(ClusterModel model) {
+  return model == ClusterModel::Homography ? 4 : cluster_model_points(model) + 1;
+}
+
+void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source, ClusterModel model) {
+  const int least = cluster_min_points(model);
+  if (pts.rows() < least)
     throw InputError(source, 0, "the cluster has " + std::to_string(pts.rows()) + " point" + (pts.rows() == 1 ? "" : "s") +
-                                    "; a homography needs at least 4");
+                                    "; " + (model == ClusterModel::Affine ? "an " : "a ") + cluster_model_name(model) +
+                                    " needs at least " + std::to_string(least));
   if (!pts.allFinite()) throw InputError(source, 0, "the cluster has a non-finite coordinate");
   Eigen::Vector2d c = pts.colwise().mean().transpose();
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
@@ -240,7 +246,7 @@ void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source) {
   double lmax = tr / 2 + disc;
   double lmin = lmax > 0 ? det / lmax : 0;
   if (!(lmax > 0)) throw InputError(source, 0, "all points of the cluster coincide");
-  if (!(lmin > 1e-12 * lmax)) throw InputError(source, 0, "the cluster is collinear (all points on one line); a homography needs a 2-D spread");
+  if (!(lmin > 1e-12 * lmax)) throw InputError(source, 0, "the cluster is collinear (all points on one line); a map of the plane needs a 2-D spread");
 }
 
 double homography_max_difference(const Eigen::Matrix3d& H, const Eigen::Matrix3d& ref, const Eigen::MatrixX2d& pts) {

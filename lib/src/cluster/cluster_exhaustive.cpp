@@ -11,84 +11,77 @@
 
 namespace tpkit {
 
-long exhaustive_hypothesis_count(long na, long nb) {
-  if (na < 4 || nb < 4) return 0;
-  const long double c = static_cast<long double>(na) * (na - 1) * (na - 2) * (na - 3) / 24.0L;
-  const long double p = static_cast<long double>(nb) * (nb - 1) * (nb - 2) * (nb - 3);
+long exhaustive_hypothesis_count(long na, long nb, ClusterModel model) {
+  const int s = cluster_model_points(model);
+  if (na < s || nb < s) return 0;
+  long double c = 1, p = 1;
+  for (int k = 0; k < s; ++k) c *= static_cast<long double>(na - k) / (k + 1), p *= static_cast<long double>(nb - k);
   const long double n = c * p;
   return n >= static_cast<long double>(std::numeric_limits<long>::max()) ? std::numeric_limits<long>::max()
                                                                          : static_cast<long>(n);
 }
 
-namespace {
-
-// The matrix taking e1, e2, e3 and (1, 1, 1) to the four points; false when three of them are collinear.
-bool basis(const Eigen::MatrixX2d& P, const std::array<int, 4>& q, Eigen::Matrix3d& M) {
-  Eigen::Matrix3d C;
-  for (int k = 0; k < 3; ++k) C.col(k) << P(q[k], 0), P(q[k], 1), 1.0;
-  const Eigen::Vector3d p4(P(q[3], 0), P(q[3], 1), 1.0);
-  // collinear triples, relative to the points' spread
-  double span2 = 0;
-  for (int a = 0; a < 4; ++a)
-    for (int b = a + 1; b < 4; ++b) span2 = std::max(span2, (P.row(q[a]) - P.row(q[b])).squaredNorm());
-  const Eigen::Vector3d P4[4] = {C.col(0), C.col(1), C.col(2), p4};
-  for (int m = 0; m < 4; ++m) {
-    int o[3], n = 0;
-    for (int k = 0; k < 4; ++k)
-      if (k != m) o[n++] = k;
-    const double area2 = std::fabs((P4[o[1]] - P4[o[0]]).head<2>().x() * (P4[o[2]] - P4[o[0]]).head<2>().y() -
-                                   (P4[o[1]] - P4[o[0]]).head<2>().y() * (P4[o[2]] - P4[o[0]]).head<2>().x());
-    if (!(area2 > 1e-9 * span2)) return false;
-  }
-  const Eigen::Vector3d lambda = C.partialPivLu().solve(p4);
-  M = C * lambda.asDiagonal();
-  return M.allFinite();
-}
-
-}  // namespace
-
 std::vector<ExhaustiveHypothesis> exhaustive_hypotheses(const ClusterCost& cost, bool allow_reflection, int keep,
-                                                        long* tried) {
+                                                        long* tried, ClusterModel model) {
   const Eigen::MatrixX2d &A = cost.a(), &B = cost.b();
   const int na = static_cast<int>(A.rows()), nb = static_cast<int>(B.rows());
+  const int s = cluster_model_points(model);
   std::vector<ExhaustiveHypothesis> best;
   long n_tried = 0;
   if (tried) *tried = 0;
-  if (na < 4 || nb < 4) return best;
+  if (na < s || nb < s) return best;
   const MapCheck check(A, B);
   const double density = nb / check.area_b(), spacing = std::sqrt(check.area_b() / nb);
-  // every 4 points of A with the inverse of its basis (C(|A|, 4) of them: at most a few MB within the
-  // budget), then every ordered 4 points of B against them
+  // every s points of A with the inverse of its frame (C(|A|, s) of them: at most a few MB within the
+  // budget), then every ordered s points of B against them
   std::vector<std::array<int, 4>> qas;
   std::vector<Eigen::Matrix3d> mais;
-  for (int i0 = 0; i0 < na; ++i0)
-    for (int i1 = i0 + 1; i1 < na; ++i1)
-      for (int i2 = i1 + 1; i2 < na; ++i2)
-        for (int i3 = i2 + 1; i3 < na; ++i3) {
-          Eigen::Matrix3d Ma;
-          if (basis(A, {i0, i1, i2, i3}, Ma)) qas.push_back({i0, i1, i2, i3}), mais.push_back(Ma.inverse());
-        }
+  std::array<int, 4> qa{0, 1, 2, 3};
+  for (int k = 0; k < s; ++k) qa[k] = k;
+  for (;;) {  // combinations in lexicographic order
+    Eigen::Matrix3d Ma;
+    if (cluster_model_frame(model, A, qa.data(), Ma)) qas.push_back(qa), mais.push_back(Ma.inverse());
+    int k = s - 1;
+    while (k >= 0 && qa[k] == na - s + k) --k;
+    if (k < 0) break;
+    ++qa[k];
+    for (int j = k + 1; j < s; ++j) qa[j] = qa[j - 1] + 1;
+  }
+  // ordered s-tuples of distinct points of B; a similarity's frame of two points keeps the orientation,
+  // so mirror images get the mirrored frame too (the other models' tuples include both orientations)
+  std::vector<std::array<int, 4>> qbs;
+  {
+    std::array<int, 4> t{0, 0, 0, 0};
+    long total = 1;
+    for (int k = 0; k < s; ++k) total *= nb;
+    for (long code = 0; code < total; ++code) {
+      long c = code;
+      bool distinct = true;
+      for (int k = 0; k < s; ++k) {
+        t[k] = static_cast<int>(c % nb), c /= nb;
+        for (int j = 0; j < k && distinct; ++j) distinct = t[j] != t[k];
+      }
+      if (distinct) qbs.push_back(t);
+    }
+  }
+  const int mirrors = model == ClusterModel::Similarity && allow_reflection ? 2 : 1;
   std::vector<Eigen::Vector3d> ha(static_cast<size_t>(na));
   for (int i = 0; i < na; ++i) ha[static_cast<size_t>(i)] << A(i, 0), A(i, 1), 1.0;
   std::vector<double> d;
   std::vector<std::pair<int, int>> extra;
   std::vector<int> claim(static_cast<size_t>(nb));  // -2: one of the four; else the index into extra
   std::vector<double> dist_of;                        // squared distance of each claim
-  for (int b0 = 0; b0 < nb; ++b0)
-    for (int b1 = 0; b1 < nb; ++b1)
-      for (int b2 = 0; b2 < nb; ++b2)
-        for (int b3 = 0; b3 < nb; ++b3) {
-          if (b0 == b1 || b0 == b2 || b0 == b3 || b1 == b2 || b1 == b3 || b2 == b3) continue;
-          const std::array<int, 4> qb = {b0, b1, b2, b3};
+  for (const std::array<int, 4>& qb : qbs)
+    for (int mirror = 0; mirror < mirrors; ++mirror) {
           Eigen::Matrix3d Mb;
-          if (!basis(B, qb, Mb)) continue;
+          if (!cluster_model_frame(model, B, qb.data(), Mb, mirror == 1)) continue;
           for (size_t u = 0; u < qas.size(); ++u) {
             const std::array<int, 4>& qa = qas[u];
-            const int i0 = qa[0], i1 = qa[1], i2 = qa[2], i3 = qa[3];
             const Eigen::Matrix3d H = Mb * mais[u];
+            auto in_qa = [&](int i) { return std::find(qa.begin(), qa.begin() + s, i) != qa.begin() + s; };
             ++n_tried;
             // all of A on one side of the line at infinity; orientation kept unless mirrors are allowed
-            const double w0 = H.row(2).dot(ha[static_cast<size_t>(i0)]);
+            const double w0 = H.row(2).dot(ha[static_cast<size_t>(qa[0])]);
             bool torn = !(w0 != 0);
             for (int i = 0; i < na && !torn; ++i) torn = !(H.row(2).dot(ha[static_cast<size_t>(i)]) * w0 > 0);
             if (torn) continue;
@@ -96,11 +89,11 @@ std::vector<ExhaustiveHypothesis> exhaustive_hypotheses(const ClusterCost& cost,
             // the other points of A: nearest free point of B, each point of B given to the nearest claim
             // only (a map that squeezes A onto one point of B matches one point, not all)
             std::fill(claim.begin(), claim.end(), -1);
-            for (int k = 0; k < 4; ++k) claim[static_cast<size_t>(qb[k])] = -2;
-            d.assign(4, 0.0);
+            for (int k = 0; k < s; ++k) claim[static_cast<size_t>(qb[k])] = -2;
+            d.assign(static_cast<size_t>(s), 0.0);
             extra.clear();
             for (int i = 0; i < na; ++i) {
-              if (i == i0 || i == i1 || i == i2 || i == i3) continue;
+              if (in_qa(i)) continue;
               const Eigen::Vector3d q = H * ha[static_cast<size_t>(i)];
               const Eigen::Vector2d x(q.x() / q.z(), q.y() / q.z());
               double bd = std::numeric_limits<double>::infinity();
@@ -124,21 +117,21 @@ std::vector<ExhaustiveHypothesis> exhaustive_hypotheses(const ClusterCost& cost,
               else extra[k].second = -1;
             extra.erase(std::remove_if(extra.begin(), extra.end(), [](const std::pair<int, int>& e) { return e.second < 0; }),
                         extra.end());
-            // nothing beyond the four near enough to matter: not worth the statistic
+            // nothing beyond the minimal set near enough to matter: not worth the statistic
             double nearest = std::numeric_limits<double>::infinity();
-            for (size_t k = 4; k < d.size(); ++k) nearest = std::min(nearest, d[k]);
-            if (!(nearest < 0.5 * spacing) && d.size() > 4) continue;
-            const Significance s = match_significance(na, d, density, spacing);
-            if (static_cast<int>(best.size()) == keep && !(s.log10_tail < best.back().log10_tail)) continue;
+            for (size_t k = static_cast<size_t>(s); k < d.size(); ++k) nearest = std::min(nearest, d[k]);
+            if (!(nearest < 0.5 * spacing) && d.size() > static_cast<size_t>(s)) continue;
+            const Significance sig = match_significance(na, d, density, spacing, s);
+            if (static_cast<int>(best.size()) == keep && !(sig.log10_tail < best.back().log10_tail)) continue;
             if (!check(H).empty()) continue;  // torn or collapsed (cluster_verdict.hpp)
             ExhaustiveHypothesis h;
             h.H = H;
-            for (int k = 0; k < 4; ++k) h.pairs.emplace_back(qa[k], qb[k]);
+            for (int k = 0; k < s; ++k) h.pairs.emplace_back(qa[k], qb[k]);
             for (size_t k = 0; k < extra.size(); ++k)
-              if (d[k + 4] <= s.radius) h.pairs.push_back(extra[k]);
+              if (d[k + static_cast<size_t>(s)] <= sig.radius) h.pairs.push_back(extra[k]);
             std::sort(h.pairs.begin(), h.pairs.end());
-            h.log10_tail = s.log10_tail;
-            // one map comes from every four of its matches: keep it once, from its best four
+            h.log10_tail = sig.log10_tail;
+            // one map comes from every minimal set of its matches: keep it once, from its best one
             auto same = std::find_if(best.begin(), best.end(), [&](const ExhaustiveHypothesis& e) { return e.pairs == h.pairs; });
             if (same != best.end()) {
               if (!(h.log10_tail < same->log10_tail)) continue;

@@ -140,26 +140,26 @@ double log10_binomial_tail(int n, int k, double p) {
   return lower >= 1 ? 0 : std::log1p(-lower) / std::log(10.0);
 }
 
-Significance match_significance(int n, std::vector<double> d, double density, double spacing) {
+Significance match_significance(int n, std::vector<double> d, double density, double spacing, int fitted) {
   Significance s;
-  s.radii = std::max(1, n - 4);
+  s.radii = std::max(1, n - fitted);
   std::sort(d.begin(), d.end());
   const double floor = 1e-6 * spacing;
   s.log10_tail = 0;
   bool any = false;
-  for (size_t i = 4; i < d.size() && static_cast<int>(i) < n; ++i) {  // k = i + 1 matches within d_k
+  for (size_t i = static_cast<size_t>(fitted); i < d.size() && static_cast<int>(i) < n; ++i) {  // k = i + 1 matches within d_k
     const int k = static_cast<int>(i) + 1;
     if (i + 1 < d.size() && d[i + 1] == d[i]) continue;  // ties: the largest k at that radius
     const double r = std::max(d[i], floor);
-    // h is fitted to its matches (least squares, 8 parameters): k matches' 2k residuals keep only
-    // (2k - 8) / 2k of their squared size, so k matches within r are as likely by chance as k independent
-    // points within r / sqrt(1 - 4 / k) (for k = 5, 2.2 r; for k = 100, 1.02 r)
-    const double r_chance = r / std::sqrt(1.0 - 4.0 / k);
+    // h is fitted to its matches (least squares, 2 s parameters): k matches' 2k residuals keep only
+    // (2k - 2s) / 2k of their squared size, so k matches within r are as likely by chance as k independent
+    // points within r / sqrt(1 - s / k) (homography, s = 4: for k = 5, 2.2 r; for k = 100, 1.02 r)
+    const double r_chance = r / std::sqrt(1.0 - static_cast<double>(fitted) / k);
     const double p = -std::expm1(-kPi * r_chance * r_chance * density);
-    const double lt = log10_binomial_tail(n - 4, k - 4, p);
+    const double lt = log10_binomial_tail(n - fitted, k - fitted, p);
     if (!any || lt < s.log10_tail) s = {lt, k, r, p, s.radii}, any = true;
   }
-  if (!any) {  // nothing beyond the 4 matches any h fits: no evidence (the smallest radius, for the report)
+  if (!any) {  // nothing beyond the s matches any h fits: no evidence (the smallest radius, for the report)
     s.inliers = static_cast<int>(std::min<size_t>(d.size(), static_cast<size_t>(std::max(n, 0))));
     s.radius = d.empty() ? 0 : std::max(d.back(), floor);
     s.p = -std::expm1(-kPi * s.radius * s.radius * density);
@@ -176,7 +176,10 @@ Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, cons
     v.log10_odds = -std::numeric_limits<double>::infinity();
     return v;
   }
-  const double m = static_cast<double>(B.rows()), density = m / check.area_b(), spacing = std::sqrt(check.area_b() / m);
+  // chance matches are spread over the region where B's points could have been: B's image when it is
+  // known (AC-RANSAC's and astrometry.net's field), else B's convex hull
+  const double domain = std::max(check.area_b(), opt.domain_area_b);
+  const double m = static_cast<double>(B.rows()), density = m / domain, spacing = std::sqrt(check.area_b() / m);
   // every point of A is a trial: a map chosen to fit a few points must not be judged only on the points
   // it keeps inside B (an unrelated 100-point pair stretched 6 times across B kept 19 points of A there,
   // 11 of them matched within 2.8 px: log10 odds 4.0 on those 19, -2 on all 100). The points that land
@@ -189,16 +192,18 @@ Verdict judge_homography(const ClusterCost& cost, const Eigen::Matrix3d& H, cons
   }
   std::vector<double> d;
   for (const MutualPair& mp : mutual_pairs(cost, H)) d.push_back(mp.d);
-  const Significance s = match_significance(n, std::move(d), density, spacing);
+  const int fitted = cluster_model_points(opt.model);
+  const Significance s = match_significance(n, std::move(d), density, spacing, fitted);
   v.candidates = n;
   v.inliers = s.inliers;
   v.radius_px = s.radius;
-  v.expected = std::min(n, 4) + std::max(0, n - 4) * s.p;
+  v.expected = std::min(n, fitted) + std::max(0, n - fitted) * s.p;
   const double tests = static_cast<double>(s.radii) * static_cast<double>(std::max(1L, opt.hypotheses));
   v.log10_odds = -(std::log10(tests) + s.log10_tail);
-  if (v.mapped_into_b <= 4)
-    v.undetermined = "only " + std::to_string(v.mapped_into_b) +
-                     " points of cluster A map into cluster B, and any 4 correspondences fit a homography exactly";
+  if (v.mapped_into_b <= fitted)
+    v.undetermined = "only " + std::to_string(v.mapped_into_b) + " points of cluster A map into cluster B, and any " +
+                     std::to_string(fitted) + " correspondences fit " + (opt.model == ClusterModel::Affine ? "an " : "a ") +
+                     cluster_model_name(opt.model) + " exactly";
   v.accepted = v.undetermined.empty() && v.log10_odds >= opt.min_log10_odds;
   return v;
 }

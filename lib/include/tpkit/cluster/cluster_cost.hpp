@@ -24,6 +24,8 @@
 #include <utility>
 #include <vector>
 
+#include "tpkit/cluster/cluster_model.hpp"
+
 namespace tpkit {
 
 struct CostOptions {
@@ -106,9 +108,13 @@ struct MutualPair {
 };
 std::vector<MutualPair> mutual_pairs(const ClusterCost& cost, const Eigen::Matrix3d& H);
 
-// Throws InputError(source, 0, reason) unless the cluster can define a homography: at least 4 points,
-// all finite, not all on one line (spread across the principal axis above 1e-6 of the spread along it).
-void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source);
+// Throws InputError(source, 0, reason) unless the cluster can define a map of the model
+// (cluster_model.hpp): at least cluster_min_points(model) points (3 for a similarity, 4 for an affine
+// map, 4 for a homography, which 4 points fix but cannot verify), all finite, not all on one line
+// (spread across the principal axis above 1e-6 of the spread along it).
+int cluster_min_points(ClusterModel model);
+void validate_cluster(const Eigen::MatrixX2d& pts, const std::string& source,
+                      ClusterModel model = ClusterModel::Homography);
 
 // Largest distance between h and a reference homography over the points of `pts` (image 1), in
 // image-2 pixels (used for "h within 0.5 px of the truth over the cluster's extent").

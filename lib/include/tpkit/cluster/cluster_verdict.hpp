@@ -12,7 +12,10 @@
 //     whose forward nearest neighbour in B is mutual, with their distances d_1 <= d_2 <= ... (image-2
 //     pixels); s = sqrt(area(hull B) / |B|) is B's mean spacing;
 //   - for unrelated clusters, a mapped point has a B point within r with probability
-//     p(r) = 1 - exp(-pi r^2 |B| / area(hull B)) (Poisson); any homography fits 4 matches exactly (8
+//     p(r) = 1 - exp(-pi r^2 |B| / area(D)) (Poisson), D the field of B: its image when the points file
+//     gives the image's size (AC-RANSAC's alpha = pi r^2 / image area; a star could have been anywhere
+//     in the frame), else hull B (which understates a few points' field: 3 points span about a twelfth of
+//     it); any homography fits 4 matches exactly (8
 //     parameters), so those prove nothing: with the radius r = d_k of the k-th match (k = 5 ... n,
 //     floored at 1e-6 s), the chance of k matches is the binomial tail
 //     P_k = P(K >= k - 4), K ~ Bin(n - 4, p(d_k / sqrt(1 - 4/k))), the radius widened because h is
@@ -24,6 +27,9 @@
 // The radius comes from the data, so a small cluster measured to 0.1 px is verifiable: 6 points (2
 // matches beyond the 4 fitted) within 0.1 px of each other. With 4 points nothing is left to verify (any
 // 4 correspondences fit exactly), so such an answer is always rejected: 4 points do not determine h.
+// For a lower model (VerdictOptions::model, cluster_model.hpp) with s minimal points, s replaces 4
+// throughout: P_k = P(K >= k - s), K ~ Bin(n - s, p(d_k / sqrt(1 - s/k))), max(1, n - s) radii, and
+// "undetermined" below s + 1 points mapped into B (a similarity is verifiable from 3 points).
 // Nothing here depends on the cost's --trim or --truncate. Pixels: x = column, y = row; H is x_B ~ H x_A.
 #pragma once
 #include <Eigen/Core>
@@ -31,12 +37,16 @@
 #include <vector>
 
 #include "tpkit/cluster/cluster_cost.hpp"
+#include "tpkit/cluster/cluster_model.hpp"
 
 namespace tpkit {
 
 struct VerdictOptions {
   double min_log10_odds = 3;  // accept when -log10(NFA) reaches this
-  long hypotheses = 1;        // how many homographies the search evaluated (the NFA's number of tests)
+  long hypotheses = 1;        // how many maps the search evaluated (the NFA's number of tests)
+  ClusterModel model = ClusterModel::Homography;  // the map's model: its s minimal points replace the 4 below
+  double domain_area_b = 0;   // px^2: the field B's points come from (its image, w x h), when known and
+                              // larger than hull B; 0: hull B
 };
 
 struct Verdict {
@@ -56,15 +66,16 @@ constexpr double kCandidateMargin = 0.25;
 
 // The a contrario significance of a set of matches (the verdict's statistic, also used on parts of the
 // clusters): n candidates, their match distances (any order; sorted here), `density` = points of B per
-// square pixel, `spacing` = B's mean point spacing (for the radius floor). log10_tail = log10 min_k P_k
-// (<= 0), radii = max(1, n - 4), the number of radii tried.
+// square pixel, `spacing` = B's mean point spacing (for the radius floor), `fitted` = the minimal points
+// of the model (4 for a homography: the 4 above; s in general). log10_tail = log10 min_k P_k
+// (<= 0), radii = max(1, n - fitted), the number of radii tried.
 struct Significance {
   double log10_tail = 0;
   int inliers = 0;
   double radius = 0, p = 0;
   int radii = 1;
 };
-Significance match_significance(int n, std::vector<double> distances, double density, double spacing);
+Significance match_significance(int n, std::vector<double> distances, double density, double spacing, int fitted = 4);
 
 // log10 of the binomial upper tail P(K >= k), K ~ Bin(n, p); 0 for k <= 0, -inf for k > n.
 double log10_binomial_tail(int n, int k, double p);
