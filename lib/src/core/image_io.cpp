@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -211,9 +212,56 @@ bool read_tiff_strip_rows(const std::string& path, long width, long ya, long yb,
     TIFFClose(tif);
     return false;
   }
-  std::vector<unsigned char> buf(static_cast<size_t>(TIFFStripSize(tif)));
+  // A header may declare more samples than the file holds (25 000 x 25 000 floats in 550 bytes): every
+  // strip read must lie in the file, and an uncompressed strip is read row by row, only the rows asked
+  // for, so that neither a huge declared strip nor a window of a large DEM allocates more than it reads.
+  std::error_code ec;
+  const uint64_t file_bytes = std::filesystem::file_size(path, ec);
+  uint16_t compression = COMPRESSION_NONE;
+  TIFFGetFieldDefaulted(tif, TIFFTAG_COMPRESSION, &compression);
   const size_t row_bytes = static_cast<size_t>(width) * bytes_per_sample;
+  const uint32_t strips = TIFFNumberOfStrips(tif);
+  auto fail = [&](const std::string& why) {
+    TIFFClose(tif);
+    throw InputError(path, 0, why);
+  };
+  auto check_strip = [&](long strip) {
+    if (strip >= static_cast<long>(strips)) fail("the header declares " + std::to_string(strips) + " strips, row " +
+                                                 std::to_string(strip * static_cast<long>(rps)) + " needs more");
+    const uint64_t off = TIFFGetStrileOffset(tif, static_cast<uint32_t>(strip)), len = TIFFGetStrileByteCount(tif, static_cast<uint32_t>(strip));
+    if (ec || off > file_bytes || len > file_bytes - off)
+      fail("strip " + std::to_string(strip) + " lies beyond the end of the file (" + std::to_string(file_bytes) +
+           " bytes): a truncated file, or a header declaring more samples than the file holds");
+    return std::make_pair(off, len);
+  };
+  if (compression == COMPRESSION_NONE) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<unsigned char> buf(row_bytes);
+    for (long y = ya; y < yb; ++y) {
+      const long strip = y / static_cast<long>(rps);
+      const auto [off, len] = check_strip(strip);
+      const uint64_t at = static_cast<uint64_t>(y - strip * static_cast<long>(rps)) * row_bytes;
+      if (at + row_bytes > len) fail("strip " + std::to_string(strip) + " is short (truncated file?)");
+      in.seekg(static_cast<std::streamoff>(off + at));
+      if (!in.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(row_bytes)))
+        fail("read error at row " + std::to_string(y));
+      if (TIFFIsByteSwapped(tif)) {
+        if (bytes_per_sample == 2) TIFFSwabArrayOfShort(reinterpret_cast<uint16_t*>(buf.data()), static_cast<tmsize_t>(width));
+        else if (bytes_per_sample == 4) TIFFSwabArrayOfLong(reinterpret_cast<uint32_t*>(buf.data()), static_cast<tmsize_t>(width));
+        else if (bytes_per_sample == 8) TIFFSwabArrayOfDouble(reinterpret_cast<double*>(buf.data()), static_cast<tmsize_t>(width));
+      }
+      row(buf.data(), y);
+    }
+    TIFFClose(tif);
+    return true;
+  }
+  // compressed: a strip is decoded whole; one declared far beyond what a strip may hold is refused
+  constexpr tmsize_t kMaxStripBytes = tmsize_t(1) << 30;
+  if (TIFFStripSize(tif) > kMaxStripBytes)
+    fail("a compressed strip of " + std::to_string(TIFFStripSize(tif) >> 20) + " MiB decoded: larger than 1 GiB (write the file tiled)");
+  std::vector<unsigned char> buf(static_cast<size_t>(TIFFStripSize(tif)));
   for (long strip = ya / static_cast<long>(rps); strip * static_cast<long>(rps) < yb; ++strip) {
+    check_strip(strip);
     const tmsize_t n = TIFFReadEncodedStrip(tif, static_cast<uint32_t>(strip), buf.data(), static_cast<tmsize_t>(buf.size()));
     if (n < 0) {
       TIFFClose(tif);

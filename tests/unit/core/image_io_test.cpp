@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -96,4 +98,70 @@ TEST(ImageIo, GeoTiffGridRoundTripsAndNeedsGeoreferencing) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no GeoTIFF georeferencing"), std::string::npos);
   }
+}
+
+namespace {
+// A little-endian GeoTIFF written byte by byte whose header declares W x H float32 samples in one
+// uncompressed strip of W x H x 4 bytes, while the file holds 16 bytes of them (issue 23: 550 bytes
+// declaring 25 000 x 25 000 made the reader allocate 2.5 GB).
+void write_lying_dem(const std::string& path, uint32_t w, uint32_t h) {
+  std::string b = "II*";
+  b += '\0';
+  auto u16 = [&](uint16_t v) { b += static_cast<char>(v & 0xff), b += static_cast<char>(v >> 8); };
+  auto u32 = [&](uint32_t v) { for (int k = 0; k < 4; ++k) b += static_cast<char>((v >> (8 * k)) & 0xff); };
+  auto f64 = [&](double v) {
+    uint64_t u;
+    std::memcpy(&u, &v, 8);
+    for (int k = 0; k < 8; ++k) b += static_cast<char>((u >> (8 * k)) & 0xff);
+  };
+  const uint32_t n = 13, data = 8 + 2 + 12 * n + 4;  // scale at data, tie at +24, keys at +72, strip at +96
+  u32(8);
+  u16(n);
+  auto entry = [&](uint16_t tag, uint16_t type, uint32_t count, uint32_t value) { u16(tag), u16(type), u32(count), u32(value); };
+  entry(256, 4, 1, w);
+  entry(257, 4, 1, h);
+  entry(258, 3, 1, 32);
+  entry(259, 3, 1, 1);
+  entry(262, 3, 1, 1);
+  entry(273, 4, 1, data + 96);
+  entry(277, 3, 1, 1);
+  entry(278, 4, 1, h);
+  entry(279, 4, 1, static_cast<uint32_t>(std::min<uint64_t>(0xffffffffu, uint64_t(w) * h * 4)));
+  entry(339, 3, 1, 3);
+  entry(33550, 12, 3, data);
+  entry(33922, 12, 6, data + 24);
+  entry(34735, 3, 12, data + 72);
+  u32(0);
+  for (double v : {1e-4, 1e-4, 0.0}) f64(v);
+  for (double v : {0.0, 0.0, 0.0, 5.0, 43.5, 0.0}) f64(v);
+  for (uint16_t v : {1, 1, 0, 2, 1024, 0, 1, 2, 2048, 0, 1, 4326}) u16(v);
+  for (int k = 0; k < 4; ++k) f64(0), b.resize(b.size() - 4);  // 16 bytes of samples
+  std::ofstream(path, std::ios::binary) << b;
+}
+}  // namespace
+
+TEST(ImageIo, DemHeaderDeclaringMoreThanTheFileIsRefusedWithoutAllocatingIt) {
+  const auto p = scratch("lying.tif").string();
+  write_lying_dem(p, 25000, 25000);
+  ASSERT_LT(fs::file_size(p), 600u);
+  // a scene's window in the middle of the declared grid: its rows lie beyond the 16 bytes held
+  const GeoBounds scene{5.1, 5.11, 43.0, 43.01};
+  try {
+    read_geotiff_grid(p, &scene);
+    FAIL() << "a DEM holding 16 bytes of a declared 2.5 GB was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("beyond the end of the file"), std::string::npos) << e.what();
+  }
+  // the whole declared grid is more samples than any window is allowed
+  try {
+    read_geotiff_grid(p);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("larger than 400000000 samples"), std::string::npos) << e.what();
+  }
+  // a small declared grid whose strip fits the file reads, byte for byte (4 x 1 samples of 0)
+  write_lying_dem(p, 4, 1);
+  const GeoGrid g = read_geotiff_grid(p);
+  EXPECT_EQ(g.width, 4);
+  EXPECT_EQ(g.data, std::vector<float>(4, 0.0f));
 }
