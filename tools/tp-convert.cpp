@@ -142,6 +142,8 @@ int main(int argc, char** argv) {
           if (!o->to.empty()) check_format("--to", o->to);
           if (!o->from.empty()) check_format("--from", o->from);
           if (o->out == "-") throw tpkit::UsageError("-o names a folder or prefix, not stdout");
+          // taken lexically: "o/new/../run" is o/run, so no folder o/new is made on the way (and left behind)
+          o->out = fs::path(o->out).lexically_normal().string();
           long files = 0, records = 0;
           if (!o->to.empty()) {
             std::vector<tpkit::Matches> ms;

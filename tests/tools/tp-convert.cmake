@@ -78,3 +78,16 @@ tpkit_tool_test(tp-convert.images-order
 tpkit_tool_test(tp-convert.images-unknown
   COMMAND "${_cin} && tp-convert --to colmap ab.m --images Z.tif -o col"
   EXPECT_FAIL STDERR_MATCH "--images names Z.tif, which no matches file holds" NO_FILE col)
+# issue 23: -o is taken lexically (o/new/../run made and left a folder o/new), a matches file without
+# image lines cannot name peer files (x-__.match was written), an image stem holding "__" round-trips
+# through ASP's PREFIX-IMAGE1__IMAGE2 names only with --images, and a folder as input is named as such
+set(_pair "printf '# tpkit matches 1\\n# image1: A.tif 100 100\\n# image2: B.tif 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n5 10 20 7 11 21\\n' > ab.m")
+tpkit_tool_test(tp-convert.output-taken-lexically
+  COMMAND "${_pair} && mkdir o && tp-convert --to asp ab.m -o o/new/../run && find o | sort"
+  STDOUT_MATCH "^o\no/run-A__B.match\n$")
+tpkit_tool_test(tp-convert.asp-needs-image-lines
+  COMMAND "printf '# tpkit matches 1\\n# columns: id1 x1 y1 id2 x2 y2\\n5 10 20 7 11 21\\n' > m && tp-convert --to asp m -o x @SEMI@ echo exit $? @SEMI@ ls"
+  STDOUT_MATCH "^exit 1\nm\n$" STDERR_MATCH "m: the header names no image1 / image2 lines: a peer format needs the images")
+tpkit_tool_test(tp-convert.asp-double-underscore-stem
+  COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 >/dev/null && cp s/view1.tif a__b.tif && cp s/view2.tif img_02.tif && printf '# tpkit matches 1\\n# image1: a__b.tif 128 128\\n# image2: img_02.tif 128 128\\n# columns: id1 x1 y1 id2 x2 y2\\n5 10 20 7 11 21\\n' > m && tp-convert -q --to asp m -o x && (tp-convert --from asp x-a__b__img_02.match -o back @SEMI@ echo exit $?) && tp-convert -q --from asp x-a__b__img_02.match --images a__b.tif img_02.tif -o back && grep '^# image' back/*.matches"
+  STDOUT_MATCH "exit 1\n# image1: a__b.tif 128 128\n# image2: img_02.tif 128 128\n$" STDERR_MATCH "the name holds '__' 2 times: cannot tell where IMAGE1 ends")
