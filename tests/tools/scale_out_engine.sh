@@ -11,7 +11,9 @@
 set -euo pipefail
 engine=$1
 BIN=$(cd "$2" && pwd)
-T=$(mktemp -d "${TMPDIR:-/tmp}/tpkit scale out.XXXXXX")  # a space in every path on purpose
+# a space in every path on purpose; for Slurm also a '%j', which sbatch would expand in --output (each job
+# then writing its log into a folder that does not exist, and failing) unless submit-slurm.sh writes %%
+if [ "$engine" = slurm ]; then T=$(mktemp -d "${TMPDIR:-/tmp}/tpkit scale %j out.XXXXXX"); else T=$(mktemp -d "${TMPDIR:-/tmp}/tpkit scale out.XXXXXX"); fi
 pids=()
 S=
 cleanup() {
@@ -38,6 +40,9 @@ run_plan() {
       local n
       n=$(ls "$T/work/logs" | wc -l)
       echo "slurm: $n job logs"
+      local jobs
+      jobs=$(cat "$T"/work/jobs/{geometry,detect,tiles,merge,chain}.jobs | wc -l)
+      [ "$n" -eq "$jobs" ] || { echo "FAIL: $n job logs in $T/work/logs for $jobs jobs" >&2; exit 1; }
       ;;
     parallel)
       need parallel

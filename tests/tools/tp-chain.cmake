@@ -22,3 +22,11 @@ tpkit_tool_test(tp-chain.bad-record
 tpkit_tool_test(tp-chain.images-twice
   COMMAND "printf '# tpkit matches 1\\n# image1: a\\n# image2: b\\n# columns: id1 x1 y1 id2 x2 y2\\n' > m && tp-chain m --images a a b -o t.tracks"
   EXPECT_FAIL STDERR_MATCH "--images names a twice" NO_FILE t.tracks)
+# issue 23: a tracks file whose header says "matches" is refused (its columns were joined as x1 y1 x2 y2
+# with record-index ids), and --min-views below 2 is an option error
+tpkit_tool_test(tp-chain.tracks-labelled-matches
+  COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m -o t.tracks && sed 's/tpkit tracks 1/tpkit matches 1/' t.tracks > fake.m && tp-chain fake.m ab.m -o x.tracks"
+  EXPECT_FAIL STDERR_MATCH "tp-chain: fake.m: a matches header over the columns of a tracks file \\(track, x3, ...\\): not a matches file" NO_FILE x.tracks)
+tpkit_tool_test(tp-chain.min-views-below-two
+  COMMAND "${_ab} && tp-chain ab.m --min-views -5 -o t.tracks @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 2" STDERR_MATCH "--min-views: must be at least 2, got '-5'" NO_FILE t.tracks)

@@ -32,3 +32,23 @@ foreach(engine slurm parallel make)
     COMMAND "bash \"$SRC/tests/tools/scale_out_engine.sh\" ${engine} \"$(dirname \"$(command -v tp-plan)\")\""
     STDOUT_MATCH "PASS: ${engine}" TIMEOUT 180 LABELS engine ${engine} slow)
 endforeach()
+# issue 23: a work folder is never reused for another plan (images in another order made make say
+# "Nothing to be done" while the old outputs stood for other pairs), nor one holding outputs without a
+# plan; the same plan again resumes. A model path that is a device is refused before any read.
+# run-parallel.sh being a folder fails before the success summary and leaves no folder made.
+# plan.mk grows with the pairs, not with pairs x images (each region rule named every detection report).
+tpkit_tool_test(tp-plan.reused-folder-other-order
+  COMMAND "${_imgs} && tp-plan -q -o w s/view1.tif s/view2.tif s/view3.tif && tp-plan -q -o w s/view1.tif s/view2.tif s/view3.tif && echo same-plan-ok && cp w/plan.mk before && tp-plan -q -o w s/view2.tif s/view1.tif s/view3.tif @SEMI@ echo exit $? && cmp before w/plan.mk && echo untouched"
+  STDOUT_MATCH "same-plan-ok\nexit 2\nuntouched" STDERR_MATCH "w: holds another plan \\(its plan.mk differs: other images, another order")
+tpkit_tool_test(tp-plan.outputs-without-plan
+  COMMAND "${_imgs} && mkdir -p w/pairs && touch w/pairs/pair-1-2.matches && tp-plan -q -o w s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "w: holds outputs of a plan \\(pairs\\) but no plan.mk" NO_FILE w/plan.mk)
+tpkit_tool_test(tp-plan.list-is-a-device
+  COMMAND "${_imgs} && timeout 20 tp-plan -o w --list /dev/zero"
+  EXPECT_FAIL STDERR_MATCH "tp-plan: /dev/zero: not a regular file or a pipe" NO_FILE w)
+tpkit_tool_test(tp-plan.runner-name-is-a-folder
+  COMMAND "${_imgs} && mkdir -p w/run-parallel.sh && (tp-plan -o w s/view1.tif s/view2.tif 2> err @SEMI@ echo exit $?) && cat err && ls w && (grep -c 'region jobs' err || true)"
+  STDOUT_MATCH "^exit 1\ntp-plan: [^\n]*w/run-parallel.sh: cannot write: is a folder\nrun-parallel.sh\n0\n$")
+tpkit_tool_test(tp-plan.size-grows-with-pairs
+  COMMAND "${_imgs} && mkdir many && for i in $(seq 40) @SEMI@ do cp s/view1.tif many/v$i.tif @SEMI@ cp s/view1_rpc.txt many/v$i\\_rpc.txt @SEMI@ done && tp-plan -q -o w many/v*.tif && pairs=$(wc -l < w/jobs/geometry.jobs) && bytes=$(wc -c < w/plan.mk) && echo \"$pairs pairs, $((bytes / pairs)) bytes per pair\" && test $bytes -lt $((pairs * 1500))"
+  STDOUT_MATCH "^780 pairs, [0-9]+ bytes per pair\n$")

@@ -29,3 +29,7 @@ tpkit_tool_test(tp-sample.empty-stdin
 tpkit_tool_test(tp-sample.negative-seed
   COMMAND "tp-sample - --seed -1 -o o.tracks < /dev/null"
   EXPECT_FAIL STDERR_MATCH "--seed: must be a non-negative integer, got '-1'" NO_FILE o.tracks)
+# issue 23: a tracks file labelled "matches" is no matches file
+tpkit_tool_test(tp-sample.tracks-labelled-matches
+  COMMAND "printf '# tpkit matches 1\\n# image1: A 9 9\\n# image2: B 9 9\\n# image3: C 9 9\\n# columns: track x1 y1 x2 y2 x3 y3\\n0 1 1 2 2 3 3\\n1 4 4 5 5 6 6\\n' > fake.m && tp-sample fake.m --count 1 -o s.m"
+  EXPECT_FAIL STDERR_MATCH "tp-sample: fake.m: a matches header over the columns of a tracks file" NO_FILE s.m)
