@@ -500,9 +500,16 @@ const char* rpc_form_name(RpcForm f) {
   return "?";
 }
 
-RpcForm rpc_form_of(const std::string& path) {
+namespace {
+std::string lower_extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+}  // namespace
+
+RpcForm rpc_form_of(const std::string& path) {
+  const std::string ext = lower_extension(path);
   if (ext == ".rpb") return RpcForm::rpb;
   if (ext == ".txt") return RpcForm::txt;
   if (ext == ".xml") return RpcForm::dimap;
@@ -712,6 +719,15 @@ RpcSource load_image_rpc(const std::string& image, const std::map<std::string, s
   std::string names;
   for (const auto& c : rpc_sidecar_candidates(image)) names += (names.empty() ? "" : ", ") + fs::path(c).filename().string();
   throw InputError(image, 0, "no RPC model: no tag 50844, none of " + names + " beside it, and no --rpc " + image + "=FILE");
+}
+
+RpcSource load_rpc_model(const std::string& image_or_model) {
+  const std::string ext = lower_extension(image_or_model);
+  if (ext == ".rpb" || ext == ".txt" || ext == ".xml") {
+    const RpcForm form = rpc_form_of(image_or_model);
+    return {read_rpc_file(image_or_model), image_or_model, form};
+  }
+  return load_image_rpc(image_or_model);
 }
 
 std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::string>& values) {

@@ -73,6 +73,9 @@ struct RpcSource {
 std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
 // The same, throwing InputError("IMAGE: no RPC model: no tag 50844 and none of SIDECARS") when there is none.
 RpcSource load_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
+// The model of an image or of a model file: a name of a model form (_rpc.txt / .TXT, .RPB, .XML) is read as
+// that form, anything else as an image (load_image_rpc: its tag 50844, else a sidecar).
+RpcSource load_rpc_model(const std::string& image_or_model);
 // "--rpc IMG=FILE" values -> map image -> file; UsageError for a value without '='.
 std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::string>& values);
 // UsageError for an --rpc IMAGE=FILE whose IMAGE is not one of `images` (as written): a typo is not ignored.

@@ -1,0 +1,41 @@
+// Single points through one RPC model, streamed as PROJ's cct streams them (tp-rpc project / localize):
+//   project    input  lon lat h [extra...]   (degrees, metres above the WGS84 ellipsoid)
+//              output x y h [extra...]       (pixels: x = column, y = row, (0, 0) the centre of the
+//                                             top-left pixel; h passed on)
+//   localize   input  x y h [extra...]   -> output lon lat h [extra...]: the ground point of the pixel at
+//              height h (RpcModel::localize, residual below 1e-8 px);
+//              with a DEM: input x y [extra...] -> lon lat h [extra...], h the DEM's (bilinear) height
+//              where the line of sight meets it: f(h) = DEM(localize(x, y, h)) - h sampled at 65 heights
+//              over the model's height range, its highest sign change refined by bisection to 1e-4 m.
+// Lines that are empty or start with '#' pass through unchanged; the coordinate columns (separated by
+// blanks or tabs) are replaced, everything after them is kept byte for byte; one output line per input
+// line. Numbers are written in the shortest form that reads back to the same double. A line with too
+// few columns or a value that is not a finite number is an InputError(source:line) (nothing is written:
+// the caller writes the returned text). A point without a solution (a localization that does not
+// converge, a pole of the model, a line of sight the DEM does not cover) is written "nan nan nan" with
+// its extra columns, and counted.
+#pragma once
+#include <istream>
+#include <string>
+
+#include "tpkit/rpc/rpc_model.hpp"
+
+namespace tpkit {
+
+struct GeoGrid;
+
+enum class RpcPointDirection { Project, Localize };
+
+struct RpcPointStats {
+  long points = 0;    // lines transformed
+  long comments = 0;  // lines passed through
+  long outside = 0;   // points outside the model's validity box (lon_off +- lon_scale, ..., height): flagged only by count
+  long unsolved = 0;  // points written as nan
+  std::string first_unsolved;  // "source:line: reason" of the first of them
+};
+
+// The transformed text of `in` (named `source` in messages). `dem` (localize only, may be null).
+std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
+                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats = nullptr);
+
+}  // namespace tpkit

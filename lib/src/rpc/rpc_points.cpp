@@ -1,0 +1,144 @@
+// See rpc_points.hpp.
+#include "tpkit/rpc/rpc_points.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <vector>
+
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/image_io.hpp"
+#include "tpkit/core/input_file.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/rpc/rpc_adjust.hpp"
+
+namespace tpkit {
+
+namespace {
+
+bool blank(char c) { return c == ' ' || c == '\t'; }
+
+// The first `n` blank-separated fields of `line` as finite numbers, and where the rest begins (the
+// separator before the first extra column included, so that it is kept as it was).
+std::vector<double> leading_numbers(const std::string& line, int n, size_t& rest, const std::string& source, long lineno) {
+  std::vector<double> v;
+  size_t i = 0;
+  while (static_cast<int>(v.size()) < n) {
+    while (i < line.size() && blank(line[i])) ++i;
+    if (i >= line.size() || line[i] == '\r')
+      throw InputError(source, lineno, "expected " + std::to_string(n) + " numbers, got " + std::to_string(v.size()));
+    size_t j = i;
+    while (j < line.size() && !blank(line[j]) && line[j] != '\r') ++j;
+    const std::string field = line.substr(i, j - i);
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(field.c_str(), &end);
+    // nan is a point without a value (what an earlier stage writes for a point it could not solve)
+    if (end != field.c_str() + field.size() || std::isinf(x) || errno == ERANGE)
+      throw InputError(source, lineno, "'" + field + "' is not a finite number (nor nan)");
+    v.push_back(x);
+    i = j;
+  }
+  rest = i;
+  return v;
+}
+
+bool outside_box(const RpcModel& m, double lon, double lat, double h) {
+  return std::fabs(lon - m.lon_off) > std::fabs(m.lon_scale) || std::fabs(lat - m.lat_off) > std::fabs(m.lat_scale) ||
+         std::fabs(h - m.height_off) > std::fabs(m.height_scale);
+}
+
+// The height where the line of sight of pixel (x, y) meets the DEM: f(h) = DEM(localize(x, y, h)) - h
+// sampled at 65 heights over the model's height range, the highest sign change (the first surface the
+// ray meets coming down from the satellite) refined by bisection to 0.1 mm.
+double line_of_sight_on_dem(const RpcModel& m, const HeightPrior& ground, double x, double y) {
+  auto f = [&](double h, double& out) {
+    const Eigen::Vector2d ll = m.localize(x, y, h);
+    double hd = 0;
+    if (!ground.at(ll.x(), ll.y(), hd, nullptr)) return false;
+    out = hd - h;
+    return true;
+  };
+  const int n = 64;
+  const double lo = m.height_min(), hi = m.height_max();
+  double h_prev = 0, f_prev = 0;
+  bool have_prev = false, seen = false;
+  for (int k = n; k >= 0; --k) {  // from the top down
+    const double h = lo + (hi - lo) * k / n;
+    double fh = 0;
+    if (!f(h, fh)) {
+      have_prev = false;
+      continue;
+    }
+    seen = true;
+    if (fh == 0) return h;
+    if (have_prev && (fh > 0) != (f_prev > 0)) {
+      double a = h, b = h_prev, fa = fh;  // f(a) and f(b) of opposite signs, a < b
+      while (b - a > 1e-4) {
+        const double c = 0.5 * (a + b);
+        double fc = 0;
+        if (!f(c, fc)) throw NumericalError("the DEM has a hole under the line of sight near h = " + format_number(c) + " m");
+        if ((fc > 0) == (fa > 0)) a = c, fa = fc;
+        else b = c;
+      }
+      return 0.5 * (a + b);
+    }
+    h_prev = h, f_prev = fh, have_prev = true;
+  }
+  if (!seen) throw NumericalError("the DEM has no height under the line of sight at any height of the model (" +
+                                  format_number(lo) + " .. " + format_number(hi) + " m)");
+  throw NumericalError("the line of sight does not meet the DEM between " + format_number(lo) + " and " + format_number(hi) + " m");
+}
+
+}  // namespace
+
+std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
+                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats) {
+  RpcPointStats st;
+  std::string out, line;
+  HeightPrior ground;
+  if (dem) ground = dem_height_prior(*dem, 1);
+  const int columns = direction == RpcPointDirection::Localize && dem ? 2 : 3;
+  for (long lineno = 1; read_text_line(in, line, source, lineno); ++lineno) {
+    size_t first = 0;
+    while (first < line.size() && blank(line[first])) ++first;
+    if (first == line.size() || line[first] == '#' || line[first] == '\r') {
+      out += line + '\n';
+      ++st.comments;
+      continue;
+    }
+    size_t rest = 0;
+    const std::vector<double> v = leading_numbers(line, columns, rest, source, lineno);
+    double a = 0, b = 0, h = columns == 3 ? v[2] : 0;
+    try {
+      for (double x : v)
+        if (std::isnan(x)) throw NumericalError("the input point is nan");
+      if (direction == RpcPointDirection::Project) {
+        const Eigen::Vector2d xy = model.project(v[0], v[1], h);
+        if (!xy.allFinite()) throw NumericalError("the projection is not finite (a pole of the model)");
+        a = xy.x(), b = xy.y();
+        st.outside += outside_box(model, v[0], v[1], h);
+      } else if (!dem) {
+        const Eigen::Vector2d ll = model.localize(v[0], v[1], h);
+        a = ll.x(), b = ll.y();
+        st.outside += outside_box(model, a, b, h);
+      } else {
+        h = line_of_sight_on_dem(model, ground, v[0], v[1]);
+        const Eigen::Vector2d ll = model.localize(v[0], v[1], h);
+        a = ll.x(), b = ll.y();
+        st.outside += outside_box(model, a, b, h);
+      }
+    } catch (const NumericalError& e) {
+      // no solution for this point (it is no bad input): marked nan, counted, the first reason kept
+      if (st.unsolved++ == 0) st.first_unsolved = source + ":" + std::to_string(lineno) + ": " + e.what();
+      out += "nan nan nan" + line.substr(rest) + '\n';
+      continue;
+    }
+    out += format_number(a) + ' ' + format_number(b) + ' ' + format_number(h) + line.substr(rest) + '\n';
+    ++st.points;
+  }
+  if (stats) *stats = st;
+  return out;
+}
+
+}  // namespace tpkit
