@@ -31,3 +31,14 @@ tpkit_tool_test(tp-rpc.dem-needs-localize
 tpkit_tool_test(tp-rpc.off-the-dem-marked-nan
   COMMAND "${_scene} && printf '150 150 k1\\n-5000 -5000 k2\\n' | tp-rpc localize s/view1.tif --dem s/truth.dem.tif | awk '{ print $1, $4 }'"
   STDOUT_MATCH "^5\\.[0-9]+ k1\nnan k2\n$" STDERR_MATCH "1 points have no solution and are written as nan@SEMI@ the first: stdin:2: ")
+# crop: a window with its model; a ground point projects into the crop at the image's pixel less the
+# window's corner; crop needs a window inside the image and a file output
+tpkit_tool_test(tp-rpc.crop-keeps-the-geometry
+  COMMAND "tp-rpc -q crop ${_mars}/img_01.tif --window 100 200 300 250 -o crop.tif && echo '5.4428 43.2618 150' > g && tp-rpc -q project ${_mars}/img_01.tif -i g > a && tp-rpc -q project crop.tif -i g > b && paste -d ' ' a b | awk '{ printf \"%.9f %.9f\\n\", $1 - $4, $2 - $5 }'"
+  STDOUT_MATCH "^100\\.000000000 200\\.000000000\n$")
+tpkit_tool_test(tp-rpc.crop-outside-the-image
+  COMMAND "tp-rpc crop ${_mars}/img_01.tif --window 900 0 200 10 -o crop.tif"
+  EXPECT_FAIL STDERR_MATCH "img_01.tif: the window 900 0 200 10 is not inside the image \\(1024 x 1024\\)" NO_FILE crop.tif)
+tpkit_tool_test(tp-rpc.crop-needs-a-file
+  COMMAND "tp-rpc crop ${_mars}/img_01.tif --window 0 0 10 10 @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 2" STDERR_MATCH "crop needs -o OUT.tif")
