@@ -12,6 +12,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
@@ -378,15 +379,17 @@ std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::strin
   return out;
 }
 
-// DIMAP pixel offsets (1-based) <-> tpkit's: the number is read in extended precision and 1 subtracted
-// before rounding to double, so that every double offset has a decimal that reads back to it exactly.
-bool dimap_offset_value(const std::string& text, double& v) {
+// DIMAP pixel offsets <-> tpkit's: the number is read in extended precision and the image's origin (the
+// number of the top-left pixel's centre: 1 in DIMAP v1/v2, FIRST_COL / FIRST_ROW of the
+// ImagetoGround_Validity_Domain in DIMAP v3, 0 or 1) subtracted before rounding to double, so that every
+// double offset has a decimal that reads back to it exactly.
+bool dimap_offset_value(const std::string& text, double& v, long double origin = 1.0L) {
   std::string t = trim(text);
   if (t.empty()) return false;
   char* end = nullptr;
   long double x = std::strtold(t.c_str(), &end);
   if (end != t.c_str() + t.size()) return false;
-  v = static_cast<double>(x - 1.0L);
+  v = static_cast<double>(x - origin);
   return std::isfinite(v);
 }
 std::string dimap_offset(double tpkit_off) {
@@ -467,11 +470,22 @@ RpcModel parse_dimap(const std::string& text, const std::string& file) {
     if (member == &RpcModel::samp_off || member == &RpcModel::line_off) continue;
     value({std::string("RFM_Validity.") + n}, true, m.*member);
   }
-  // DIMAP: the centre of the top-left pixel is (1, 1); tpkit and RPC00B: (0, 0)
-  for (auto [n, member] : {std::make_pair("SAMP_OFF", &RpcModel::samp_off), std::make_pair("LINE_OFF", &RpcModel::line_off)}) {
+  // DIMAP v1/v2: the centre of the top-left pixel is (1, 1); DIMAP v3 (Pléiades Neo) says which, 0 or 1, in
+  // FIRST_COL and FIRST_ROW of its ImagetoGround_Validity_Domain (GDAL reads it so, taking FIRST_COL for
+  // both axes; here each axis its own); tpkit and RPC00B: (0, 0)
+  auto origin = [&](const char* key) {
+    auto* e = find({std::string("RFM_Validity.ImagetoGround_Validity_Domain.") + key});
+    if (!e) return 1.0L;
+    const double v = number_or_throw(e->second.text, file, e->second.line, e->first);
+    if (v != 0 && v != 1) throw InputError(file, e->second.line, e->first + ": " + e->second.text + " (the first pixel is numbered 0 or 1)");
+    return static_cast<long double>(v);
+  };
+  const long double first_col = origin("FIRST_COL"), first_row = origin("FIRST_ROW");
+  for (auto [n, member, first] : {std::make_tuple("SAMP_OFF", &RpcModel::samp_off, first_col),
+                                  std::make_tuple("LINE_OFF", &RpcModel::line_off, first_row)}) {
     auto* e = find({std::string("RFM_Validity.") + n});
     if (!e) throw InputError(file, 0, "missing " + base + "RFM_Validity." + n);
-    if (!dimap_offset_value(e->second.text, m.*member))
+    if (!dimap_offset_value(e->second.text, m.*member, first))
       throw InputError(file, e->second.line, e->first + ": '" + e->second.text + "' is not a number");
   }
   check_model(m, file);

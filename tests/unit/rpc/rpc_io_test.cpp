@@ -189,6 +189,50 @@ TEST(RpcIo, DimapPixelsAreOneBased) {
   EXPECT_DOUBLE_EQ(o[1], 0);
 }
 
+// DIMAP v3 (Pléiades Neo): ImagetoGround_Values / GroundtoImage_Values and, in RFM_Validity, an
+// ImagetoGround_Validity_Domain whose FIRST_COL / FIRST_ROW number the top-left pixel's centre, 0 or 1
+// (GDAL subtracts FIRST_COL from the offsets). Pinned on a v3 file made from the v2 text of a model.
+TEST(RpcIo, DimapV3OffsetsCountFromFirstColAndFirstRow) {
+  RpcModel m;
+  m.line_off = 10, m.samp_off = 20, m.lat_off = 43, m.lon_off = 5, m.height_off = 0;
+  m.lat_scale = m.lon_scale = 0.01;
+  m.line_scale = m.samp_scale = 1000;
+  m.height_scale = 100;
+  m.line_den[0] = m.samp_den[0] = 1;
+  m.samp_num[1] = 1;
+  m.line_num[2] = -1;
+  std::string v3 = format_rpc_dimap(m);
+  v3 = std::regex_replace(v3, std::regex("Direct_Model_Validity_Domain"), "ImagetoGround_Validity_Domain");
+  v3 = std::regex_replace(v3, std::regex("Inverse_Model_Validity_Domain"), "GroundtoImage_Validity_Domain");
+  v3 = std::regex_replace(v3, std::regex("Direct_Model"), "ImagetoGround_Values");
+  v3 = std::regex_replace(v3, std::regex("Inverse_Model"), "GroundtoImage_Values");
+  auto with_origin = [&](const std::string& first, const std::string& samp, const std::string& line) {
+    std::string t = std::regex_replace(v3, std::regex("<FIRST_ROW>[^<]*</FIRST_ROW>"), "<FIRST_ROW>" + first + "</FIRST_ROW>");
+    t = std::regex_replace(t, std::regex("<FIRST_COL>[^<]*</FIRST_COL>"), "<FIRST_COL>" + first + "</FIRST_COL>");
+    t = std::regex_replace(t, std::regex("<SAMP_OFF>[^<]*</SAMP_OFF>"), "<SAMP_OFF>" + samp + "</SAMP_OFF>");
+    return std::regex_replace(t, std::regex("<LINE_OFF>[^<]*</LINE_OFF>"), "<LINE_OFF>" + line + "</LINE_OFF>");
+  };
+  auto p = scratch("RPC_v3.XML");
+  // FIRST_COL = FIRST_ROW = 0: the offsets are tpkit's as written
+  write(p, with_origin("0", "20", "10"));
+  RpcModel r = read_rpc_dimap(p.string());
+  EXPECT_EQ(r.samp_off, 20);
+  EXPECT_EQ(r.line_off, 10);
+  // FIRST_COL = FIRST_ROW = 1: one-based like v2
+  write(p, with_origin("1", "21", "11"));
+  r = read_rpc_dimap(p.string());
+  EXPECT_EQ(r.samp_off, 20);
+  EXPECT_EQ(r.line_off, 10);
+  // any other first pixel is refused with its line
+  write(p, with_origin("2", "21", "11"));
+  try {
+    read_rpc_dimap(p.string());
+    FAIL() << "FIRST_COL 2 was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("the first pixel is numbered 0 or 1"), std::string::npos) << e.what();
+  }
+}
+
 TEST(RpcIo, MalformedFilesAreRefusedWithFileAndLine) {
   RpcModel m;
   m.line_den[0] = m.samp_den[0] = 1;
