@@ -61,8 +61,7 @@ int main(int argc, char** argv) {
       const RpcSource src = load_rpc_model(o->model);
       GeoGrid dem;
       if (!o->dem.empty()) {
-        const GeoBounds box{src.model.lon_off - std::fabs(src.model.lon_scale), src.model.lon_off + std::fabs(src.model.lon_scale),
-                            src.model.lat_off - std::fabs(src.model.lat_scale), src.model.lat_off + std::fabs(src.model.lat_scale)};
+        const GeoBounds box = model_bounds(src.model);
         dem = read_geotiff_grid(o->dem, &box);
       }
       const RpcPointDirection dir = o->action == "project" ? RpcPointDirection::Project : RpcPointDirection::Localize;

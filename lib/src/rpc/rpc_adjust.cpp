@@ -321,13 +321,6 @@ double held_out_rms(const std::vector<AdjustImage>& images, const std::vector<Im
   return n ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();
 }
 
-namespace {
-bool outside_validity_box(const RpcModel& m, const Eigen::Vector3d& llh) {
-  const double L = (llh[0] - m.lon_off) / m.lon_scale, P = (llh[1] - m.lat_off) / m.lat_scale,
-               H = (llh[2] - m.height_off) / m.height_scale;
-  return !(std::fabs(L) <= 1.1 && std::fabs(P) <= 1.1 && std::fabs(H) <= 1.1);
-}
-}  // namespace
 
 GroundSolution ground_points(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                              const GroundOptions& o) {
@@ -347,7 +340,7 @@ GroundSolution ground_points(const std::vector<AdjustImage>& images, const std::
     rms.push_back(x.rms_px);
     if (x.rms_px > o.flag_px) g.flags[t] |= kGroundResidual, ++g.residual_flagged;
     for (const auto& [i, xy] : tracks[t].views)
-      if (outside_validity_box(images[i].model, x.llh)) {
+      if (images[i].model.outside_validity_box(x.llh)) {
         g.flags[t] |= kGroundOutsideBox;
         ++g.outside_box;
         break;
@@ -483,14 +476,17 @@ HeightPrior parse_height_prior(const std::string& text) {
   return p;
 }
 
+GeoBounds model_bounds(const RpcModel& m) {
+  return {m.lon_off - std::fabs(m.lon_scale), m.lon_off + std::fabs(m.lon_scale), m.lat_off - std::fabs(m.lat_scale),
+          m.lat_off + std::fabs(m.lat_scale)};
+}
+
 GeoBounds models_bounds(const std::vector<AdjustImage>& images) {
   GeoBounds b{INFINITY, -INFINITY, INFINITY, -INFINITY};
   for (const auto& im : images) {
-    const RpcModel& m = im.model;
-    b.lon0 = std::min(b.lon0, m.lon_off - m.lon_scale);
-    b.lon1 = std::max(b.lon1, m.lon_off + m.lon_scale);
-    b.lat0 = std::min(b.lat0, m.lat_off - m.lat_scale);
-    b.lat1 = std::max(b.lat1, m.lat_off + m.lat_scale);
+    const GeoBounds m = model_bounds(im.model);
+    b.lon0 = std::min(b.lon0, m.lon0), b.lon1 = std::max(b.lon1, m.lon1);
+    b.lat0 = std::min(b.lat0, m.lat0), b.lat1 = std::max(b.lat1, m.lat1);
   }
   return b;
 }

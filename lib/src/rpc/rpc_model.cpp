@@ -59,6 +59,11 @@ Eigen::Vector2d RpcModel::localize(double x, double y, double h) const {
                        std::to_string(h) + " m did not converge");
 }
 
+bool RpcModel::outside_validity_box(const Eigen::Vector3d& llh, double margin) const {
+  const double L = (llh[0] - lon_off) / lon_scale, P = (llh[1] - lat_off) / lat_scale, H = (llh[2] - height_off) / height_scale;
+  return !(std::fabs(L) <= margin && std::fabs(P) <= margin && std::fabs(H) <= margin);
+}
+
 bool RpcModel::operator==(const RpcModel& o) const {
   auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
   const double a[] = {err_bias, err_rand, line_off, samp_off, lat_off, lon_off, height_off,

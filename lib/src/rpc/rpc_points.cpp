@@ -43,10 +43,6 @@ std::vector<double> leading_numbers(const std::string& line, int n, size_t& rest
   return v;
 }
 
-bool outside_box(const RpcModel& m, double lon, double lat, double h) {
-  return std::fabs(lon - m.lon_off) > std::fabs(m.lon_scale) || std::fabs(lat - m.lat_off) > std::fabs(m.lat_scale) ||
-         std::fabs(h - m.height_off) > std::fabs(m.height_scale);
-}
 
 // The height where the line of sight of pixel (x, y) meets the DEM: f(h) = DEM(localize(x, y, h)) - h
 // sampled at 65 heights over the model's height range, the highest sign change (the first surface the
@@ -117,16 +113,16 @@ std::string transform_rpc_points(std::istream& in, const std::string& source, co
         const Eigen::Vector2d xy = model.project(v[0], v[1], h);
         if (!xy.allFinite()) throw NumericalError("the projection is not finite (a pole of the model)");
         a = xy.x(), b = xy.y();
-        st.outside += outside_box(model, v[0], v[1], h);
+        st.outside += model.outside_validity_box({v[0], v[1], h});
       } else if (!dem) {
         const Eigen::Vector2d ll = model.localize(v[0], v[1], h);
         a = ll.x(), b = ll.y();
-        st.outside += outside_box(model, a, b, h);
+        st.outside += model.outside_validity_box({a, b, h});
       } else {
         h = line_of_sight_on_dem(model, ground, v[0], v[1]);
         const Eigen::Vector2d ll = model.localize(v[0], v[1], h);
         a = ll.x(), b = ll.y();
-        st.outside += outside_box(model, a, b, h);
+        st.outside += model.outside_validity_box({a, b, h});
       }
     } catch (const NumericalError& e) {
       // no solution for this point (it is no bad input): marked nan, counted, the first reason kept

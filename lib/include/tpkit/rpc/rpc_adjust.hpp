@@ -131,6 +131,7 @@ HeightPrior dem_height_prior(const GeoGrid& dem, double sigma);
 // lat_scale), degrees; what a DEM must cover.
 struct GeoBounds;
 GeoBounds models_bounds(const std::vector<AdjustImage>& images);
+GeoBounds model_bounds(const RpcModel& m);  // one model's box
 
 // Figure: per image, the residual vectors at the observed points before (zero bias) and after the
 // adjustment, exaggerated by one common factor (scale bar), over the image extent.

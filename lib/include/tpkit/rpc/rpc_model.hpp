@@ -87,6 +87,10 @@ struct RpcModel {
   // The direct model's (lon, lat) of pixel (x, y) at height h (has_direct only).
   Eigen::Vector2d direct(double x, double y, double h) const;
 
+  // True when the ground point lies outside the model's validity box, widened by `margin` (normalized
+  // |lon|, |lat|, |h| above margin; 1.1: a tenth beyond lon_off +- lon_scale, ...).
+  bool outside_validity_box(const Eigen::Vector3d& llh, double margin = 1.1) const;
+
   // Height range the model is valid for: height_off -/+ height_scale.
   double height_min() const { return height_off - height_scale; }
   double height_max() const { return height_off + height_scale; }

@@ -29,7 +29,7 @@ enum class RpcPointDirection { Project, Localize };
 struct RpcPointStats {
   long points = 0;    // lines transformed
   long comments = 0;  // lines passed through
-  long outside = 0;   // points outside the model's validity box (lon_off +- lon_scale, ..., height): flagged only by count
+  long outside = 0;   // points outside the model's validity box (RpcModel::outside_validity_box, 10% margin): counted only
   long unsolved = 0;  // points written as nan
   std::string first_unsolved;  // "source:line: reason" of the first of them
 };
