@@ -30,3 +30,12 @@ find_package(SQLite3 REQUIRED)
 # JSON (OpenMVG's sfm_data.json): a real parser, not a pattern scan (nlohmann-json3-dev, header-only)
 find_package(nlohmann_json 3.2 REQUIRED)
 find_package(Threads REQUIRED)
+# JPEG 2000 of NITF images (IC = C8/M8) through OpenJPEG (libopenjp2-7-dev). Found by header and library:
+# Debian's OpenJPEGConfig.cmake also imports the JPIP tools, which another package ships.
+if(NOT TARGET tpkit_openjp2)
+  find_path(OPENJP2_INCLUDE_DIR openjpeg.h PATH_SUFFIXES openjpeg-2.5 openjpeg-2.4 openjpeg-2.3 REQUIRED)
+  find_library(OPENJP2_LIBRARY NAMES openjp2 REQUIRED)
+  add_library(tpkit_openjp2 UNKNOWN IMPORTED)
+  set_target_properties(tpkit_openjp2 PROPERTIES
+    IMPORTED_LOCATION ${OPENJP2_LIBRARY} INTERFACE_INCLUDE_DIRECTORIES ${OPENJP2_INCLUDE_DIR})
+endif()

@@ -11,6 +11,7 @@ packages=(
   ccache  # the build scripts compile through it: a rebuild (and CI's fresh roots, which share one) compiles only what changed
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libtiff-dev libgeographiclib-dev
   libcli11-dev libceres-dev libnanoflann-dev libsqlite3-dev
+  libopenjp2-7-dev  # NITF images compressed with JPEG 2000 (IC=C8/M8) are decoded and written with OpenJPEG
   nlohmann-json3-dev  # tp-convert reads OpenMVG's sfm_data.json with a JSON parser (a regex scan crashed on long objects)
   libgtest-dev libgmock-dev libbenchmark-dev
   dpkg-dev file  # dpkg-shlibdeps and file (CPack calls it to find the binaries): the Debian package's runtime dependencies (scripts/package.sh)

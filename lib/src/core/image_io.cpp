@@ -17,6 +17,7 @@
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/input_file.hpp"
+#include "tpkit/core/nitf_image.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/version.hpp"
 
@@ -64,6 +65,7 @@ std::unique_ptr<ImageInput> open_input(const std::string& path) {
 }  // namespace
 
 ImageInfo image_info(const std::string& path) {
+  if (is_nitf_file(path)) return nitf_image_info(read_nitf_image(path));  // OIIO has no NITF reader
   auto in = open_input(path);
   const ImageSpec& s = in->spec();
   ImageInfo info;
@@ -84,6 +86,7 @@ ImageInfo image_info(const std::string& path) {
 }
 
 Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h) {
+  if (is_nitf_file(path)) return read_nitf_region(read_nitf_image(path), band, x0, y0, w, h);
   auto in = open_input(path);
   const ImageSpec& s = in->spec();
   if (band < 0 || band >= s.nchannels)

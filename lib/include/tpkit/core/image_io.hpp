@@ -1,4 +1,5 @@
-// Image reading and writing through OpenImageIO (every format it reads: TIFF/GeoTIFF, PNG, ...), and
+// Image reading and writing through OpenImageIO (every format it reads: TIFF/GeoTIFF, PNG, ...) and of
+// NITF 2.1 images through nitf_image.hpp (OIIO has no NITF reader), and
 // the raw RPC tag 50844 of a GeoTIFF through libtiff (the one thing OIIO does not expose).
 // Pixel convention: x = column, y = row, (0, 0) the centre of the top-left pixel. Regions are given in
 // whole pixels [x0, x0 + w) x [y0, y0 + h) and are read without loading the rest of the image.
