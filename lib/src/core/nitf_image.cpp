@@ -568,6 +568,7 @@ struct NitfWriterU16::Impl {
   bool closed = false;
   uint64_t fl_at = 0, li_at = 0, comrat_at = 0, data_at = 0;
   long nbpr = 1, nbpc = 1;
+  long bw = 0, bh = 0;  // block (tile) width and height: opt.block, or the image's side when smaller
   int sample_bytes = 2;
   std::vector<uint16_t> strip;  // the block row being filled: opt.block rows x width
   long strip_rows = 0;
@@ -591,9 +592,8 @@ struct NitfWriterU16::Impl {
 
 void NitfWriterU16::Impl::write_headers() {
   const std::string date = utc_now();
-  const long b = opt.block;
-  nbpr = (width + b - 1) / b;
-  nbpc = (height + b - 1) / b;
+  nbpr = (width + bw - 1) / bw;
+  nbpc = (height + bh - 1) / bh;
   std::string tres;
   for (const auto& t : opt.tres) tres += field(t.tag, 6) + number_field(t.data.size(), 5, "CEL") + t.data;
   const bool j2k = opt.compression == NitfWriteOptions::Compression::j2k;
@@ -619,7 +619,7 @@ void NitfWriterU16::Impl::write_headers() {
   sub += j2k ? std::string("C8") + "N000" : std::string("NC");
   sub += "1" + field("M", 2) + field("", 6) + "N" + field("", 3) + "0";
   sub += "0B" + number_field(static_cast<uint64_t>(nbpr), 4, "NBPR") + number_field(static_cast<uint64_t>(nbpc), 4, "NBPC");
-  sub += number_field(static_cast<uint64_t>(b), 4, "NPPBH") + number_field(static_cast<uint64_t>(b), 4, "NPPBV");
+  sub += number_field(static_cast<uint64_t>(bw), 4, "NPPBH") + number_field(static_cast<uint64_t>(bh), 4, "NPPBV");
   sub += number_field(static_cast<uint64_t>(sample_bytes * 8), 2, "NBPP") + "001" "000" "0000000000" "1.0 ";
   sub += "00000";  // UDIDL
   sub += tres.empty() ? std::string("00000") : number_field(tres.size() + 3, 5, "IXSHDL") + "000" + tres;
@@ -644,9 +644,10 @@ void NitfWriterU16::Impl::start_jpeg2000() {
   p.cp_disto_alloc = 1;
   p.irreversible = 0;  // reversible 5-3 wavelet
   p.tile_size_on = OPJ_TRUE;
-  p.cp_tdx = p.cp_tdy = static_cast<int>(opt.block);
+  p.cp_tdx = static_cast<int>(bw);
+  p.cp_tdy = static_cast<int>(bh);
   int levels = 1;
-  while (levels < 6 && (opt.block >> levels) >= 32 && (std::min(width, height) >> levels) >= 1) ++levels;
+  while (levels < 6 && (std::min(bw, bh) >> levels) >= 16) ++levels;
   p.numresolution = levels;
   opj_image_cmptparm_t cp{};
   cp.dx = cp.dy = 1;
@@ -673,6 +674,9 @@ NitfWriterU16::NitfWriterU16(const std::string& path, long width, long height, c
   if (options.abpp < 1 || options.abpp > 16) throw InputError(path, 0, "NITF writer: " + std::to_string(options.abpp) + " bits per sample");
   if (options.block < 16 || options.block > 8192) throw InputError(path, 0, "NITF block of " + std::to_string(options.block) + " pixels (16 to 8192)");
   m.sample_bytes = options.abpp <= 8 ? 1 : 2;
+  m.bw = std::min(options.block, width);
+  m.bh = std::min(options.block, height);
+  if (width <= 0 || height <= 0) throw InputError(path, 0, "NITF writer: an empty image");
   claim_output(path);
   m.tmp = claim_temp(path);
   m.f = std::fopen(m.tmp.c_str(), "w+b");
@@ -691,7 +695,7 @@ NitfWriterU16::NitfWriterU16(const std::string& path, long width, long height, c
     m.closed = true;
     throw;
   }
-  m.strip.assign(static_cast<size_t>(std::min(options.block, height)) * width, 0);
+  m.strip.assign(static_cast<size_t>(m.bh) * width, 0);
 }
 
 NitfWriterU16::~NitfWriterU16() {
@@ -703,18 +707,18 @@ NitfWriterU16::~NitfWriterU16() {
 // The filled block row (strip_rows rows of the image) as blocks (NC: big-endian, padded to full blocks
 // with 0) or JPEG 2000 tiles (their real size at the edges).
 void NitfWriterU16::Impl::flush_block_row() {
-  const long b = opt.block, row0 = next_row - strip_rows;
-  const long tile_row = row0 / b;
+  const long row0 = next_row - strip_rows;
+  const long tile_row = row0 / bh;
   std::vector<unsigned char> bytes;
   std::vector<uint16_t> tile;
   for (long bc = 0; bc < nbpr; ++bc) {
-    const long x0 = bc * b, tw = std::min(b, width - x0);
+    const long x0 = bc * bw, tw = std::min(bw, width - x0);
     if (opt.compression == NitfWriteOptions::Compression::none) {
-      bytes.assign(static_cast<size_t>(b) * b * sample_bytes, 0);
+      bytes.assign(static_cast<size_t>(bw) * bh * sample_bytes, 0);
       for (long y = 0; y < strip_rows; ++y)
         for (long x = 0; x < tw; ++x) {
           const uint16_t v = strip[static_cast<size_t>(y) * width + x0 + x];
-          unsigned char* p = bytes.data() + (static_cast<size_t>(y) * b + x) * sample_bytes;
+          unsigned char* p = bytes.data() + (static_cast<size_t>(y) * bw + x) * sample_bytes;
           if (sample_bytes == 1) {
             p[0] = static_cast<unsigned char>(v);
           } else {
@@ -755,7 +759,7 @@ void NitfWriterU16::write_rows(long y0, long rows, const uint16_t* data) {
     std::copy(src, src + m.width, m.strip.begin() + static_cast<size_t>(m.strip_rows) * m.width);
     ++m.strip_rows;
     ++m.next_row;
-    if (m.strip_rows == m.opt.block || m.next_row == m.height) m.flush_block_row();
+    if (m.strip_rows == m.bh || m.next_row == m.height) m.flush_block_row();
   }
 }
 

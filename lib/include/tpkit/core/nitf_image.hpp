@@ -66,8 +66,9 @@ Raster read_nitf_region(const NitfImage&, int band, long x0, long y0, long w, lo
 
 // Writes a single-band NITF 2.1 file of unsigned samples of `abpp` bits (at most 16; 8 or fewer are
 // stored in bytes, more in 16-bit words), row strip by row strip, atomically (like TiffWriterU16):
-// uncompressed (IC = NC, IMODE B, square blocks of `block` pixels, pad pixels 0 at the right and bottom)
-// or JPEG 2000 (IC = C8: one lossless codestream, reversible 5-3 wavelet, tiles of `block` pixels,
+// uncompressed (IC = NC, IMODE B, blocks of `block` pixels (or the image's side when smaller), pad pixels
+// 0 at the right and bottom) or JPEG 2000 (IC = C8: one lossless codestream, reversible 5-3 wavelet, tiles
+// of `block` pixels likewise,
 // written tile row by tile row through OpenJPEG), with the given TREs in the image subheader.
 struct NitfWriteOptions {
   enum class Compression { none, j2k } compression = Compression::none;
