@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -64,6 +65,23 @@ double number_or_throw(const std::string& text, const std::string& file, long li
   double v;
   if (!parse_double(text, v)) throw InputError(file, line, key + ": '" + trim(text) + "' is not a number");
   return v;
+}
+
+// `count` numbers in one value, separated by blanks or commas (GDAL's RPC metadata, as GDALExtractRPCInfo
+// splits it; DIMAP v1's rational functions).
+std::vector<double> numbers_or_throw(const std::string& text, const std::string& file, long line, const std::string& key,
+                                     size_t count) {
+  static const char* kSeparators = " \t\r\n,";
+  std::vector<double> out;
+  for (size_t i = text.find_first_not_of(kSeparators); i != std::string::npos; i = text.find_first_not_of(kSeparators, i)) {
+    const size_t e = text.find_first_of(kSeparators, i);
+    out.push_back(number_or_throw(text.substr(i, e - i), file, line, key));
+    i = e;
+    if (i == std::string::npos) break;
+  }
+  if (out.size() != count)
+    throw InputError(file, line, key + ": " + std::to_string(out.size()) + " coefficients instead of " + std::to_string(count));
+  return out;
 }
 
 // The named scalar fields of RPC00B, in the order of the GeoTIFF tag after ERR_BIAS, ERR_RAND.
@@ -294,28 +312,66 @@ RpcModel parse_rpb(const std::string& text, const std::string& file) {
   return m;
 }
 
-// ---------------------------------------------------------------- DIMAP v2 XML
+// ---------------------------------------------------------------- XML (DIMAP, GDAL's .aux.xml)
 
-// Leaf elements of an XML document: path "A.B.C" (element names from the root's child down) -> text, line.
-struct XmlLeaf {
-  std::string text;
+// An element open on the way from the document's root to a leaf: its name, its attributes, its tag's line.
+struct XmlOpen {
+  std::string name;
+  std::map<std::string, std::string> attributes;
   long line;
-  long repeated_at = 0;  // the line of a second leaf of the same path (0: none)
 };
-std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file) {
-  std::map<std::string, XmlLeaf> out;
-  std::vector<std::string> stack;
+
+// Text with XML's five predefined entities replaced by their characters.
+std::string xml_unescape(const std::string& s) {
+  static const std::pair<const char*, char> kEntities[] = {
+      {"&lt;", '<'}, {"&gt;", '>'}, {"&quot;", '"'}, {"&apos;", '\''}, {"&amp;", '&'}};
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    bool replaced = false;
+    if (s[i] == '&')
+      for (const auto& [entity, c] : kEntities)
+        if (s.compare(i, std::strlen(entity), entity) == 0) {
+          out += c;
+          i += std::strlen(entity) - 1;
+          replaced = true;
+          break;
+        }
+    if (!replaced) out += s[i];
+  }
+  return out;
+}
+
+// The attributes (name="value" or name='value') written after an element's name in its start tag.
+std::map<std::string, std::string> xml_attributes(const std::string& s, const std::string& element, const std::string& file,
+                                                  long line) {
+  std::map<std::string, std::string> out;
+  const char* blank = " \t\r\n";
+  for (size_t i = s.find_first_not_of(blank); i != std::string::npos; i = s.find_first_not_of(blank, i)) {
+    const size_t eq = s.find('=', i);
+    const size_t q = eq == std::string::npos ? eq : s.find_first_not_of(blank, eq + 1);
+    const size_t end = q == std::string::npos || (s[q] != '"' && s[q] != '\'') ? std::string::npos : s.find(s[q], q + 1);
+    const std::string name = end == std::string::npos ? std::string() : trim(s.substr(i, eq - i));
+    if (name.empty() || name.find_first_of(blank) != std::string::npos)
+      throw InputError(file, line, "malformed attributes in <" + element + ">");
+    out[name] = xml_unescape(s.substr(q + 1, end - q - 1));
+    i = end + 1;
+  }
+  return out;
+}
+
+// Walks an XML document, calling leaf(path, text, line) for every element without child elements, in
+// document order: `path` the elements from the root down to it, `text` its trimmed text, `line` the line
+// of its end tag. Comments, processing instructions and declarations are skipped; unbalanced or
+// unterminated markup is refused with its line.
+using XmlLeafVisitor = std::function<void(const std::vector<XmlOpen>& path, const std::string& text, long line)>;
+void xml_walk(const std::string& s, const std::string& file, const XmlLeafVisitor& leaf) {
+  std::vector<XmlOpen> stack;
   std::string text;
   bool had_child = false;
   long line = 1;
   size_t i = 0;
   auto count_lines = [&](size_t a, size_t b) {
     for (size_t k = a; k < b && k < s.size(); ++k) line += s[k] == '\n';
-  };
-  auto path = [&]() {
-    std::string p;
-    for (size_t k = 1; k < stack.size(); ++k) p += (k > 1 ? "." : "") + stack[k];
-    return p;
   };
   while (i < s.size()) {
     if (s[i] != '<') {
@@ -352,32 +408,49 @@ std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::strin
     i = e + 1;
     bool closing = !tag.empty() && tag[0] == '/';
     bool empty = !tag.empty() && tag.back() == '/';
-    std::string name = tag.substr(closing ? 1 : 0);
-    if (empty) name.pop_back();
-    name = name.substr(0, name.find_first_of(" \t\r\n"));
+    std::string body = tag.substr(closing ? 1 : 0);
+    if (empty) body.pop_back();
+    const size_t name_end = body.find_first_of(" \t\r\n");
+    std::string name = body.substr(0, name_end);
     if (name.empty()) throw InputError(file, tag_line, "empty tag name");
     if (closing) {
-      if (stack.empty() || stack.back() != name)
-        throw InputError(file, tag_line, "</" + name + "> does not close <" + (stack.empty() ? "" : stack.back()) + ">");
-      if (!had_child) {
-        auto [it, fresh] = out.emplace(path(), XmlLeaf{trim(text), tag_line});
-        if (!fresh && !it->second.repeated_at) it->second.repeated_at = tag_line;
-      }
+      if (stack.empty() || stack.back().name != name)
+        throw InputError(file, tag_line, "</" + name + "> does not close <" + (stack.empty() ? "" : stack.back().name) + ">");
+      if (!had_child) leaf(stack, trim(text), tag_line);
       stack.pop_back();
       had_child = true;
       text.clear();
     } else if (empty) {
       had_child = true;
     } else {
-      stack.push_back(name);
+      stack.push_back({name, xml_attributes(name_end == std::string::npos ? "" : body.substr(name_end), name, file, tag_line),
+                       tag_line});
       had_child = false;
       text.clear();
     }
   }
-  if (!stack.empty()) throw InputError(file, line, "end of file inside <" + stack.back() + ">");
+  if (!stack.empty()) throw InputError(file, line, "end of file inside <" + stack.back().name + ">");
+}
+
+// Leaf elements of an XML document: path "A.B.C" (element names from the root's child down) -> text, line.
+struct XmlLeaf {
+  std::string text;
+  long line;
+  long repeated_at = 0;  // the line of a second leaf of the same path (0: none)
+};
+std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file) {
+  std::map<std::string, XmlLeaf> out;
+  xml_walk(s, file, [&](const std::vector<XmlOpen>& path, const std::string& text, long line) {
+    std::string p;
+    for (size_t k = 1; k < path.size(); ++k) p += (k > 1 ? "." : "") + path[k].name;
+    auto [it, fresh] = out.emplace(p, XmlLeaf{text, line});
+    if (!fresh && !it->second.repeated_at) it->second.repeated_at = line;
+  });
   if (out.empty()) throw InputError(file, 1, "not an XML document");
   return out;
 }
+
+// ---------------------------------------------------------------- DIMAP XML
 
 // DIMAP pixel offsets <-> tpkit's: the number is read in extended precision and the image's origin (the
 // number of the top-left pixel's centre: 1 in DIMAP v1/v2, FIRST_COL / FIRST_ROW of the
@@ -401,19 +474,15 @@ std::string dimap_offset(double tpkit_off) {
   return buf;
 }
 
-RpcModel parse_dimap(const std::string& text, const std::string& file) {
-  auto leaves = xml_leaves(text, file);
-  // the RPC root element varies (Dimap_Document); find Global_RFM below it
-  std::string base;
-  for (const auto& [p, l] : leaves) {
-    size_t k = p.find("Global_RFM.");
-    if (k != std::string::npos) {
-      base = p.substr(0, k + 11);
-      break;
-    }
-  }
-  if (base.empty()) throw InputError(file, 0, "no Global_RFM element (not a DIMAP RPC file)");
-  auto find = [&](const std::vector<std::string>& names) -> const std::pair<const std::string, XmlLeaf>* {
+// The RPC part of a DIMAP document: its leaves below the RPC element (Global_RFM, else
+// Rational_Function_Model, where GDAL also looks), named relative to it.
+struct DimapRpc {
+  std::map<std::string, XmlLeaf> leaves;
+  std::string base;  // "...Global_RFM."
+  std::string file;
+
+  // The first of `names` present (nullptr: none); a leaf given twice is refused.
+  const std::pair<const std::string, XmlLeaf>* find(const std::vector<std::string>& names) const {
     for (const auto& n : names) {
       auto it = leaves.find(base + n);
       if (it == leaves.end()) continue;
@@ -423,8 +492,9 @@ RpcModel parse_dimap(const std::string& text, const std::string& file) {
       return &*it;
     }
     return nullptr;
-  };
-  auto value = [&](const std::vector<std::string>& names, bool required, double& out) {
+  }
+  // The number of the first of `names` present; false when none is (an InputError when `required`).
+  bool value(const std::vector<std::string>& names, bool required, double& out) const {
     auto* e = find(names);
     if (!e) {
       if (required) throw InputError(file, 0, "missing " + base + names[0]);
@@ -432,14 +502,36 @@ RpcModel parse_dimap(const std::string& text, const std::string& file) {
     }
     out = number_or_throw(e->second.text, file, e->second.line, e->first);
     return true;
-  };
+  }
+  // A pixel offset (SAMP_OFF, LINE_OFF) counted from `origin` (the number of the top-left pixel's centre),
+  // as tpkit's (dimap_offset_value).
+  void pixel_offset(const std::string& name, long double origin, double& out) const {
+    auto* e = find({name});
+    if (!e) throw InputError(file, 0, "missing " + base + name);
+    if (!dimap_offset_value(e->second.text, out, origin))
+      throw InputError(file, e->second.line, e->first + ": '" + e->second.text + "' is not a number");
+  }
+};
+
+std::string dimap_rpc_base(const std::map<std::string, XmlLeaf>& leaves) {
+  for (const std::string element : {"Global_RFM.", "Rational_Function_Model."})
+    for (const auto& kv : leaves) {
+      const size_t k = kv.first.find(element);
+      if (k != std::string::npos) return kv.first.substr(0, k + element.size());
+    }
+  return "";
+}
+
+// DIMAP v2 (Pléiades, SPOT 6/7) and v3 (Pléiades Neo): one element per coefficient, Inverse_Model /
+// GroundtoImage_Values and Direct_Model / ImagetoGround_Values, the normalization in RFM_Validity.
+RpcModel dimap_v2_model(const DimapRpc& d) {
   RpcModel m;
   const char* kInverse[] = {"Inverse_Model.", "GroundtoImage_Values."};
   const char* kDirect[] = {"Direct_Model.", "ImagetoGround_Values."};
   for (const auto& p : kPolys)
     for (int i = 0; i < 20; ++i) {
       std::string n = std::string(p.txt) + "_" + std::to_string(i + 1);
-      value({kInverse[0] + n, kInverse[1] + n}, true, (m.*p.member)[i]);
+      d.value({kInverse[0] + n, kInverse[1] + n}, true, (m.*p.member)[i]);
     }
   // direct model: Pléiades names its outputs SAMP (longitude) and LINE (latitude), Pléiades Neo LON and LAT
   struct DirectPoly {
@@ -452,46 +544,94 @@ RpcModel parse_dimap(const std::string& text, const std::string& file) {
                                {"LINE_NUM_COEFF", "LAT_NUM_COEFF", &RpcModel::lat_num},
                                {"LINE_DEN_COEFF", "LAT_DEN_COEFF", &RpcModel::lat_den}};
   int found = 0;
-  for (const auto& d : direct)
+  for (const auto& dp : direct)
     for (int i = 0; i < 20; ++i) {
       std::string k = "_" + std::to_string(i + 1);
-      found += value({kDirect[0] + std::string(d.phr) + k, kDirect[1] + std::string(d.pneo) + k,
-                      kDirect[0] + std::string(d.pneo) + k},
-                     false, (m.*d.member)[i]);
+      found += d.value({kDirect[0] + std::string(dp.phr) + k, kDirect[1] + std::string(dp.pneo) + k,
+                        kDirect[0] + std::string(dp.pneo) + k},
+                       false, (m.*dp.member)[i]);
     }
-  if (found != 0 && found != 80) throw InputError(file, 0, "incomplete Direct_Model (" + std::to_string(found) + " of 80 coefficients)");
+  if (found != 0 && found != 80)
+    throw InputError(d.file, 0, "incomplete Direct_Model (" + std::to_string(found) + " of 80 coefficients)");
   m.has_direct = found == 80;
   const std::pair<const char*, double RpcModel::*> scalars[] = {
-      {"LONG_SCALE", &RpcModel::lon_scale},     {"LONG_OFF", &RpcModel::lon_off},     {"LAT_SCALE", &RpcModel::lat_scale},
-      {"LAT_OFF", &RpcModel::lat_off},          {"HEIGHT_SCALE", &RpcModel::height_scale},
-      {"HEIGHT_OFF", &RpcModel::height_off},    {"SAMP_SCALE", &RpcModel::samp_scale}, {"SAMP_OFF", &RpcModel::samp_off},
-      {"LINE_SCALE", &RpcModel::line_scale},    {"LINE_OFF", &RpcModel::line_off}};
-  for (const auto& [n, member] : scalars) {
-    if (member == &RpcModel::samp_off || member == &RpcModel::line_off) continue;
-    value({std::string("RFM_Validity.") + n}, true, m.*member);
-  }
-  // DIMAP v1/v2: the centre of the top-left pixel is (1, 1); DIMAP v3 (Pléiades Neo) says which, 0 or 1, in
+      {"LONG_SCALE", &RpcModel::lon_scale},  {"LONG_OFF", &RpcModel::lon_off},       {"LAT_SCALE", &RpcModel::lat_scale},
+      {"LAT_OFF", &RpcModel::lat_off},       {"HEIGHT_SCALE", &RpcModel::height_scale}, {"HEIGHT_OFF", &RpcModel::height_off},
+      {"SAMP_SCALE", &RpcModel::samp_scale}, {"LINE_SCALE", &RpcModel::line_scale}};
+  for (const auto& [n, member] : scalars) d.value({std::string("RFM_Validity.") + n}, true, m.*member);
+  // DIMAP v2: the centre of the top-left pixel is (1, 1); DIMAP v3 (Pléiades Neo) says which, 0 or 1, in
   // FIRST_COL and FIRST_ROW of its ImagetoGround_Validity_Domain (GDAL reads it so, taking FIRST_COL for
   // both axes; here each axis its own); tpkit and RPC00B: (0, 0)
   auto origin = [&](const char* key) {
-    auto* e = find({std::string("RFM_Validity.ImagetoGround_Validity_Domain.") + key});
+    auto* e = d.find({std::string("RFM_Validity.ImagetoGround_Validity_Domain.") + key});
     if (!e) return 1.0L;
-    const double v = number_or_throw(e->second.text, file, e->second.line, e->first);
-    if (v != 0 && v != 1) throw InputError(file, e->second.line, e->first + ": " + e->second.text + " (the first pixel is numbered 0 or 1)");
+    const double v = number_or_throw(e->second.text, d.file, e->second.line, e->first);
+    if (v != 0 && v != 1)
+      throw InputError(d.file, e->second.line, e->first + ": " + e->second.text + " (the first pixel is numbered 0 or 1)");
     return static_cast<long double>(v);
   };
-  const long double first_col = origin("FIRST_COL"), first_row = origin("FIRST_ROW");
-  for (auto [n, member, first] : {std::make_tuple("SAMP_OFF", &RpcModel::samp_off, first_col),
-                                  std::make_tuple("LINE_OFF", &RpcModel::line_off, first_row)}) {
-    auto* e = find({std::string("RFM_Validity.") + n});
-    if (!e) throw InputError(file, 0, "missing " + base + "RFM_Validity." + n);
-    if (!dimap_offset_value(e->second.text, m.*member, first))
-      throw InputError(file, e->second.line, e->first + ": '" + e->second.text + "' is not a number");
+  d.pixel_offset("RFM_Validity.SAMP_OFF", origin("FIRST_COL"), m.samp_off);
+  d.pixel_offset("RFM_Validity.LINE_OFF", origin("FIRST_ROW"), m.line_off);
+  return m;
+}
+
+// DIMAP v1 (the first Pléiades products: PHRDIMAP.XML, METADATA_FORMAT DIMAP_PHR, profile version 1.x;
+// CNES shareloc's rpc_readers.py reads it so): each rational function is one list of 40 numbers, its
+// numerator's 20 coefficients then its denominator's, in RPC00B's term order (Inverse_Model F_COL: the
+// sample, F_ROW: the line; Direct_Model F_LON, F_LAT of normalized sample, line, height as v2's direct
+// model), and RFM_Validity holds each normalization as A (scale) and B (offset) of Lon, Lat, Alt, Col
+// and Row. Pixels are numbered from 1, as in v2 (PIXEL_ORIGIN 1): Col.B and Row.B are tpkit's plus 1.
+RpcModel dimap_v1_model(const DimapRpc& d) {
+  RpcModel m;
+  struct Rational {
+    const char* name;
+    RpcPoly RpcModel::*num;
+    RpcPoly RpcModel::*den;
+    bool direct;
+  };
+  const Rational functions[] = {{"Inverse_Model.F_COL", &RpcModel::samp_num, &RpcModel::samp_den, false},
+                                {"Inverse_Model.F_ROW", &RpcModel::line_num, &RpcModel::line_den, false},
+                                {"Direct_Model.F_LON", &RpcModel::lon_num, &RpcModel::lon_den, true},
+                                {"Direct_Model.F_LAT", &RpcModel::lat_num, &RpcModel::lat_den, true}};
+  int direct = 0;
+  for (const auto& f : functions) {
+    auto* e = d.find({f.name});
+    if (!e) {
+      if (!f.direct) throw InputError(d.file, 0, "missing " + d.base + f.name);
+      continue;
+    }
+    const std::vector<double> c = numbers_or_throw(e->second.text, d.file, e->second.line, e->first, 40);
+    std::copy(c.begin(), c.begin() + 20, (m.*f.num).begin());
+    std::copy(c.begin() + 20, c.end(), (m.*f.den).begin());
+    direct += f.direct;
   }
+  if (direct == 1) throw InputError(d.file, 0, "incomplete Direct_Model (F_LON and F_LAT go together)");
+  m.has_direct = direct == 2;
+  const std::tuple<const char*, double RpcModel::*, double RpcModel::*> axes[] = {
+      {"Lon", &RpcModel::lon_scale, &RpcModel::lon_off},
+      {"Lat", &RpcModel::lat_scale, &RpcModel::lat_off},
+      {"Alt", &RpcModel::height_scale, &RpcModel::height_off},
+      {"Col", &RpcModel::samp_scale, &RpcModel::samp_off},
+      {"Row", &RpcModel::line_scale, &RpcModel::line_off}};
+  for (const auto& [axis, scale, off] : axes) {
+    const std::string n = std::string("RFM_Validity.") + axis;
+    d.value({n + ".A"}, true, m.*scale);
+    if (off == &RpcModel::samp_off || off == &RpcModel::line_off)
+      d.pixel_offset(n + ".B", 1.0L, m.*off);
+    else
+      d.value({n + ".B"}, true, m.*off);
+  }
+  return m;
+}
+
+RpcModel parse_dimap(const std::string& text, const std::string& file) {
+  DimapRpc d{xml_leaves(text, file), "", file};
+  d.base = dimap_rpc_base(d.leaves);
+  if (d.base.empty()) throw InputError(file, 0, "no Global_RFM element (not a DIMAP RPC file)");
+  const bool v1 = d.leaves.count(d.base + "Inverse_Model.F_COL") || d.leaves.count(d.base + "Inverse_Model.F_ROW");
+  const RpcModel m = v1 ? dimap_v1_model(d) : dimap_v2_model(d);
   check_model(m, file);
-  if (m.has_direct) {
-    if (zero(m.lon_den) || zero(m.lat_den)) throw InputError(file, 0, "a Direct_Model denominator is all zeros");
-  }
+  if (m.has_direct && (zero(m.lon_den) || zero(m.lat_den))) throw InputError(file, 0, "a Direct_Model denominator is all zeros");
   return m;
 }
 
@@ -704,8 +844,11 @@ std::vector<std::string> rpc_sidecar_candidates(const std::string& image) {
                                   stem.string() + ".rpb"};
   std::string name = p.stem().string();
   if (name.rfind("IMG_", 0) == 0) {
+    // DIMAP products: v2 / v3 RPC_NAME.XML for IMG_NAME[_RiCj]; v1 one PHRDIMAP.XML beside the images
+    // (IMG_R1C1.JP2, ...), where OTB's ossimPleiadesModel looks for it
     std::string rest = std::regex_replace(name.substr(4), std::regex("_R[0-9]+C[0-9]+$"), "");
     out.push_back((p.parent_path() / ("RPC_" + rest + ".XML")).string());
+    out.push_back((p.parent_path() / "PHRDIMAP.XML").string());
   }
   return out;
 }

@@ -4,11 +4,15 @@
 //   txt     GDAL / Ikonos key-value sidecar IMAGE_rpc.txt or IMAGE_RPC.TXT ("LINE_OFF: 5720.5", one per line,
 //           LINE_NUM_COEFF_1 .. _20 etc.; a unit word after a value is allowed)
 //   rpb     DigitalGlobe / Maxar IMAGE.RPB (BEGIN_GROUP = IMAGE ... lineOffset = ...; lineNumCoef = ( ... );)
-//   dimap   Pléiades / SPOT DIMAP v2 RPC_*.XML (Global_RFM: Direct_Model, Inverse_Model, RFM_Validity)
+//   dimap   Pléiades / SPOT DIMAP v2 RPC_*.XML (Global_RFM: Direct_Model, Inverse_Model, RFM_Validity), v3
+//           (Pléiades Neo: ImagetoGround_Values, GroundtoImage_Values) and v1 (the first Pléiades products'
+//           PHRDIMAP.XML: Inverse_Model F_COL / F_ROW and Direct_Model F_LON / F_LAT, 40 numbers each,
+//           RFM_Validity Lon / Lat / Alt / Col / Row with A = scale, B = offset)
 //
-// Pixel convention: RPC00B (tiff, txt, rpb) has (0, 0) at the centre of the top-left pixel, as tpkit;
-// DIMAP numbers pixels from 1 (the centre of the top-left pixel is (1, 1)): its SAMP_OFF and LINE_OFF
-// (and the validity domain's rows and columns) are 1 more than tpkit's. The conversion happens here only.
+// Pixel convention: RPC00B (tiff, txt, rpb) has (0, 0) at the centre of the top-left pixel, as tpkit:
+// taken as it is. DIMAP v1 and v2 number pixels from 1 (the centre of the top-left pixel is (1, 1)):
+// their SAMP_OFF and LINE_OFF (v1: Col.B and Row.B; and the validity domain's rows and columns) are 1
+// more than tpkit's; v3 counts from FIRST_COL / FIRST_ROW (0 or 1). The conversion happens here only.
 // Every writer writes numbers in the shortest form that reads back to the same double, so that
 // write -> read is exact; every reader refuses a malformed file with InputError(file:line: reason).
 #pragma once
@@ -58,8 +62,10 @@ std::string format_rpc_dimap(const RpcModel&);
 // The model with a direct model (image -> ground) fitted to its inverse over its normalization volume.
 RpcModel with_direct_model(const RpcModel&);
 
-// Sidecar names beside an image, in the order they are looked for: IMAGE_rpc.txt, IMAGE_RPC.TXT, IMAGE.RPB,
-// IMAGE.rpb, and for DIMAP images named IMG_NAME.ext (optionally with a _R<i>C<j> tile suffix) RPC_NAME.XML.
+// Sidecar names beside an image, in the order they are looked for: IMAGE_rpc.txt, IMAGE_RPC.TXT,
+// IMAGE.RPB, IMAGE.rpb, and for DIMAP images named IMG_NAME.ext (optionally with a _R<i>C<j> tile
+// suffix) RPC_NAME.XML, then PHRDIMAP.XML (DIMAP v1
+// products: one PHRDIMAP.XML beside IMG_R1C1.JP2 ..., where OTB looks for it).
 std::vector<std::string> rpc_sidecar_candidates(const std::string& image);
 
 // Where an image's model comes from: an explicit file (overrides, keyed by the image path as given), else
