@@ -42,3 +42,7 @@ tpkit_tool_test(tp-rpc.crop-outside-the-image
 tpkit_tool_test(tp-rpc.crop-needs-a-file
   COMMAND "tp-rpc crop ${_mars}/img_01.tif --window 0 0 10 10 @SEMI@ echo exit $?"
   STDOUT_MATCH "exit 2" STDERR_MATCH "crop needs -o OUT.tif")
+# the OSSIM .geom and GDAL .aux.xml forms: a view's _rpc.txt rewritten by hand in each gives its pixels
+tpkit_tool_test(tp-rpc.geom-and-aux-same-as-txt
+  COMMAND "bash $SRC/tests/tools/tp-rpc-forms.sh"
+  STDOUT_MATCH "^geom: 147 points, same pixels@SEMI@ m.geom \\(geom\\)\naux: 147 points, same pixels@SEMI@ img.tif.aux.xml \\(aux\\)\n$")

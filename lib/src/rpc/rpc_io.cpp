@@ -86,28 +86,38 @@ std::vector<double> numbers_or_throw(const std::string& text, const std::string&
 
 // The named scalar fields of RPC00B, in the order of the GeoTIFF tag after ERR_BIAS, ERR_RAND.
 struct Field {
-  const char* txt;  // GDAL / Ikonos key
-  const char* rpb;  // DigitalGlobe key
+  const char* txt;   // GDAL / Ikonos key (also GDAL's RPC metadata domain)
+  const char* rpb;   // DigitalGlobe key
+  const char* geom;  // OSSIM keyword
   double RpcModel::*member;
 };
 const Field kScalars[] = {
-    {"ERR_BIAS", "errBias", &RpcModel::err_bias},          {"ERR_RAND", "errRand", &RpcModel::err_rand},
-    {"LINE_OFF", "lineOffset", &RpcModel::line_off},       {"SAMP_OFF", "sampOffset", &RpcModel::samp_off},
-    {"LAT_OFF", "latOffset", &RpcModel::lat_off},          {"LONG_OFF", "longOffset", &RpcModel::lon_off},
-    {"HEIGHT_OFF", "heightOffset", &RpcModel::height_off}, {"LINE_SCALE", "lineScale", &RpcModel::line_scale},
-    {"SAMP_SCALE", "sampScale", &RpcModel::samp_scale},    {"LAT_SCALE", "latScale", &RpcModel::lat_scale},
-    {"LONG_SCALE", "longScale", &RpcModel::lon_scale},     {"HEIGHT_SCALE", "heightScale", &RpcModel::height_scale},
+    {"ERR_BIAS", "errBias", "bias_error", &RpcModel::err_bias},
+    {"ERR_RAND", "errRand", "rand_error", &RpcModel::err_rand},
+    {"LINE_OFF", "lineOffset", "line_off", &RpcModel::line_off},
+    {"SAMP_OFF", "sampOffset", "samp_off", &RpcModel::samp_off},
+    {"LAT_OFF", "latOffset", "lat_off", &RpcModel::lat_off},
+    {"LONG_OFF", "longOffset", "long_off", &RpcModel::lon_off},
+    {"HEIGHT_OFF", "heightOffset", "height_off", &RpcModel::height_off},
+    {"LINE_SCALE", "lineScale", "line_scale", &RpcModel::line_scale},
+    {"SAMP_SCALE", "sampScale", "samp_scale", &RpcModel::samp_scale},
+    {"LAT_SCALE", "latScale", "lat_scale", &RpcModel::lat_scale},
+    {"LONG_SCALE", "longScale", "long_scale", &RpcModel::lon_scale},
+    {"HEIGHT_SCALE", "heightScale", "height_scale", &RpcModel::height_scale},
 };
+// ERR_BIAS and ERR_RAND may be absent from every form (0 then); the other fields are required.
+bool optional_field(const Field& f) { return f.member == &RpcModel::err_bias || f.member == &RpcModel::err_rand; }
 struct PolyField {
   const char* txt;
   const char* rpb;
+  const char* geom;
   RpcPoly RpcModel::*member;
 };
 const PolyField kPolys[] = {
-    {"LINE_NUM_COEFF", "lineNumCoef", &RpcModel::line_num},
-    {"LINE_DEN_COEFF", "lineDenCoef", &RpcModel::line_den},
-    {"SAMP_NUM_COEFF", "sampNumCoef", &RpcModel::samp_num},
-    {"SAMP_DEN_COEFF", "sampDenCoef", &RpcModel::samp_den},
+    {"LINE_NUM_COEFF", "lineNumCoef", "line_num_coeff", &RpcModel::line_num},
+    {"LINE_DEN_COEFF", "lineDenCoef", "line_den_coeff", &RpcModel::line_den},
+    {"SAMP_NUM_COEFF", "sampNumCoef", "samp_num_coeff", &RpcModel::samp_num},
+    {"SAMP_DEN_COEFF", "sampDenCoef", "samp_den_coeff", &RpcModel::samp_den},
 };
 
 bool zero(const RpcPoly& p) {
@@ -188,7 +198,7 @@ RpcModel parse_txt(const std::string& text, const std::string& file) {
     }
     out = it->second.first;
   };
-  for (const auto& f : kScalars) get(f.txt, std::string(f.txt).rfind("ERR_", 0) != 0, m.*f.member);
+  for (const auto& f : kScalars) get(f.txt, !optional_field(f), m.*f.member);
   for (const auto& p : kPolys)
     for (int i = 0; i < 20; ++i) get(std::string(p.txt) + "_" + std::to_string(i + 1), true, (m.*p.member)[i]);
   check_model(m, file);
@@ -294,7 +304,7 @@ RpcModel parse_rpb(const std::string& text, const std::string& file) {
   for (const auto& f : kScalars) {
     auto it = image.find(f.rpb);
     if (it == image.end()) {
-      if (std::string(f.rpb).rfind("err", 0) == 0) continue;
+      if (optional_field(f)) continue;
       throw InputError(file, 0, std::string("missing IMAGE.") + f.rpb);
     }
     if (it->second.first.size() != 1) throw InputError(file, it->second.second, std::string(f.rpb) + ": expected one value");
@@ -640,6 +650,129 @@ void xml_poly(std::ostringstream& os, const char* indent, const std::string& nam
     os << indent << '<' << name << '_' << i + 1 << '>' << format_number(p[i]) << "</" << name << '_' << i + 1 << ">\n";
 }
 
+// ---------------------------------------------------------------- OSSIM keyword list (.geom)
+
+// "key: value" lines of an OSSIM keyword list (blank lines and // comments skipped; a value opened by
+// """ runs to the next """, over lines if need be): key -> value, its line, the line of a second one.
+struct KwlValue {
+  std::string text;
+  long line;
+  long repeated_at = 0;
+};
+std::map<std::string, KwlValue> ossim_keywords(const std::string& text, const std::string& file) {
+  std::map<std::string, KwlValue> out;
+  std::istringstream in(text);
+  std::string raw;
+  long no = 0;
+  while (std::getline(in, raw)) {
+    const long at = ++no;
+    const std::string t = trim(raw);
+    if (t.empty() || t.rfind("//", 0) == 0) continue;
+    const size_t colon = t.find(':');
+    const std::string key = colon == std::string::npos ? std::string() : trim(t.substr(0, colon));
+    if (key.empty()) throw InputError(file, at, "expected 'key: value'");
+    std::string value = trim(t.substr(colon + 1));
+    if (value.rfind("\"\"\"", 0) == 0) {
+      while (value.find("\"\"\"", 3) == std::string::npos) {
+        if (!std::getline(in, raw)) throw InputError(file, at, key + ": a \"\"\" value without its closing \"\"\"");
+        ++no;
+        value += "\n" + raw;
+      }
+    }
+    auto [it, fresh] = out.emplace(key, KwlValue{value, at});
+    if (!fresh && !it->second.repeated_at) it->second.repeated_at = at;
+  }
+  return out;
+}
+
+// The OSSIM models that keep their RPC in ossimRpcModel's keywords (ossimRpcModel::saveState): OSSIM's
+// own and OTB's (ossimPleiadesModel, ossimSpot6Model).
+const char* const kOssimRpcTypes[] = {"ossimRpcModel",          "ossimPleiadesModel",  "ossimSpot6Model",
+                                      "ossimNitfRpcModel",      "ossimQuickbirdRpcModel", "ossimIkonosRpcModel"};
+
+// RPC00A's term order 1 L P H LP LH PH LPH L2 P2 H2 L3 L2P L2H LP2 P3 P2H LH2 PH2 H3 (OSSIM's
+// polynomial_format A): kRpc00aTerm[j] is the RPC00A index of RPC00B's term j.
+const int kRpc00aTerm[20] = {0, 1, 2, 3, 4, 5, 6, 8, 9, 10, 7, 11, 14, 17, 12, 15, 18, 13, 16, 19};
+
+// An OSSIM RPC keyword list: type, polynomial_format (B: RPC00B's term order; A: RPC00A's, reordered
+// here), RPC00B's scalars under OSSIM's names (line_off .. height_scale, bias_error, rand_error) and
+// line_num_coeff_00 .. _19, line_den_coeff_, samp_num_coeff_, samp_den_coeff_; every other key (OTB's
+// support_data., adjustment_0., rect, ...) is ignored. OSSIM's image space has (0, 0) at the centre of
+// the top-left pixel, as RPC00B (ossimNitfRpcModel takes the RPC00B offsets unchanged, its image rectangle
+// 0 .. width - 1; OTB writes a Pléiades DIMAP SAMP_OFF of 20000.5 as samp_off 19999.5): taken as it is.
+RpcModel parse_geom(const std::string& text, const std::string& file) {
+  const auto kw = ossim_keywords(text, file);
+  auto get = [&](const std::string& key, bool required) -> const KwlValue* {
+    auto it = kw.find(key);
+    if (it == kw.end()) {
+      if (required) throw InputError(file, 0, "missing " + key);
+      return nullptr;
+    }
+    if (it->second.repeated_at)
+      throw InputError(file, it->second.repeated_at, key + " given twice (first at line " + std::to_string(it->second.line) + ")");
+    return &it->second;
+  };
+  const KwlValue* type = get("type", true);
+  if (std::find(std::begin(kOssimRpcTypes), std::end(kOssimRpcTypes), type->text) == std::end(kOssimRpcTypes))
+    throw InputError(file, type->line, "type: " + type->text + " is not an OSSIM RPC model (ossimRpcModel, ossimPleiadesModel, ...)");
+  // OTB's ossimPleiadesModel (and ossimSpot6Model) keeps an RPC only for SENSOR products
+  if (const KwlValue* level = get("support_data.processing_level", false); level && level->text != "SENSOR")
+    throw InputError(file, level->line, "a " + level->text + " product: its " + type->text + " carries no RPC (SENSOR products do)");
+  const KwlValue* format = get("polynomial_format", true);
+  if (format->text != "A" && format->text != "B")
+    throw InputError(file, format->line, "polynomial_format: '" + format->text + "' (expected B, RPC00B, or A, RPC00A)");
+  RpcModel m;
+  for (const auto& f : kScalars)
+    if (const KwlValue* v = get(f.geom, !optional_field(f))) m.*f.member = number_or_throw(v->text, file, v->line, f.geom);
+  for (const auto& p : kPolys)
+    for (int j = 0; j < 20; ++j) {  // RPC00B's term j: the file's term j (B) or kRpc00aTerm[j] (A)
+      char key[32];
+      std::snprintf(key, sizeof key, "%s_%02d", p.geom, format->text == "A" ? kRpc00aTerm[j] : j);
+      const KwlValue* v = get(key, true);
+      (m.*p.member)[j] = number_or_throw(v->text, file, v->line, key);
+    }
+  check_model(m, file);
+  return m;
+}
+
+// ---------------------------------------------------------------- GDAL PAM .aux.xml
+
+// The RPC metadata domain of a GDAL PAM file (<PAMDataset><Metadata domain="RPC"><MDI key="LINE_OFF">
+// ...</MDI>...): the keys of GDAL's RPC metadata (those of _rpc.txt, each polynomial's 20 coefficients in
+// one value; MIN_LONG .. MAX_LAT ignored). GDAL's RPC metadata is RPC00B's, (0, 0) at the centre of the
+// top-left pixel (alg/gdal_rpc.cpp): taken as it is. Nothing when the file has no RPC domain (GDAL writes
+// .aux.xml files for statistics and other metadata too).
+std::optional<RpcModel> parse_aux(const std::string& text, const std::string& file) {
+  std::map<std::string, XmlLeaf> md;
+  xml_walk(text, file, [&](const std::vector<XmlOpen>& path, const std::string& value, long line) {
+    if (path.size() != 3 || path[1].name != "Metadata" || path[2].name != "MDI") return;
+    auto domain = path[1].attributes.find("domain");
+    if (domain == path[1].attributes.end() || domain->second != "RPC") return;
+    auto key = path[2].attributes.find("key");
+    if (key == path[2].attributes.end() || key->second.empty())
+      throw InputError(file, line, "an MDI element of the RPC domain without a key");
+    auto [it, fresh] = md.emplace(key->second, XmlLeaf{value, line});
+    if (!fresh)
+      throw InputError(file, line, key->second + " given twice (first at line " + std::to_string(it->second.line) + ")");
+  });
+  if (md.empty()) return std::nullopt;
+  auto get = [&](const char* key, bool required) -> const XmlLeaf* {
+    auto it = md.find(key);
+    if (it == md.end() && required) throw InputError(file, 0, std::string("missing ") + key + " in the RPC metadata domain");
+    return it == md.end() ? nullptr : &it->second;
+  };
+  RpcModel m;
+  for (const auto& f : kScalars)
+    if (const XmlLeaf* v = get(f.txt, !optional_field(f))) m.*f.member = number_or_throw(v->text, file, v->line, f.txt);
+  for (const auto& p : kPolys) {
+    const XmlLeaf* v = get(p.txt, true);
+    const std::vector<double> c = numbers_or_throw(v->text, file, v->line, p.txt, 20);
+    std::copy(c.begin(), c.end(), (m.*p.member).begin());
+  }
+  check_model(m, file);
+  return m;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------- public
@@ -650,6 +783,8 @@ const char* rpc_form_name(RpcForm f) {
     case RpcForm::txt: return "txt";
     case RpcForm::rpb: return "rpb";
     case RpcForm::dimap: return "dimap";
+    case RpcForm::geom: return "geom";
+    case RpcForm::aux: return "aux";
   }
   return "?";
 }
@@ -660,20 +795,31 @@ std::string lower_extension(const std::string& path) {
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
+
+// GDAL's PAM sidecar IMAGE.aux.xml ends with .xml too: it is told apart by its whole suffix
+bool is_aux_xml(const std::string& path) {
+  std::string name = fs::path(path).filename().string();
+  for (auto& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name.size() > 8 && name.compare(name.size() - 8, 8, ".aux.xml") == 0;
+}
 }  // namespace
 
 RpcForm rpc_form_of(const std::string& path) {
   const std::string ext = lower_extension(path);
+  if (is_aux_xml(path)) return RpcForm::aux;
+  if (ext == ".geom") return RpcForm::geom;
   if (ext == ".rpb") return RpcForm::rpb;
   if (ext == ".txt") return RpcForm::txt;
   if (ext == ".xml") return RpcForm::dimap;
   if (ext == ".tif" || ext == ".tiff") return RpcForm::tiff;
-  throw InputError(path, 0, "unknown RPC file kind (expected .RPB, _rpc.txt, RPC_*.XML or a GeoTIFF)");
+  throw InputError(path, 0, "unknown RPC file kind (expected .RPB, _rpc.txt, RPC_*.XML, .geom, .aux.xml or a GeoTIFF)");
 }
 
 RpcModel read_rpc_txt(const std::string& path) { return parse_txt(read_whole(path), path); }
 RpcModel read_rpc_rpb(const std::string& path) { return parse_rpb(read_whole(path), path); }
 RpcModel read_rpc_dimap(const std::string& path) { return parse_dimap(read_whole(path), path); }
+RpcModel read_rpc_geom(const std::string& path) { return parse_geom(read_whole(path), path); }
+std::optional<RpcModel> read_rpc_aux(const std::string& path) { return parse_aux(read_whole(path), path); }
 
 std::array<double, 92> rpc_tag_values(const RpcModel& m) {
   RpcTagValues v;
@@ -704,6 +850,12 @@ RpcModel read_rpc_file(const std::string& path) {
     case RpcForm::txt: return read_rpc_txt(path);
     case RpcForm::rpb: return read_rpc_rpb(path);
     case RpcForm::dimap: return read_rpc_dimap(path);
+    case RpcForm::geom: return read_rpc_geom(path);
+    case RpcForm::aux: {
+      auto m = read_rpc_aux(path);
+      if (!m) throw InputError(path, 0, "no RPC metadata domain (<Metadata domain=\"RPC\">) in this GDAL .aux.xml");
+      return *m;
+    }
     case RpcForm::tiff: {
       auto m = read_rpc_tiff(path);
       if (!m) throw InputError(path, 0, "no RPC tag 50844 in this TIFF");
@@ -727,6 +879,33 @@ std::string format_rpc_rpb(const RpcModel& m) {
   for (const auto& f : kScalars) os << '\t' << f.rpb << " = " << format_number(m.*f.member) << ";\n";
   for (const auto& p : kPolys) os << '\t' << p.rpb << " = (\n\t\t\t" << join_poly(m.*p.member, ",\n\t\t\t") << ");\n";
   os << "END_GROUP = IMAGE\nEND;\n";
+  return os.str();
+}
+
+std::string format_rpc_geom(const RpcModel& m) {
+  // an ossimRpcModel keyword list, its keys sorted as OSSIM writes them; one "key: value" per line
+  std::map<std::string, std::string> kw = {{"type", "ossimRpcModel"}, {"polynomial_format", "B"}};
+  for (const auto& f : kScalars) kw[f.geom] = format_number(m.*f.member);
+  for (const auto& p : kPolys)
+    for (int i = 0; i < 20; ++i) {
+      char key[32];
+      std::snprintf(key, sizeof key, "%s_%02d", p.geom, i);
+      kw[key] = format_number((m.*p.member)[i]);
+    }
+  std::ostringstream os;
+  for (const auto& [key, value] : kw) os << key << ": " << value << '\n';
+  return os.str();
+}
+
+std::string format_rpc_aux(const RpcModel& m) {
+  // a PAM file holding GDAL's RPC metadata domain only, its keys sorted as GDAL writes them
+  std::map<std::string, std::string> md;
+  for (const auto& f : kScalars) md[f.txt] = format_number(m.*f.member);
+  for (const auto& p : kPolys) md[p.txt] = join_poly(m.*p.member, " ");
+  std::ostringstream os;
+  os << "<PAMDataset>\n  <Metadata domain=\"RPC\">\n";
+  for (const auto& [key, value] : md) os << "    <MDI key=\"" << key << "\">" << value << "</MDI>\n";
+  os << "  </Metadata>\n</PAMDataset>\n";
   return os.str();
 }
 
@@ -823,6 +1002,8 @@ std::string format_rpc_dimap(const RpcModel& model) {
 void write_rpc_txt(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_txt(m)); }
 void write_rpc_rpb(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_rpb(m)); }
 void write_rpc_dimap(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_dimap(m)); }
+void write_rpc_geom(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_geom(m)); }
+void write_rpc_aux(const std::string& path, const RpcModel& m) { write_file_atomic(path, format_rpc_aux(m)); }
 
 void write_rpc_tiff_copy(const std::string& image, const std::string& out, const RpcModel& m) {
   copy_tiff_with_rpc_tag(image, out, rpc_tag_values(m));
@@ -833,6 +1014,8 @@ void write_rpc_file(const std::string& path, RpcForm form, const RpcModel& m) {
     case RpcForm::txt: return write_rpc_txt(path, m);
     case RpcForm::rpb: return write_rpc_rpb(path, m);
     case RpcForm::dimap: return write_rpc_dimap(path, m);
+    case RpcForm::geom: return write_rpc_geom(path, m);
+    case RpcForm::aux: return write_rpc_aux(path, m);
     case RpcForm::tiff: throw UsageError("an RPC tag is written into a copy of an image (write_rpc_tiff_copy)");
   }
 }
@@ -840,8 +1023,11 @@ void write_rpc_file(const std::string& path, RpcForm form, const RpcModel& m) {
 std::vector<std::string> rpc_sidecar_candidates(const std::string& image) {
   fs::path p(image);
   fs::path stem = p.parent_path() / p.stem();
-  std::vector<std::string> out = {stem.string() + "_rpc.txt", stem.string() + "_RPC.TXT", stem.string() + ".RPB",
-                                  stem.string() + ".rpb"};
+  // GDAL's PAM file first: it is named after this very file (IMAGE.tif.aux.xml), and it is where GDAL
+  // users set or correct a model (SetMetadata on a read-only image) while the vendor's sidecar stays as
+  // delivered; then the sidecars named after the image's stem
+  std::vector<std::string> out = {image + ".aux.xml",      stem.string() + "_rpc.txt", stem.string() + "_RPC.TXT",
+                                  stem.string() + ".RPB",  stem.string() + ".rpb",     stem.string() + ".geom"};
   std::string name = p.stem().string();
   if (name.rfind("IMG_", 0) == 0) {
     // DIMAP products: v2 / v3 RPC_NAME.XML for IMG_NAME[_RiCj]; v1 one PHRDIMAP.XML beside the images
@@ -866,8 +1052,13 @@ std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map
   if (ext == ".tif" || ext == ".tiff") {
     if (auto m = read_rpc_tiff(image)) return RpcSource{*m, image, RpcForm::tiff};
   }
-  for (const auto& c : rpc_sidecar_candidates(image))
-    if (fs::is_regular_file(c)) return RpcSource{read_rpc_file(c), c, rpc_form_of(c)};
+  for (const auto& c : rpc_sidecar_candidates(image)) {
+    if (!fs::is_regular_file(c)) continue;
+    const RpcForm form = rpc_form_of(c);
+    if (form != RpcForm::aux) return RpcSource{read_rpc_file(c), c, form};
+    // GDAL writes .aux.xml files for statistics and other metadata too: one without an RPC domain is passed
+    if (auto m = read_rpc_aux(c)) return RpcSource{*m, c, form};
+  }
   return std::nullopt;
 }
 
@@ -880,7 +1071,7 @@ RpcSource load_image_rpc(const std::string& image, const std::map<std::string, s
 
 RpcSource load_rpc_model(const std::string& image_or_model) {
   const std::string ext = lower_extension(image_or_model);
-  if (ext == ".rpb" || ext == ".txt" || ext == ".xml") {
+  if (ext == ".rpb" || ext == ".txt" || ext == ".xml" || ext == ".geom") {
     const RpcForm form = rpc_form_of(image_or_model);
     return {read_rpc_file(image_or_model), image_or_model, form};
   }
