@@ -18,8 +18,10 @@
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
+#include "tpkit/core/nitf_image.hpp"
 #include "tpkit/core/input_file.hpp"
 #include "tpkit/core/text_table.hpp"
+#include "tpkit/rpc/rpc_nitf.hpp"
 
 namespace tpkit {
 
@@ -780,6 +782,7 @@ std::optional<RpcModel> parse_aux(const std::string& text, const std::string& fi
 const char* rpc_form_name(RpcForm f) {
   switch (f) {
     case RpcForm::tiff: return "tiff";
+    case RpcForm::nitf: return "nitf";
     case RpcForm::txt: return "txt";
     case RpcForm::rpb: return "rpb";
     case RpcForm::dimap: return "dimap";
@@ -812,7 +815,8 @@ RpcForm rpc_form_of(const std::string& path) {
   if (ext == ".txt") return RpcForm::txt;
   if (ext == ".xml") return RpcForm::dimap;
   if (ext == ".tif" || ext == ".tiff") return RpcForm::tiff;
-  throw InputError(path, 0, "unknown RPC file kind (expected .RPB, _rpc.txt, RPC_*.XML, .geom, .aux.xml or a GeoTIFF)");
+  if (ext == ".ntf" || ext == ".nitf" || ext == ".nsf") return RpcForm::nitf;
+  throw InputError(path, 0, "unknown RPC file kind (expected .RPB, _rpc.txt, RPC_*.XML, .geom, .aux.xml, a GeoTIFF or a NITF image)");
 }
 
 RpcModel read_rpc_txt(const std::string& path) { return parse_txt(read_whole(path), path); }
@@ -845,8 +849,19 @@ std::optional<RpcModel> read_rpc_tiff(const std::string& path) {
   return m;
 }
 
+std::optional<RpcModel> read_rpc_ntf(const std::string& path) {
+  auto m = read_rpc_nitf(read_nitf_image(path));
+  if (m) check_model(*m, path);
+  return m;
+}
+
 RpcModel read_rpc_file(const std::string& path) {
   switch (rpc_form_of(path)) {
+    case RpcForm::nitf: {
+      auto m = read_rpc_ntf(path);
+      if (!m) throw InputError(path, 0, "no RPC00B or RPC00A TRE in this NITF image");
+      return *m;
+    }
     case RpcForm::txt: return read_rpc_txt(path);
     case RpcForm::rpb: return read_rpc_rpb(path);
     case RpcForm::dimap: return read_rpc_dimap(path);
@@ -1017,6 +1032,7 @@ void write_rpc_file(const std::string& path, RpcForm form, const RpcModel& m) {
     case RpcForm::geom: return write_rpc_geom(path, m);
     case RpcForm::aux: return write_rpc_aux(path, m);
     case RpcForm::tiff: throw UsageError("an RPC tag is written into a copy of an image (write_rpc_tiff_copy)");
+    case RpcForm::nitf: throw UsageError("an RPC00B TRE is written with the image (tp-rpc crop -o IMAGE.ntf)");
   }
 }
 
@@ -1051,6 +1067,8 @@ std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (ext == ".tif" || ext == ".tiff") {
     if (auto m = read_rpc_tiff(image)) return RpcSource{*m, image, RpcForm::tiff};
+  } else if (is_nitf_file(image)) {
+    if (auto m = read_rpc_ntf(image)) return RpcSource{*m, image, RpcForm::nitf};
   }
   for (const auto& c : rpc_sidecar_candidates(image)) {
     if (!fs::is_regular_file(c)) continue;
@@ -1066,7 +1084,8 @@ RpcSource load_image_rpc(const std::string& image, const std::map<std::string, s
   if (auto s = find_image_rpc(image, overrides)) return *s;
   std::string names;
   for (const auto& c : rpc_sidecar_candidates(image)) names += (names.empty() ? "" : ", ") + fs::path(c).filename().string();
-  throw InputError(image, 0, "no RPC model: no tag 50844, none of " + names + " beside it, and no --rpc " + image + "=FILE");
+  const char* inside = is_nitf_file(image) ? "no RPC00B or RPC00A TRE" : "no tag 50844";
+  throw InputError(image, 0, std::string("no RPC model: ") + inside + ", none of " + names + " beside it, and no --rpc " + image + "=FILE");
 }
 
 RpcSource load_rpc_model(const std::string& image_or_model) {

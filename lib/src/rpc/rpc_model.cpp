@@ -220,4 +220,67 @@ RpcFitVolume rpc_volume(const RpcModel& m) {
   return v;
 }
 
+namespace {
+// Exponents of (L, P, H) of each RPC00B term, in rpc_terms() order.
+constexpr int kTermPowers[20][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {1, 0, 1}, {0, 1, 1},
+                                    {2, 0, 0}, {0, 2, 0}, {0, 0, 2}, {1, 1, 1}, {3, 0, 0}, {1, 2, 0}, {1, 0, 2},
+                                    {2, 1, 0}, {0, 3, 0}, {0, 1, 2}, {2, 0, 1}, {0, 2, 1}, {0, 0, 3}};
+int term_index(int i, int j, int k) {
+  for (int t = 0; t < 20; ++t)
+    if (kTermPowers[t][0] == i && kTermPowers[t][1] == j && kTermPowers[t][2] == k) return t;
+  return -1;
+}
+double binomial(int n, int k) { return n == 3 && (k == 1 || k == 2) ? 3.0 : n == 2 && k == 1 ? 2.0 : 1.0; }
+
+// c(u) with u = b + a * u' for each variable, as a polynomial in u'.
+RpcPoly substitute(const RpcPoly& c, const double a[3], const double b[3]) {
+  RpcPoly out{};
+  for (int t = 0; t < 20; ++t) {
+    if (c[t] == 0.0) continue;
+    const int* e = kTermPowers[t];
+    for (int i = 0; i <= e[0]; ++i)
+      for (int j = 0; j <= e[1]; ++j)
+        for (int k = 0; k <= e[2]; ++k) {
+          const double w = binomial(e[0], i) * std::pow(a[0], i) * std::pow(b[0], e[0] - i) * binomial(e[1], j) *
+                           std::pow(a[1], j) * std::pow(b[1], e[1] - j) * binomial(e[2], k) * std::pow(a[2], k) *
+                           std::pow(b[2], e[2] - k);
+          out[term_index(i, j, k)] += c[t] * w;
+        }
+  }
+  return out;
+}
+}  // namespace
+
+RpcModel renormalized_rpc(const RpcModel& m, const RpcModel& to) {
+  RpcModel r = m;
+  r.line_off = to.line_off;
+  r.samp_off = to.samp_off;
+  r.lat_off = to.lat_off;
+  r.lon_off = to.lon_off;
+  r.height_off = to.height_off;
+  r.line_scale = to.line_scale;
+  r.samp_scale = to.samp_scale;
+  r.lat_scale = to.lat_scale;
+  r.lon_scale = to.lon_scale;
+  r.height_scale = to.height_scale;
+  r.has_direct = false;
+  // old normalized = b + a * new normalized, for (L, P, H) = (lon, lat, h)
+  const double a[3] = {to.lon_scale / m.lon_scale, to.lat_scale / m.lat_scale, to.height_scale / m.height_scale};
+  const double b[3] = {(to.lon_off - m.lon_off) / m.lon_scale, (to.lat_off - m.lat_off) / m.lat_scale,
+                       (to.height_off - m.height_off) / m.height_scale};
+  // x = off + scale * N / D = off' + scale' * (scale * N + (off - off') * D) / (scale' * D)
+  auto image_side = [&](const RpcPoly& num, const RpcPoly& den, double off, double scale, double off2, double scale2,
+                        RpcPoly& num_out, RpcPoly& den_out) {
+    const RpcPoly n = substitute(num, a, b), d = substitute(den, a, b);
+    if (d[0] == 0.0) throw NumericalError("renormalized RPC: the denominator is 0 at the new centre");
+    for (int t = 0; t < 20; ++t) {
+      num_out[t] = (scale * n[t] + (off - off2) * d[t]) / (scale2 * d[0]);
+      den_out[t] = d[t] / d[0];
+    }
+  };
+  image_side(m.samp_num, m.samp_den, m.samp_off, m.samp_scale, to.samp_off, to.samp_scale, r.samp_num, r.samp_den);
+  image_side(m.line_num, m.line_den, m.line_off, m.line_scale, to.line_off, to.line_scale, r.line_num, r.line_den);
+  return r;
+}
+
 }  // namespace tpkit

@@ -1,6 +1,7 @@
 // RPC00B models in the files that carry them (man/tpkit-formats.5, "RPC camera models"):
 //
 //   tiff    GeoTIFF tag 50844 (RPCCoefficientTag, 92 doubles) inside the image
+//   nitf    the RPC00B (or RPC00A) TRE of a NITF image (rpc_nitf.hpp), inside the image (.NTF, .NITF)
 //   txt     GDAL / Ikonos key-value sidecar IMAGE_rpc.txt or IMAGE_RPC.TXT ("LINE_OFF: 5720.5", one per line,
 //           LINE_NUM_COEFF_1 .. _20 etc.; a unit word after a value is allowed)
 //   rpb     DigitalGlobe / Maxar IMAGE.RPB (BEGIN_GROUP = IMAGE ... lineOffset = ...; lineNumCoef = ( ... );)
@@ -15,7 +16,7 @@
 //   aux     GDAL's PAM sidecar IMAGE.ext.aux.xml, its RPC metadata domain (<Metadata domain="RPC">, one
 //           <MDI key="LINE_OFF"> per key, each polynomial's 20 coefficients in one value)
 //
-// Pixel convention: RPC00B (tiff, txt, rpb), GDAL's RPC metadata (aux) and OSSIM's image space (geom)
+// Pixel convention: RPC00B (tiff, nitf, txt, rpb), GDAL's RPC metadata (aux) and OSSIM's image space (geom)
 // have (0, 0) at the centre of the top-left pixel, as tpkit: taken as they are. DIMAP v1 and v2 number
 // pixels from 1 (the centre of the top-left pixel is (1, 1)): their SAMP_OFF and LINE_OFF (v1: Col.B and
 // Row.B; and the validity domain's rows and columns) are 1 more than tpkit's; v3 counts from FIRST_COL /
@@ -33,8 +34,8 @@
 
 namespace tpkit {
 
-enum class RpcForm { tiff, txt, rpb, dimap, geom, aux };
-// "tiff", "txt", "rpb", "dimap", "geom", "aux"
+enum class RpcForm { tiff, nitf, txt, rpb, dimap, geom, aux };
+// "tiff", "nitf", "txt", "rpb", "dimap", "geom", "aux"
 const char* rpc_form_name(RpcForm);
 // The form of a file, from its name: *.RPB -> rpb, *.txt / *.TXT -> txt, *.aux.xml -> aux (before the
 // next rule), *.XML -> dimap, *.geom -> geom, *.tif / *.tiff -> tiff.
@@ -49,6 +50,8 @@ RpcModel read_rpc_geom(const std::string& path);
 // Nothing when the .aux.xml has no RPC metadata domain (GDAL writes them for statistics too).
 std::optional<RpcModel> read_rpc_aux(const std::string& path);
 std::optional<RpcModel> read_rpc_tiff(const std::string& path);
+// A NITF image's RPC00B / RPC00A TRE; nothing when it has neither.
+std::optional<RpcModel> read_rpc_ntf(const std::string& path);
 // Any form, chosen by rpc_form_of(); a TIFF without the tag, an .aux.xml without the domain is an InputError.
 RpcModel read_rpc_file(const std::string& path);
 

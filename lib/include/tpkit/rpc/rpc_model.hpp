@@ -125,6 +125,14 @@ struct RpcFit {
 RpcFit fit_rpc(const std::function<Eigen::Vector2d(const Eigen::Vector3d& llh)>& ground_to_image,
                const RpcFitVolume& volume);
 
+// The same model under other offsets and scales (`to`'s; its polynomials are not used), exactly: an affine
+// change of each normalized ground variable maps a cubic to a cubic (binomial expansion of each term),
+// and new image offsets and scales only mix each denominator into its numerator. Both rational functions
+// are then divided by their denominator's constant term, so that it is 1 again (it must not be 0 at the
+// new centre). The direct model is dropped. Used where a form stores offsets and scales at a fixed
+// precision (the NITF RPC00B TRE: whole pixels and metres, 1e-4 degree).
+RpcModel renormalized_rpc(const RpcModel& m, const RpcModel& to);
+
 // The volume an RPC's normalization describes (offsets -/+ scales), for refitting a modified model.
 RpcFitVolume rpc_volume(const RpcModel& m);
 
