@@ -1,6 +1,7 @@
 // tp-rpc: single points through an image's RPC model, streamed (man/tp-rpc.1). Options -> library
 // (rpc_io.hpp, rpc_points.hpp) -> stdout or a file.
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "tpkit/core/tool_support.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
 #include "tpkit/rpc/rpc_crop.hpp"
+#include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/rpc/rpc_points.hpp"
 
@@ -22,6 +24,8 @@ struct Opts {
   std::string action, model, input = "-", output = "-", dem;
   std::vector<long> window;
   int band = 1;
+  std::string compression = "none", crs = "geographic";
+  long block = 1024;
   bool quiet = false;
 };
 }  // namespace
@@ -33,30 +37,50 @@ int main(int argc, char** argv) {
     app.add_option("ACTION", o->action, "project (lon lat h -> x y h) | localize (x y h -> lon lat h) | crop (a window and its model)")
         ->required()
         ->check(CLI::IsMember({"project", "localize", "crop"}));
-    app.add_option("MODEL", o->model, "an image (its tag 50844 or sidecar model) or a model file (_rpc.txt, .RPB, DIMAP .XML)")
+    app.add_option("MODEL", o->model, "an image (its tag 50844, its NITF RPC00B TRE or sidecar model) or a model file (_rpc.txt, .RPB, DIMAP .XML, .geom, .aux.xml)")
         ->required();
     app.add_option("-i,--input", o->input, "points to transform; - for stdin (default)");
     app.add_option("-o,--output", o->output, "the transformed points; - for stdout (default)");
     app.add_option("--dem", o->dem, "localize onto this GeoTIFF DEM (EPSG:4326, heights above the ellipsoid, m): input x y");
-    app.add_option("--window", o->window, "crop: X0 Y0 W H, pixels (the window's top-left pixel, its width and height)")->expected(4);
+    app.add_option("--crs", o->crs, "project / localize: ground coordinates lon lat h (geographic, default) | utm (easting northing h, m, the model centre's zone) | ecef (X Y Z, m)")
+        ->check(CLI::IsMember({"geographic", "utm", "ecef"}));
+    app.add_option("--window", o->window, "crop: X0 Y0 W H, pixels (the window's top-left pixel, its width and height; default the whole image)")->expected(4);
     app.add_option("--band", o->band, "crop: the band written (from 1; default 1)");
+    app.add_option("--compression", o->compression, "crop to NITF (-o OUT.ntf): none (IC=NC, default) | j2k (lossless JPEG 2000, IC=C8)")
+        ->check(CLI::IsMember({"none", "j2k"}));
+    app.add_option("--block", o->block, "crop to NITF: block (JPEG 2000 tile) size, pixels, 16 to 8192 (default 1024)");
     app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
     return [o]() {
       if (!o->dem.empty() && o->action != "localize") throw UsageError("--dem goes with localize");
       if (o->action == "crop") {
-        if (o->window.size() != 4) throw UsageError("crop needs --window X0 Y0 W H");
-        if (o->output == "-") throw UsageError("crop needs -o OUT.tif (a GeoTIFF, not stdout)");
+        if (o->crs != "geographic") throw UsageError("--crs goes with project and localize");
+        if (o->output == "-") throw UsageError("crop needs -o OUT.tif (a GeoTIFF) or -o OUT.ntf (a NITF image), not stdout");
+        if (!is_nitf_name(o->output) && (o->compression != "none" || o->block != 1024))
+          throw UsageError("--compression and --block go with a NITF output (-o OUT.ntf)");
+        if (o->block < 16 || o->block > 8192) throw UsageError("--block " + std::to_string(o->block) + ": 16 to 8192 pixels");
         if (o->band < 1) throw UsageError("--band counts from 1");
         check_outputs({{"-o", o->output}}, {o->model});
         const RpcSource src = load_rpc_model(o->model);
-        crop_image_with_rpc(o->model, o->band - 1, src.model, o->window[0], o->window[1], o->window[2], o->window[3], o->output);
-        if (!o->quiet)
+        if (o->window.empty()) {  // the whole image: a conversion (to NITF, or a GeoTIFF with the model in its tag)
+          const ImageInfo info = image_info(o->model);
+          o->window = {0, 0, info.width, info.height};
+        }
+        CropFormat format;
+        format.jpeg2000 = o->compression == "j2k";
+        format.block = o->block;
+        const double change =
+            crop_image_with_rpc(o->model, o->band - 1, src.model, o->window[0], o->window[1], o->window[2], o->window[3], o->output, format);
+        if (!o->quiet) {
+          char moved[64] = "";
+          if (is_nitf_name(o->output)) std::snprintf(moved, sizeof moved, "; RPC00B precision: %.2g px at most", change);
           summary("crop " + std::to_string(o->window[2]) + " x " + std::to_string(o->window[3]) + " at (" + std::to_string(o->window[0]) +
                   ", " + std::to_string(o->window[1]) + ") of " + o->model + " with its model (" + rpc_form_name(src.form) + ") -> " +
-                  o->output);
+                  o->output + moved);
+        }
         return 0;
       }
       if (!o->window.empty()) throw UsageError("--window goes with crop");
+      if (o->compression != "none" || o->block != 1024) throw UsageError("--compression and --block go with crop");
       check_outputs({{"-o", o->output}}, {o->model, o->input, o->dem});
       const RpcSource src = load_rpc_model(o->model);
       GeoGrid dem;
@@ -65,19 +89,22 @@ int main(int argc, char** argv) {
         dem = read_geotiff_grid(o->dem, &box);
       }
       const RpcPointDirection dir = o->action == "project" ? RpcPointDirection::Project : RpcPointDirection::Localize;
+      const GroundConverter crs(parse_ground_crs(o->crs), src.model.lon_off, src.model.lat_off);
+      const GroundConverter* ground = o->crs == "geographic" ? nullptr : &crs;
       RpcPointStats st;
       std::string text;
       if (o->input == "-") {
-        text = transform_rpc_points(std::cin, "stdin", src.model, dir, o->dem.empty() ? nullptr : &dem, &st);
+        text = transform_rpc_points(std::cin, "stdin", src.model, dir, o->dem.empty() ? nullptr : &dem, &st, ground);
       } else {
         std::ifstream in = open_input_file(o->input);
-        text = transform_rpc_points(in, o->input, src.model, dir, o->dem.empty() ? nullptr : &dem, &st);
+        text = transform_rpc_points(in, o->input, src.model, dir, o->dem.empty() ? nullptr : &dem, &st, ground);
       }
       AtomicOutput out(o->output);
       out.stream() << text;
       out.commit();
       if (!o->quiet)
-        summary(o->action + " through " + src.path + " (" + rpc_form_name(src.form) + "): " + std::to_string(st.points) +
+        summary(o->action + " through " + src.path + " (" + rpc_form_name(src.form) + ")" + (ground ? ", ground in " + crs.description() : std::string()) +
+                ": " + std::to_string(st.points) +
                 " points, " + std::to_string(st.comments) + " lines passed through" +
                 (st.outside ? ", " + std::to_string(st.outside) + " outside the model's validity box" : "") +
                 (st.unsolved ? ", " + std::to_string(st.unsolved) + " without a solution (nan)" : ""));

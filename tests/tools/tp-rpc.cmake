@@ -46,3 +46,12 @@ tpkit_tool_test(tp-rpc.crop-needs-a-file
 tpkit_tool_test(tp-rpc.geom-and-aux-same-as-txt
   COMMAND "bash $SRC/tests/tools/tp-rpc-forms.sh"
   STDOUT_MATCH "^geom: 147 points, same pixels@SEMI@ m.geom \\(geom\\)\naux: 147 points, same pixels@SEMI@ img.tif.aux.xml \\(aux\\)\n$")
+# --crs: ground points in UTM (the model centre's zone, 31N at Marseille) or ECEF, read by project and
+# written by localize; the values are PROJ's (cct +proj=utm +zone=31 / +proj=cart, WGS84, computed once),
+# and the pixels the same as through lon lat h to 1e-5 px (PROJ printed 1e-6 m)
+tpkit_tool_test(tp-rpc.crs-utm-and-ecef-as-proj
+  COMMAND "printf '5.38 43.30 80\\n5.50 43.22 300\\n' > ll && printf '693046.809404 4796880.750200 80\\n703046.473160 4788280.417277 300\\n' > utm && printf '4628736.756182 435914.329043 4351872.072125\\n4634036.160635 446206.931220 4345550.077421\\n' > xyz && tp-rpc -q project ${_mars}/img_01.tif -i ll > a && tp-rpc -q project --crs utm ${_mars}/img_01.tif -i utm > b && tp-rpc -q project --crs ecef ${_mars}/img_01.tif -i xyz > c && tp-rpc -q localize --crs utm ${_mars}/img_01.tif -i a > u2 && paste -d ' ' a b c u2 utm | awk '{ d = sqrt(($1 - $4) ^ 2 + ($2 - $5) ^ 2) + sqrt(($1 - $7) ^ 2 + ($2 - $8) ^ 2)@SEMI@ e = sqrt(($10 - $13) ^ 2 + ($11 - $14) ^ 2)@SEMI@ if (d > m) m = d@SEMI@ if (e > k) k = e } END { printf \"pixels %s, utm %s\\n\", (m <= 1e-5 ? \"same\" : m), (k <= 1e-5 ? \"as PROJ\" : k) }'"
+  STDOUT_MATCH "^pixels same, utm as PROJ\n$")
+tpkit_tool_test(tp-rpc.crs-goes-with-points
+  COMMAND "tp-rpc crop ${_mars}/img_01.tif --crs utm -o c.tif @SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 2" STDERR_MATCH "--crs goes with project and localize")

@@ -147,13 +147,42 @@ Eigen::Vector3d GroundConverter::operator()(const Eigen::Vector3d& llh) const {
   return llh;
 }
 
-Eigen::Vector3d GroundConverter::operator()(const Eigen::Vector3d& llh, long long track) const {
+Eigen::Vector3d GroundConverter::checked(const Eigen::Vector3d& llh) const {
   try {
     return (*this)(llh);
   } catch (const GeographicLib::GeographicErr& e) {
-    throw NumericalError("track " + std::to_string(track) + " at lon " + format_figure(llh[0], 9) + ", lat " +
-                         format_figure(llh[1], 9) + ": not in " + description() + ": " + e.what());
+    throw NumericalError("lon " + format_figure(llh[0], 9) + ", lat " + format_figure(llh[1], 9) + ": not in " + description() +
+                         ": " + e.what());
   }
+}
+
+Eigen::Vector3d GroundConverter::operator()(const Eigen::Vector3d& llh, long long track) const {
+  try {
+    return checked(llh);
+  } catch (const NumericalError& e) {
+    throw NumericalError("track " + std::to_string(track) + " at " + e.what());
+  }
+}
+
+Eigen::Vector3d GroundConverter::inverse(const Eigen::Vector3d& p) const {
+  try {
+    switch (crs_) {
+      case GroundCrs::geographic: return p;
+      case GroundCrs::utm: {
+        double lat, lon;
+        GeographicLib::UTMUPS::Reverse(zone_, north_, p[0], p[1], lat, lon);
+        return {lon, lat, p[2]};
+      }
+      case GroundCrs::ecef: {
+        double lat, lon, h;
+        GeographicLib::Geocentric::WGS84().Reverse(p[0], p[1], p[2], lat, lon, h);
+        return {lon, lat, h};
+      }
+    }
+  } catch (const GeographicLib::GeographicErr& e) {
+    throw NumericalError("not in " + description() + ": " + e.what());
+  }
+  return p;
 }
 
 std::vector<std::string> GroundConverter::columns() const {

@@ -1,6 +1,8 @@
 // See rpc_points.hpp.
 #include "tpkit/rpc/rpc_points.hpp"
 
+#include "tpkit/rpc/rpc_ground.hpp"
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -11,6 +13,7 @@
 #include "tpkit/core/input_file.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
+#include "tpkit/rpc/rpc_ground.hpp"
 
 namespace tpkit {
 
@@ -89,7 +92,8 @@ double line_of_sight_on_dem(const RpcModel& m, const HeightPrior& ground, double
 }  // namespace
 
 std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
-                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats) {
+                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats,
+                                 const GroundConverter* crs) {
   RpcPointStats st;
   std::string out, line;
   HeightPrior ground;
@@ -105,15 +109,16 @@ std::string transform_rpc_points(std::istream& in, const std::string& source, co
     }
     size_t rest = 0;
     const std::vector<double> v = leading_numbers(line, columns, rest, source, lineno);
-    double a = 0, b = 0, h = columns == 3 ? v[2] : 0;
+    double a = 0, b = 0, h = columns == 3 ? v[2] : 0, c = 0;
     try {
       for (double x : v)
         if (std::isnan(x)) throw NumericalError("the input point is nan");
       if (direction == RpcPointDirection::Project) {
-        const Eigen::Vector2d xy = model.project(v[0], v[1], h);
+        const Eigen::Vector3d g = crs ? crs->inverse({v[0], v[1], v[2]}) : Eigen::Vector3d(v[0], v[1], h);
+        const Eigen::Vector2d xy = model.project(g);
         if (!xy.allFinite()) throw NumericalError("the projection is not finite (a pole of the model)");
-        a = xy.x(), b = xy.y();
-        st.outside += model.outside_validity_box({v[0], v[1], h});
+        a = xy.x(), b = xy.y(), h = g.z();
+        st.outside += model.outside_validity_box(g);
       } else if (!dem) {
         const Eigen::Vector2d ll = model.localize(v[0], v[1], h);
         a = ll.x(), b = ll.y();
@@ -124,13 +129,18 @@ std::string transform_rpc_points(std::istream& in, const std::string& source, co
         a = ll.x(), b = ll.y();
         st.outside += model.outside_validity_box({a, b, h});
       }
+      c = h;
+      if (crs && direction == RpcPointDirection::Localize) {
+        const Eigen::Vector3d p = crs->checked({a, b, h});
+        a = p.x(), b = p.y(), c = p.z();
+      }
     } catch (const NumericalError& e) {
       // no solution for this point (it is no bad input): marked nan, counted, the first reason kept
       if (st.unsolved++ == 0) st.first_unsolved = source + ":" + std::to_string(lineno) + ": " + e.what();
       out += "nan nan nan" + line.substr(rest) + '\n';
       continue;
     }
-    out += format_number(a) + ' ' + format_number(b) + ' ' + format_number(h) + line.substr(rest) + '\n';
+    out += format_number(a) + ' ' + format_number(b) + ' ' + format_number(c) + line.substr(rest) + '\n';
     ++st.points;
   }
   if (stats) *stats = st;

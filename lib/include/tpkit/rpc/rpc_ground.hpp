@@ -52,6 +52,11 @@ class GroundConverter {
   // The same; NumericalError naming the track for a point the system cannot hold (UTM: too far from the
   // zone; GeographicLib's own message follows).
   Eigen::Vector3d operator()(const Eigen::Vector3d& llh, long long track) const;
+  // The same, the NumericalError naming the point only.
+  Eigen::Vector3d checked(const Eigen::Vector3d& llh) const;
+  // The inverse: a point of the output system back to (lon, lat, h); NumericalError for one the system
+  // cannot hold (UTM: an easting or northing outside the zone's range).
+  Eigen::Vector3d inverse(const Eigen::Vector3d& xyz) const;
   // Column names of the three coordinates: lon lat h | easting northing h | X Y Z.
   std::vector<std::string> columns() const;
   // The "# crs:" value, e.g. "EPSG:4979 (WGS 84 geographic 3D: lon lat degrees, h metres above the ellipsoid)".

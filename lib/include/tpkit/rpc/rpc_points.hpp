@@ -14,6 +14,9 @@
 // the caller writes the returned text). A point without a solution (a localization that does not
 // converge, a pole of the model, a line of sight the DEM does not cover) is written "nan nan nan" with
 // its extra columns, and counted.
+// With a ground system (GroundConverter: UTM in the zone of the model's centre, or ECEF), the ground
+// coordinates read by project and written by localize are in it (easting northing h, X Y Z) instead of
+// lon lat h; the pixel side keeps its height above the ellipsoid.
 #pragma once
 #include <istream>
 #include <string>
@@ -23,6 +26,7 @@
 namespace tpkit {
 
 struct GeoGrid;
+class GroundConverter;
 
 enum class RpcPointDirection { Project, Localize };
 
@@ -36,6 +40,7 @@ struct RpcPointStats {
 
 // The transformed text of `in` (named `source` in messages). `dem` (localize only, may be null).
 std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
-                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats = nullptr);
+                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats = nullptr,
+                                 const GroundConverter* crs = nullptr);
 
 }  // namespace tpkit
