@@ -39,7 +39,7 @@ if [ "$fuzz_seconds" != 0 ]; then
   stamp "libFuzzer targets of the readers"
   cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DTPKIT_FUZZ=ON -DTPKIT_TESTS=OFF -DTPKIT_BENCH=OFF "${cache_flags[@]}" >/dev/null
   cmake --build build-fuzz -j"$jobs" --target fuzz_readers
-  for kind in matches tracks points trifocal homography cameras; do
+  for kind in matches tracks points trifocal homography cameras nitf; do
     corpus=$(mktemp -d)
     cp fuzz/corpus/"$kind"/* "$corpus"/
     echo "fuzz_$kind: ${fuzz_seconds} s"

@@ -122,23 +122,27 @@ int bytes_per_sample(const NitfImage& im) { return im.nbpp / 8; }
 
 bool masked(const NitfImage& im) { return im.ic == "NM" || im.ic == "M8"; }
 
-// Where each block starts (relative to the file), from the block mask of NM / M8 or contiguous for
-// NC / C8; UINT64_MAX for a block that is not in the file. Index: block (row-major), and for IMODE S
-// band * blocks + block. Also the pad pixel value when the mask gives one.
+// Where each block starts (relative to the file): from the block mask of NM / M8, or one after the
+// other for NC; UINT64_MAX for a block that is not in the file. Index: block (row-major), and for IMODE
+// S band * blocks + block. Also the pad pixel value when the mask gives one.
 struct BlockMap {
-  std::vector<uint64_t> start;
+  std::vector<uint32_t> table;  // the mask's block offsets (from `first`), when it has them
   std::optional<double> pad;
   uint64_t first = 0;  // where the blocks (or the codestream) begin
+  uint64_t block_bytes = 0;
+  uint64_t start(uint64_t k) const {
+    if (table.empty()) return first + k * block_bytes;
+    return table[k] == 0xFFFFFFFFu ? UINT64_MAX : first + table[k];
+  }
 };
 
 BlockMap read_block_map(const ByteFile& f, const NitfImage& im) {
   BlockMap m;
   const uint64_t nblocks = static_cast<uint64_t>(im.nbpr) * im.nbpc;
   const uint64_t entries = im.imode == 'S' ? nblocks * im.bands : nblocks;
-  const uint64_t block_bytes = static_cast<uint64_t>(im.nppbh) * im.nppbv * bytes_per_sample(im) *
-                               (im.imode == 'S' ? 1 : im.bands);
+  m.block_bytes = static_cast<uint64_t>(im.nppbh) * im.nppbv * bytes_per_sample(im) * (im.imode == 'S' ? 1 : im.bands);
   m.first = im.data_offset;
-  std::vector<uint32_t> table;
+  const uint64_t end = im.data_offset + im.data_length;
   if (masked(im)) {
     unsigned char h[10];
     f.read(im.data_offset, h, sizeof h, "the block mask header");
@@ -162,24 +166,23 @@ BlockMap read_block_map(const ByteFile& f, const NitfImage& im) {
     if (imdatoff >= im.data_length) throw InputError(im.path, 0, "block mask: IMDATOFF " + std::to_string(imdatoff) + " is past the image data");
     m.first = im.data_offset + imdatoff;
     if (bmrlnth == 4) {
+      if (entries > (end - pos) / 4)
+        throw InputError(im.path, 0, "truncated: a block mask of " + std::to_string(entries) + " records does not fit the image data");
       std::vector<unsigned char> raw(static_cast<size_t>(entries) * 4);
       f.read(pos, raw.data(), raw.size(), "the block mask");
-      table.resize(entries);
-      for (uint64_t k = 0; k < entries; ++k) table[k] = static_cast<uint32_t>(be(raw.data() + 4 * k, 4));
+      m.table.resize(entries);
+      for (uint64_t k = 0; k < entries; ++k) {
+        m.table[k] = static_cast<uint32_t>(be(raw.data() + 4 * k, 4));
+        if (m.table[k] != 0xFFFFFFFFu && (im.ic == "NM" && m.start(k) + m.block_bytes > end))
+          throw InputError(im.path, 0, "truncated: block " + std::to_string(k) + " ends past the image data (" +
+                                           std::to_string(im.data_length) + " bytes)");
+      }
+      return m;
     }
   }
-  const bool compressed = im.ic == "C8" || im.ic == "M8";
-  m.start.resize(compressed ? 0 : entries);
-  for (uint64_t k = 0; k < m.start.size(); ++k) {
-    if (!table.empty()) {
-      m.start[k] = table[k] == 0xFFFFFFFFu ? UINT64_MAX : m.first + table[k];
-    } else {
-      m.start[k] = m.first + k * block_bytes;
-    }
-    if (m.start[k] != UINT64_MAX && m.start[k] + block_bytes > im.data_offset + im.data_length)
-      throw InputError(im.path, 0, "truncated: block " + std::to_string(k) + " ends past the image data (" +
-                                       std::to_string(im.data_length) + " bytes)");
-  }
+  if ((im.ic == "NC" || im.ic == "NM") && (m.block_bytes == 0 || entries > (end - m.first) / m.block_bytes))
+    throw InputError(im.path, 0, "truncated: " + std::to_string(entries) + " blocks of " + std::to_string(m.block_bytes) +
+                                     " bytes do not fit the image data (" + std::to_string(im.data_length) + " bytes)");
   return m;
 }
 
@@ -251,7 +254,7 @@ void read_uncompressed(const ByteFile& f, const NitfImage& im, int band, Raster&
   for (long br = r.y0 / im.nppbv; br <= (yb - 1) / im.nppbv; ++br)
     for (long bc = r.x0 / im.nppbh; bc <= (xb - 1) / im.nppbh; ++bc) {
       const uint64_t k = static_cast<uint64_t>(br) * im.nbpr + bc;
-      const uint64_t start = map.start[im.imode == 'S' ? band * nblocks + k : k];
+      const uint64_t start = map.start(im.imode == 'S' ? band * nblocks + k : k);
       const long xa = std::max(r.x0, bc * im.nppbh), xe = std::min(xb, (bc + 1) * im.nppbh);
       const long ya = std::max(r.y0, br * im.nppbv), ye = std::min(yb, (br + 1) * im.nppbv);
       const size_t n = static_cast<size_t>(xe - xa);
