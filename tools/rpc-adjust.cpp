@@ -28,7 +28,7 @@ struct Opts {
   std::string model = "affine", height_prior, dem, crs = "geographic", out;
   double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01;
   int threads = 1, iterations = 100;
-  bool write_tiff = false;
+  bool write_tiff = false, strict = false;
 };
 
 
@@ -208,6 +208,17 @@ int run(const Opts& o) {
                 inputs);
 
   AdjustResult r = adjust_rpcs(images, tracks, ao);
+  if (ao.height.at) {
+    // a prior that contradicts the tie points degrades the fit silently: solved again without it, compared
+    const HeightPriorCheck pc = check_height_prior(images, tracks, ao, r);
+    const std::string what = !o.height_prior.empty() ? "--height-prior " + o.height_prior : "--dem " + o.dem;
+    if (pc.contradicts && o.strict)
+      throw NumericalError(what + " contradicts the tie points (--strict): " + pc.figures);
+    if (pc.contradicts)
+      warn(what + " contradicts the tie points: " + pc.figures + " (check its value and datum, or drop it; --strict makes this an error)");
+    else
+      std::cerr << "rpc-adjust: " << what << " agrees with the tie points: " << pc.figures << "\n";
+  }
   long check_n = 0;
   double check_rms = check.empty() ? NAN : held_out_rms(images, r.bias, check, &check_n);
   auto fits = write_models(o, images, r);
@@ -256,6 +267,7 @@ int main(int argc, char** argv) {
         app.add_option("--prior-linear", o->prior_linear, "sigma of the linear terms' prior (px per px)")->check(Positive);
         app.add_option("--iterations", o->iterations, "largest number of solver iterations")->check(Positive);
         app.add_option("--threads", o->threads, "threads");
+        app.add_flag("--strict", o->strict, "a height prior (--height-prior, --dem) that contradicts the tie points is an error");
         app.add_flag("--write-tiff", o->write_tiff, "also write a copy of each image with the adjusted tag 50844");
         app.add_option("-o,--out", o->out, "output folder (created if needed)");
         return [o]() { return run(*o); };

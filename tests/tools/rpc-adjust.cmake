@@ -44,3 +44,12 @@ tpkit_tool_test(rpc-adjust.threads-under-address-limit
   COMMAND "${synth_biased} && (ulimit -v 4000000 && ${adjust} --threads 1024 -o b 2> err) && cat err >&2 && ! grep -E 'WARNING|preprocessor' err"
   STDERR_MATCH "rpc-adjust: warning: the system refused a worker thread .*\nrpc-adjust: 400 tracks, 1200 observations, model affine: rms 8.207 px before, 0.000[0-9]+ px after"
   CHECK_FILE b/rpc.bias FILE_MATCH "# tpkit rpc-bias" LABELS rlimit)
+# A height prior that contradicts the tie points (the scene's terrain is near 0 m, the prior says 1000+-5)
+# is said with the figures of the fit with and without it; --strict refuses it and writes nothing; the
+# scene's own DEM agrees.
+tpkit_tool_test(rpc-adjust.contradicting-height-prior
+  COMMAND "${synth_biased} && ${adjust} --height-prior 1000+-5 -o adj 2> log && grep -c 'warning: --height-prior 1000+-5 contradicts the tie points: rms after [0-9.]* px with it, [0-9.e-]* px without@SEMI@ flagged tracks [0-9]* with, 0 without' log && ${adjust} --height-prior 1000+-5 --strict -o adj2"
+  EXPECT_FAIL STDOUT_MATCH "^1\n$" STDERR_MATCH "rpc-adjust: --height-prior 1000\\+-5 contradicts the tie points \\(--strict\\): rms after" NO_FILE adj2)
+tpkit_tool_test(rpc-adjust.agreeing-dem
+  COMMAND "${synth_biased} && ${adjust} --dem syn/truth.dem.tif --strict -o adj"
+  STDERR_MATCH "--dem syn/truth.dem.tif agrees with the tie points: rms after [0-9.e-]+ px with it")

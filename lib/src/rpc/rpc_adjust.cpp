@@ -305,6 +305,43 @@ double residual_rms(const AdjustResult& r, bool after, int image) {
   return n ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();
 }
 
+HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                                    const AdjustOptions& options, const AdjustResult& with_prior) {
+  HeightPriorCheck c;
+  c.sigma = options.height.sigma;
+  AdjustOptions free_options = options;
+  free_options.height = HeightPrior{};
+  free_options.progress = false;
+  const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
+  c.rms_with = residual_rms(with_prior, true);
+  c.rms_without = residual_rms(free_fit, true);
+  c.flagged_with = std::count(with_prior.flagged.begin(), with_prior.flagged.end(), 1);
+  c.flagged_without = std::count(free_fit.flagged.begin(), free_fit.flagged.end(), 1);
+  std::vector<double> dh, adh;
+  for (size_t t = 0; t < free_fit.ground.size(); ++t) {
+    if (!free_fit.initial_ok[t]) continue;
+    double h;
+    const Eigen::Vector3d& g = free_fit.ground[t];
+    if (!options.height.at || !options.height.at(g[0], g[1], h, nullptr)) continue;
+    dh.push_back(h - g[2]);
+    adh.push_back(std::fabs(h - g[2]));
+  }
+  c.covered = static_cast<long>(dh.size());
+  auto median = [](std::vector<double> v) {
+    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  c.median_dh = median(dh);
+  c.median_abs_dh = median(adh);
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.02 || (c.covered > 0 && c.median_abs_dh > 3 * c.sigma);
+  c.figures = "rms after " + format_figure(c.rms_with) + " px with it, " + format_figure(c.rms_without) + " px without; flagged tracks " +
+              std::to_string(c.flagged_with) + " with, " + std::to_string(c.flagged_without) + " without; prior minus free height: median " +
+              format_figure(c.median_dh) + " m, median |.| " + format_figure(c.median_abs_dh) + " m = " +
+              format_figure(c.median_abs_dh / c.sigma) + " sigma (sigma " + format_figure(c.sigma) + " m, " + std::to_string(c.covered) + " tracks)";
+  return c;
+}
+
 double held_out_rms(const std::vector<AdjustImage>& images, const std::vector<ImageBias>& bias,
                     const std::vector<AdjustTrack>& tracks, long* n_out) {
   check_tracks(images, tracks);

@@ -82,6 +82,23 @@ void check_tracks(const std::vector<AdjustImage>& images, const std::vector<Adju
 AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                          const AdjustOptions& options);
 
+// Does a height prior (options.height: --height-prior or --dem) contradict the tie points? The adjustment
+// is solved again without it and the two compared: the prior contradicts them when, with it, the RMS
+// after the fit exceeds the free fit's by more than 20% and 0.02 px, or when the median of
+// |prior - free height| over the tracks the prior covers exceeds 3 prior sigmas. The free fit is as
+// well posed as the problem is without a prior (--fixed images; else the bias priors hold the datum).
+struct HeightPriorCheck {
+  bool contradicts = false;
+  double rms_with = 0, rms_without = 0;  // px, after the fit
+  long flagged_with = 0, flagged_without = 0;
+  long covered = 0;                      // tracks whose free ground point the prior gives a height for
+  double median_dh = 0, median_abs_dh = 0;  // prior minus free height, m
+  double sigma = 0;                      // the prior's sigma, m
+  std::string figures;                   // one line: the figures above
+};
+HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                                    const AdjustOptions& options, const AdjustResult& with_prior);
+
 // RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0).
 double residual_rms(const AdjustResult& r, bool after, int image = -1);
 
