@@ -1073,6 +1073,16 @@ std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map
   for (const auto& c : rpc_sidecar_candidates(image)) {
     if (!fs::is_regular_file(c)) continue;
     const RpcForm form = rpc_form_of(c);
+    if (form == RpcForm::dimap) {
+      // a DIMAP product's model is the whole image's, whose top-left pixel is tile R1C1's: any other tile
+      // would get the whole image's pixels (GDAL shifts it by the tile layout of the DIM file, not read here)
+      std::smatch t;
+      const std::string stem = fs::path(image).stem().string();
+      if (std::regex_search(stem, t, std::regex("_R([0-9]+)C([0-9]+)$")) && (std::stoi(t[1]) != 1 || std::stoi(t[2]) != 1))
+        throw InputError(image, 0, "tile R" + t[1].str() + "C" + t[2].str() + " of a DIMAP product: " + fs::path(c).filename().string() +
+                                       " is the model of the whole image (tile R1C1's pixels), and the tile's offset in it is not known "
+                                       "here: mosaic the tiles, or give --rpc IMAGE=FILE with the model shifted to the tile");
+    }
     if (form != RpcForm::aux) return RpcSource{read_rpc_file(c), c, form};
     // GDAL writes .aux.xml files for statistics and other metadata too: one without an RPC domain is passed
     if (auto m = read_rpc_aux(c)) return RpcSource{*m, c, form};

@@ -330,3 +330,20 @@ TEST(RpcIo, TruncatedFilesAreRefusedCleanly) {
     EXPECT_GT(refused, static_cast<long>(text.size() / 13) - 2) << name;  // all but (at most) a cut at the very end
   }
 }
+
+TEST(RpcIo, DimapTilesOtherThanTheFirstAreRefused) {
+  // RPC_NAME.XML is the whole image's model, whose top-left pixel is tile R1C1's: tile R2C1 would get
+  // pixels of the whole image, so it is refused rather than given a model off by the tile's offset
+  const fs::path dir = fs::path(testing::TempDir()) / "dimap_tiles";
+  fs::create_directories(dir);
+  const RpcModel m = *read_rpc_tiff(std::string(TPKIT_SHARED_DIR) + "/data/pleiades-marseille/img_01.tif");
+  write_rpc_dimap((dir / "RPC_PHR1A_X.XML").string(), m);
+  for (const char* tile : {"IMG_PHR1A_X_R1C1.JP2", "IMG_PHR1A_X_R2C1.JP2"}) std::ofstream((dir / tile).string()) << "x";
+  EXPECT_EQ(load_image_rpc((dir / "IMG_PHR1A_X_R1C1.JP2").string()).form, RpcForm::dimap);
+  try {
+    load_image_rpc((dir / "IMG_PHR1A_X_R2C1.JP2").string());
+    ADD_FAILURE() << "tile R2C1 given the whole image's model";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("tile R2C1 of a DIMAP product: RPC_PHR1A_X.XML is the model of the whole image"), std::string::npos) << e.what();
+  }
+}
