@@ -1,5 +1,5 @@
-// tp-plan: the job list of a scaled-out tie-point run (pairs x regions, merge, chain) for make -j,
-// GNU parallel and Slurm job arrays.
+// tp-plan: the job list of a scaled-out tie-point run (pairs x regions, merge, chain, and the RPC
+// adjustment with its ground points) for make -j, GNU parallel and Slurm job arrays.
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -15,9 +15,10 @@ extern const char* const tpkit_man_page;
 namespace {
 struct Opts {
   std::vector<std::string> images;
-  std::string list, match_options;
+  std::string list, match_options, adjust_options, ground_options, adjust_model;
+  std::vector<std::string> fixed;
   tpkit::PlanOptions p;
-  bool quiet = false;
+  bool quiet = false, adjust = false, no_adjust = false;
 };
 
 }  // namespace
@@ -37,6 +38,12 @@ int main(int argc, char** argv) {
         app.add_option("--threads", o->p.threads, "threads of each tp-match job (Slurm --cpus-per-task)")->check(CLI::Range(1, 1024));
         app.add_option("--bin", o->p.bin, "folder of the tpkit tools on the machines (default: on PATH)");
         app.add_option("--match-options", o->match_options, "more tp-match options for every match job, space separated");
+        app.add_flag("--adjust", o->adjust, "end with rpc-adjust and tp-ground; refused when an image has no RPC model");
+        app.add_flag("--no-adjust", o->no_adjust, "end with the chain (tracks.tracks)");
+        app.add_option("--adjust-model", o->adjust_model, "rpc-adjust --model: shift, drift or affine (default affine)");
+        app.add_option("--fixed", o->fixed, "rpc-adjust --fixed: an image whose model is kept (repeatable)");
+        app.add_option("--adjust-options", o->adjust_options, "more rpc-adjust options, space separated");
+        app.add_option("--ground-options", o->ground_options, "more tp-ground options, space separated");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
           std::vector<std::string> paths = o->images;
@@ -48,6 +55,16 @@ int main(int argc, char** argv) {
               throw tpkit::UsageError("--match-options: the detection tile is tp-plan's --detect-tile");
             o->p.match_args.push_back(a);
           }
+          // any option of the adjustment asks for it: refused, not dropped, when it cannot be made
+          const bool asked = o->adjust || !o->adjust_model.empty() || !o->fixed.empty() || !o->adjust_options.empty() ||
+                             !o->ground_options.empty();
+          if (o->no_adjust && asked)
+            throw tpkit::UsageError("--no-adjust excludes --adjust, --adjust-model, --fixed, --adjust-options and --ground-options");
+          o->p.adjust = o->no_adjust ? tpkit::PlanOptions::Adjust::off : asked ? tpkit::PlanOptions::Adjust::on : tpkit::PlanOptions::Adjust::automatic;
+          if (!o->adjust_model.empty()) o->p.adjust_model = o->adjust_model;
+          for (const auto& f : o->fixed) o->p.fixed.push_back(std::filesystem::absolute(f).lexically_normal().string());
+          o->p.adjust_args = tpkit::plan_tool_args(o->adjust_options, "rpc-adjust", "--adjust-options");
+          o->p.ground_args = tpkit::plan_tool_args(o->ground_options, "tp-ground", "--ground-options");
           o->p.work = std::filesystem::absolute(o->p.work).lexically_normal().string();
           if (!o->p.bin.empty()) o->p.bin = std::filesystem::absolute(o->p.bin).lexically_normal().string();
           tpkit::shell_quote(o->p.work);
@@ -57,7 +74,8 @@ int main(int argc, char** argv) {
           if (!o->quiet)
             tpkit::summary(std::to_string(images.size()) + " images, " + std::to_string(plan.pairs.size()) + " pairs, " +
                            std::to_string(plan.detect.size()) + " detection jobs, " + std::to_string(plan.tiles.size()) +
-                           " region jobs; make -C " + tpkit::shell_quote(o->p.work) + " -f plan.mk -j N, or bash " +
+                           " region jobs, " + (plan.adjust.empty() ? "ending with the chain" : "ending with the adjustment (" + o->p.adjust_model + ")") +
+                           " in " + tpkit::plan_result(plan) + "; make -C " + tpkit::shell_quote(o->p.work) + " -f plan.mk -j N, or bash " +
                            tpkit::shell_quote(o->p.work + "/run-parallel.sh") + " -j N, or bash " +
                            tpkit::shell_quote(o->p.work + "/submit-slurm.sh"));
           return 0;

@@ -1,6 +1,7 @@
 #include "tpkit/plan/scale_out_plan.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,27 +18,35 @@ namespace tpkit {
 
 namespace fs = std::filesystem;
 
-std::optional<Footprint> image_footprint(const std::string& path, long width, long height) {
-  const std::optional<RpcSource> rpc = find_image_rpc(path);  // a broken model is bad input: thrown
-  if (!rpc || width <= 0 || height <= 0) return std::nullopt;
+namespace {
+// The footprint of an image from its model (see image_footprint).
+std::optional<Footprint> footprint_of(const std::string& path, const RpcSource& rpc, long width, long height) {
+  if (width <= 0 || height <= 0) return std::nullopt;
   // the image's border, 4 points a side (corners included), at both ends of the model's height range:
   // the outline of every ground point the image can see
   Footprint f;
   try {
-    for (double h : {rpc->model.height_min(), rpc->model.height_max()})
+    for (double h : {rpc.model.height_min(), rpc.model.height_max()})
       for (int k = 0; k < 16; ++k) {
         const int side = k / 4, t = k % 4;  // top, right, bottom, left; t = 0..3 along it
         const double u = t / 4.0, X = width - 0.5, Y = height - 0.5;
         const double x = side == 0 ? -0.5 + u * width : side == 1 ? X : side == 2 ? X - u * width : -0.5;
         const double y = side == 0 ? -0.5 : side == 1 ? -0.5 + u * height : side == 2 ? Y : Y - u * height;
-        const Eigen::Vector2d ll = rpc->model.localize(x, y, h);
+        const Eigen::Vector2d ll = rpc.model.localize(x, y, h);
         f.lonlat.push_back({ll.x(), ll.y()});
       }
   } catch (const NumericalError&) {
-    warn(path + ": its RPC model (" + rpc->path + ") does not localize the image's border: paired with every image");
+    warn(path + ": its RPC model (" + rpc.path + ") does not localize the image's border: paired with every image");
     return std::nullopt;
   }
   return f;
+}
+}  // namespace
+
+std::optional<Footprint> image_footprint(const std::string& path, long width, long height) {
+  const std::optional<RpcSource> rpc = find_image_rpc(path);  // a broken model is bad input: thrown
+  if (!rpc) return std::nullopt;
+  return footprint_of(path, *rpc, width, height);
 }
 
 bool footprints_may_overlap(const PlanImage& a, const PlanImage& b) {
@@ -62,7 +71,9 @@ std::vector<PlanImage> plan_images(const std::vector<std::string>& paths) {
     const fs::path abs = fs::absolute(p, ec).lexically_normal();
     for (const auto& q : out)
       if (q.path == abs.string()) throw UsageError("the image " + p + " is listed twice");
-    out.push_back({abs.string(), info.width, info.height, image_footprint(p, info.width, info.height)});
+    const std::optional<RpcSource> rpc = find_image_rpc(p);  // a broken model is bad input: thrown
+    out.push_back({abs.string(), info.width, info.height, rpc ? footprint_of(p, *rpc, info.width, info.height) : std::nullopt,
+                   rpc.has_value()});
   }
   return out;
 }
@@ -121,6 +132,69 @@ std::string match_args(const PlanOptions& o) {
 // " --region X0 Y0 W H"
 std::string region_arg(const std::array<long, 4>& r) {
   return " --region " + std::to_string(r[0]) + " " + std::to_string(r[1]) + " " + std::to_string(r[2]) + " " + std::to_string(r[3]);
+}
+
+// The adjust and ground stages after the chain (see the header), or the reason why not.
+void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::vector<char>& paired, const PlanOptions& o) {
+  using Mode = PlanOptions::Adjust;
+  if (o.adjust_model != "shift" && o.adjust_model != "drift" && o.adjust_model != "affine")
+    throw UsageError("--adjust-model " + o.adjust_model + ": expected shift, drift or affine");
+  std::vector<size_t> chained;
+  for (size_t i = 0; i < images.size(); ++i)
+    if (paired[i]) chained.push_back(i);
+  for (const auto& f : o.fixed) {
+    const auto it = std::find_if(images.begin(), images.end(), [&](const PlanImage& im) { return im.path == f; });
+    if (it == images.end()) throw UsageError("--fixed " + f + ": not one of the plan's images");
+    if (!paired[static_cast<size_t>(it - images.begin())]) throw UsageError("--fixed " + f + ": left out of the plan (it overlaps no other image)");
+  }
+  if (o.adjust == Mode::off) return;
+  // what the adjustment needs of the images, else the reason
+  std::string reason;
+  bool no_model = false;
+  std::vector<std::string> stems;
+  for (size_t i : chained) {
+    const fs::path path(images[i].path);
+    if (!images[i].rpc) {
+      reason = images[i].path + ": no RPC model (no tag 50844 and no sidecar, see rpc-adjust(1)): the adjustment needs one for every image";
+      no_model = true;
+      break;
+    }
+    if (images[i].path.find('=') != std::string::npos) {
+      reason = images[i].path + ": a '=' in the path cannot go into tp-ground's --rpc IMAGE=FILE";
+      break;
+    }
+    const std::string stem = path.stem().string();
+    if (std::find(stems.begin(), stems.end(), stem) != stems.end()) {
+      reason = images[i].path + ": another image of the plan is also named " + stem + ".*: rpc-adjust names the adjusted models by it";
+      break;
+    }
+    stems.push_back(stem);
+  }
+  if (!reason.empty()) {
+    if (o.adjust == Mode::on) {
+      if (no_model) throw InputError(reason);
+      throw UsageError(reason);
+    }
+    warn(reason + "; the plan ends with the chain (tracks.tracks), without the adjust and ground stages");
+    return;
+  }
+  const std::string tracks = in_work(o, "tracks.tracks"), threads = " --threads " + std::to_string(o.threads);
+  std::string imgs;
+  for (size_t i : chained) imgs += " " + shell_quote(images[i].path);
+  PlanJob adjust{"adjusted/rpc.bias", {"tracks.tracks"}, {},
+                 tool(o, "rpc-adjust") + imgs + " --tracks " + tracks + " --model " + o.adjust_model};
+  for (const auto& f : o.fixed) adjust.command += " --fixed " + shell_quote(f);
+  adjust.command += threads;
+  for (const auto& a : o.adjust_args) adjust.command += " " + shell_quote(a);
+  adjust.command += " -o " + in_work(o, "adjusted");
+  p.adjust.push_back(adjust);
+  PlanJob ground{"ground.points", {"adjusted/rpc.bias", "tracks.tracks"}, {}, tool(o, "tp-ground") + imgs + " --tracks " + tracks};
+  for (size_t i : chained)
+    ground.command += " --rpc " + shell_quote(images[i].path + "=" + (fs::path(o.work) / "adjusted" / (fs::path(images[i].path).stem().string() + "_rpc.txt")).string());
+  ground.command += threads;
+  for (const auto& a : o.ground_args) ground.command += " " + shell_quote(a);
+  ground.command += " -o " + in_work(o, "ground.points");
+  p.ground.push_back(ground);
 }
 
 }  // namespace
@@ -186,7 +260,61 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
   chain.command += " -o " + in_work(o, "tracks.tracks");
   for (const auto& f : pair_files) chain.command += " " + in_work(o, f);
   p.chain.push_back(chain);
+  add_adjustment(p, images, paired, o);
   return p;
+}
+
+std::vector<PlanStage> plan_stages(const Plan& p) {
+  std::vector<PlanStage> out;
+  for (const PlanStage& s : std::initializer_list<PlanStage>{{"geometry", &p.geometry}, {"detect", &p.detect}, {"tiles", &p.tiles},
+                                                             {"merge", &p.merge}, {"chain", &p.chain}, {"adjust", &p.adjust},
+                                                             {"ground", &p.ground}})
+    if (!s.jobs->empty()) out.push_back(s);
+  return out;
+}
+
+std::string plan_result(const Plan& p) { return p.ground.empty() ? "tracks.tracks" : p.ground.back().target; }
+
+std::vector<std::string> plan_tool_args(const std::string& text, const std::string& which, const std::string& option_name) {
+  const bool adjust = which == "rpc-adjust";
+  std::vector<std::string> refused = {"-o", "--out", "--output", "--tracks", "--threads", "--rpc"};
+  if (adjust) refused.insert(refused.end(), {"--model", "--fixed"});
+  auto why = [&](const std::string& opt) -> std::string {
+    if (opt == "--model") return "it is tp-plan's --adjust-model";
+    if (opt == "--fixed") return "it is tp-plan's --fixed";
+    if (opt == "--threads") return "it is tp-plan's --threads";
+    if (opt == "--rpc") return "the models are those found beside the images, as for the footprints and tp-match";
+    return "tp-plan sets it (the work folder's files)";
+  };
+  auto absolute = [](const std::string& f) { return fs::absolute(f).lexically_normal().string(); };
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  std::string file_option;  // the option whose file names follow (--dem: one, --check: until the next option)
+  for (std::string a; in >> a;) {
+    const bool is_option = a.size() > 1 && a[0] == '-' && !(std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.');
+    if (is_option) {
+      file_option.clear();
+      const std::string name = a.substr(0, a.find('='));
+      for (const auto& r : refused)
+        if (name == r || (r == "-o" && a.rfind("-o", 0) == 0 && a.rfind("--", 0) != 0))
+          throw UsageError(option_name + ": " + r + " is refused there: " + why(r));
+      if (name == "--dem" || name == "--check") {
+        if (name.size() < a.size()) {
+          a = name + "=" + absolute(a.substr(name.size() + 1));
+        } else {
+          file_option = name;
+        }
+      }
+      out.push_back(a);
+      continue;
+    }
+    if (!file_option.empty()) {
+      a = absolute(a);
+      if (file_option == "--dem") file_option.clear();
+    }
+    out.push_back(a);
+  }
+  return out;
 }
 
 std::string plan_makefile(const Plan& p) {
@@ -195,7 +323,7 @@ std::string plan_makefile(const Plan& p) {
        "# Targets are relative to the work folder; every command line is the job files' own.\n"
        ".PHONY: tpkit-all\n"
        ".DELETE_ON_ERROR:\n"
-       "tpkit-all: tracks.tracks\n";
+       "tpkit-all: " << plan_result(p) << "\n";
   auto dollars = [](const std::string& c) {
     std::string r;
     for (char ch : c) r += ch == '$' ? std::string("$$") : std::string(1, ch);
@@ -209,8 +337,8 @@ std::string plan_makefile(const Plan& p) {
     for (const auto& t : p.image_detections[i]) s << " " << t;
     s << "\n";
   }
-  for (const auto* stage : {&p.geometry, &p.detect, &p.tiles, &p.merge, &p.chain})
-    for (const PlanJob& j : *stage) {
+  for (const PlanStage& stage : plan_stages(p))
+    for (const PlanJob& j : *stage.jobs) {
       s << j.target << ":";
       for (const auto& d : j.depends) s << " " << d;
       for (size_t i : j.detections) s << " $(" << detections_of(i) << ")";
@@ -236,9 +364,12 @@ std::string plan_sbatch_script() {
 }
 
 std::string plan_slurm_submit(const Plan& p, const PlanOptions& o) {
+  const std::vector<PlanStage> stages = plan_stages(p);
+  std::string names;
+  for (const auto& st : stages) names += (names.empty() ? "" : ", ") + st.name;
   std::ostringstream s;
   s << "#!/bin/bash\n"
-       "# tpkit plan (tp-plan): submits the stages geometry, detect, tiles, merge, chain as Slurm job arrays, each\n"
+       "# tpkit plan (tp-plan): submits the stages " << names << " as Slurm job arrays, each\n"
        "# after the previous one succeeded (afterok). Usage: bash submit-slurm.sh [--wait] [SBATCH OPTIONS...]\n"
        "# The sbatch options go to every stage; --wait returns when the last stage ends, with its status.\n"
        "# Prints each stage's job id.\n"
@@ -259,16 +390,15 @@ std::string plan_slurm_submit(const Plan& p, const PlanOptions& o) {
        "  id=${id%%;*}\n"
        "  echo \"$1 $id\"\n"
        "  dep=(--dependency=\"afterok:$id\")\n"
-       "}\n"
-    << "submit geometry " << p.geometry.size() << "\n"
-    << "submit detect " << p.detect.size() << "\n"
-    << "submit tiles " << p.tiles.size() << "\n"
-    << "submit merge " << p.merge.size() << "\n"
-    << "submit chain " << p.chain.size() << " \"${wait[@]}\"\n";
+       "}\n";
+  for (size_t k = 0; k < stages.size(); ++k)
+    s << "submit " << stages[k].name << " " << stages[k].jobs->size() << (k + 1 == stages.size() ? " \"${wait[@]}\"" : "") << "\n";
   return s.str();
 }
 
-std::string plan_parallel_runner(const PlanOptions& o) {
+std::string plan_parallel_runner(const Plan& p, const PlanOptions& o) {
+  std::string names;
+  for (const auto& st : plan_stages(p)) names += (names.empty() ? "" : " ") + st.name;
   return "#!/bin/bash\n"
          "# tpkit plan (tp-plan): runs the stages with GNU parallel, one after the other.\n"
          "# Usage: bash run-parallel.sh [PARALLEL OPTIONS...]   (e.g. -j 8, --sshloginfile FILE)\n"
@@ -276,7 +406,7 @@ std::string plan_parallel_runner(const PlanOptions& o) {
          "W=" +
          shell_quote(o.work) +
          "\n"
-         "for s in geometry detect tiles merge chain; do\n"
+         "for s in " + names + "; do\n"
          "  parallel --halt now,fail=1 --joblog \"$W/logs/parallel-$s.joblog\" \"$@\" < \"$W/jobs/$s.jobs\"\n"
          "done\n";
 }
@@ -296,7 +426,7 @@ void check_work_folder(const fs::path& W, const std::string& makefile) {
     throw UsageError(W.string() + ": holds another plan (its plan.mk differs: other images, another order or other "
                                   "options), whose outputs would stand for other pairs: plan into a new folder, or empty this one");
   }
-  for (const char* d : {"geometry", "detect", "tiles", "pairs", "tracks.tracks"}) {
+  for (const char* d : {"geometry", "detect", "tiles", "pairs", "tracks.tracks", "adjusted", "ground.points"}) {
     const fs::path sub = W / d;
     bool used = fs::is_regular_file(sub, ec);
     if (fs::is_directory(sub, ec))
@@ -317,14 +447,10 @@ void write_plan(const Plan& p, const PlanOptions& o) {
   for (const PlanJob& j : p.detect) create_output_dir((W / j.target).parent_path().string());
   for (const auto& pr : p.pairs) create_output_dir((W / "tiles" / pair_name(pr)).string());
   write_file_atomic((W / "plan.mk").string(), makefile);
-  write_file_atomic((W / "jobs/geometry.jobs").string(), plan_job_file(p.geometry));
-  write_file_atomic((W / "jobs/detect.jobs").string(), plan_job_file(p.detect));
-  write_file_atomic((W / "jobs/tiles.jobs").string(), plan_job_file(p.tiles));
-  write_file_atomic((W / "jobs/merge.jobs").string(), plan_job_file(p.merge));
-  write_file_atomic((W / "jobs/chain.jobs").string(), plan_job_file(p.chain));
+  for (const PlanStage& st : plan_stages(p)) write_file_atomic((W / "jobs" / (st.name + ".jobs")).string(), plan_job_file(*st.jobs));
   write_file_atomic((W / "slurm-array.sbatch").string(), plan_sbatch_script());
   write_file_atomic((W / "submit-slurm.sh").string(), plan_slurm_submit(p, o));
-  write_file_atomic((W / "run-parallel.sh").string(), plan_parallel_runner(o));
+  write_file_atomic((W / "run-parallel.sh").string(), plan_parallel_runner(p, o));
 }
 
 }  // namespace tpkit

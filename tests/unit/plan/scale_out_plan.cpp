@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/match/sift_tiles.hpp"
@@ -102,5 +104,134 @@ TEST(ScaleOutPlan, DetectionTilesOnce) {
       EXPECT_GT(jobs, 0);
       for (int s : seen) EXPECT_EQ(s, 1) << "detect tile " << detect_tile << ", image " << i + 1;
     }
+  }
+}
+
+// Issue 24: the plan ends in the adjustment. After the chain, one rpc-adjust job on the chain's images
+// and tracks, then one tp-ground job through the adjusted models rpc-adjust writes (NAME_rpc.txt), in
+// every engine's files, in that order.
+namespace {
+PlanImage with_model(const std::string& path, std::optional<Footprint> f = std::nullopt) {
+  PlanImage im{path, 300, 300, std::move(f)};
+  im.rpc = true;
+  return im;
+}
+std::vector<std::string> stage_names(const Plan& p) {
+  std::vector<std::string> out;
+  for (const PlanStage& s : plan_stages(p)) out.push_back(s.name);
+  return out;
+}
+}  // namespace
+
+TEST(ScaleOutPlan, AdjustAndGroundJobs) {
+  // c overlaps neither: left out of the chain and so of the adjustment
+  const PlanImage a = with_model("/i/a.tif", Footprint{{{{0, 0}}, {{1, 1}}}}), b = with_model("/i/b 2.tif", Footprint{{{{0.5, 0.5}}, {{2, 2}}}}),
+                  c = with_model("/j/a.tif", Footprint{{{{5, 5}}, {{6, 6}}}});
+  PlanOptions o;
+  o.work = "/w d";
+  o.threads = 3;
+  o.adjust_model = "drift";
+  o.fixed = {"/i/a.tif"};
+  o.adjust_args = {"--dem", "/x/dem.tif"};
+  o.ground_args = {"--crs", "utm"};
+  const Plan p = make_plan({a, b, c}, o);
+  EXPECT_EQ(stage_names(p), (std::vector<std::string>{"geometry", "detect", "tiles", "merge", "chain", "adjust", "ground"}));
+  ASSERT_EQ(p.adjust.size(), 1u);
+  ASSERT_EQ(p.ground.size(), 1u);
+  EXPECT_EQ(p.adjust[0].target, "adjusted/rpc.bias");
+  EXPECT_EQ(p.adjust[0].depends, (std::vector<std::string>{"tracks.tracks"}));
+  EXPECT_EQ(p.adjust[0].command,
+            "rpc-adjust '/i/a.tif' '/i/b 2.tif' --tracks '/w d/tracks.tracks' --model drift --fixed '/i/a.tif' --threads 3 "
+            "'--dem' '/x/dem.tif' -o '/w d/adjusted'");
+  EXPECT_EQ(p.ground[0].target, "ground.points");
+  EXPECT_EQ(p.ground[0].depends, (std::vector<std::string>{"adjusted/rpc.bias", "tracks.tracks"}));
+  EXPECT_EQ(p.ground[0].command,
+            "tp-ground '/i/a.tif' '/i/b 2.tif' --tracks '/w d/tracks.tracks' --rpc '/i/a.tif=/w d/adjusted/a_rpc.txt' "
+            "--rpc '/i/b 2.tif=/w d/adjusted/b 2_rpc.txt' --threads 3 '--crs' 'utm' -o '/w d/ground.points'");
+  EXPECT_EQ(plan_result(p), "ground.points");
+
+  const std::string mk = plan_makefile(p);
+  EXPECT_NE(mk.find("tpkit-all: ground.points\n"), std::string::npos);
+  EXPECT_NE(mk.find("\nadjusted/rpc.bias: tracks.tracks\n\trpc-adjust "), std::string::npos);
+  EXPECT_NE(mk.find("\nground.points: adjusted/rpc.bias tracks.tracks\n\ttp-ground "), std::string::npos);
+  EXPECT_EQ(plan_job_file(p.adjust), p.adjust[0].command + "\n");
+  // Slurm: adjust after chain, ground after adjust (each submit takes the previous job's id as its
+  // afterok dependency), --wait on the last
+  const std::string sub = plan_slurm_submit(p, o);
+  const size_t chain = sub.find("\nsubmit chain 1\n"), adjust = sub.find("\nsubmit adjust 1\n"),
+               ground = sub.find("\nsubmit ground 1 \"${wait[@]}\"\n");
+  ASSERT_NE(chain, std::string::npos) << sub;
+  ASSERT_NE(adjust, std::string::npos) << sub;
+  ASSERT_NE(ground, std::string::npos) << sub;
+  EXPECT_LT(chain, adjust);
+  EXPECT_LT(adjust, ground);
+  EXPECT_NE(sub.find("--cpus-per-task=3 "), std::string::npos);
+  EXPECT_NE(plan_parallel_runner(p, o).find("for s in geometry detect tiles merge chain adjust ground; do\n"), std::string::npos);
+}
+
+TEST(ScaleOutPlan, AdjustmentThatCannotBeMade) {
+  PlanOptions o;
+  o.work = "/w";
+  const PlanImage a = with_model("/i/a.tif"), b = with_model("/i/b.tif"), none{"/i/c.tif", 300, 300, std::nullopt},
+                  same_stem = with_model("/j/a.tiff"), eq = with_model("/i/x=1.tif");
+  for (const auto& images : {std::vector<PlanImage>{a, b, none}, std::vector<PlanImage>{a, b, same_stem}, std::vector<PlanImage>{a, eq}}) {
+    // by default: the plan ends with the chain (warned), in every engine
+    o.adjust = PlanOptions::Adjust::automatic;
+    const Plan p = make_plan(images, o);
+    EXPECT_TRUE(p.adjust.empty());
+    EXPECT_TRUE(p.ground.empty());
+    EXPECT_EQ(stage_names(p), (std::vector<std::string>{"geometry", "detect", "tiles", "merge", "chain"}));
+    EXPECT_NE(plan_makefile(p).find("tpkit-all: tracks.tracks\n"), std::string::npos);
+    EXPECT_EQ(plan_makefile(p).find("rpc-adjust"), std::string::npos);
+    EXPECT_NE(plan_slurm_submit(p, o).find("\nsubmit chain 1 \"${wait[@]}\"\n"), std::string::npos);
+    EXPECT_NE(plan_parallel_runner(p, o).find("for s in geometry detect tiles merge chain; do\n"), std::string::npos);
+    // asked for: refused
+    o.adjust = PlanOptions::Adjust::on;
+    if (std::any_of(images.begin(), images.end(), [](const PlanImage& im) { return !im.rpc; }))
+      EXPECT_THROW(make_plan(images, o), InputError);
+    else
+      EXPECT_THROW(make_plan(images, o), UsageError);
+  }
+  // off: no adjustment, also where it could be made
+  o.adjust = PlanOptions::Adjust::off;
+  EXPECT_TRUE(make_plan({a, b}, o).adjust.empty());
+  o.adjust = PlanOptions::Adjust::automatic;
+  EXPECT_EQ(make_plan({a, b}, o).adjust.size(), 1u);
+  // bad options of the adjustment
+  o.adjust_model = "projective";
+  EXPECT_THROW(make_plan({a, b}, o), UsageError);
+  o.adjust_model = "shift";
+  o.fixed = {"/i/z.tif"};
+  EXPECT_THROW(make_plan({a, b}, o), UsageError);
+  const PlanImage far = with_model("/i/far.tif", Footprint{{{{5, 5}}, {{6, 6}}}}), a1 = with_model("/i/a.tif", Footprint{{{{0, 0}}, {{1, 1}}}}),
+                  b1 = with_model("/i/b.tif", Footprint{{{{0, 0}}, {{1, 1}}}});
+  o.fixed = {"/i/far.tif"};  // left out of the plan: not in the chain
+  EXPECT_THROW(make_plan({a1, b1, far}, o), UsageError);
+  o.fixed = {"/i/b.tif"};
+  const Plan p = make_plan({a1, b1, far}, o);
+  ASSERT_EQ(p.adjust.size(), 1u);
+  EXPECT_EQ(p.adjust[0].command, "rpc-adjust '/i/a.tif' '/i/b.tif' --tracks '/w/tracks.tracks' --model shift --fixed '/i/b.tif' --threads 1 -o '/w/adjusted'");
+}
+
+TEST(ScaleOutPlan, AdjustAndGroundOptions) {
+  EXPECT_EQ(plan_tool_args("  --loss 0.5   --flag 2 ", "rpc-adjust", "--adjust-options"),
+            (std::vector<std::string>{"--loss", "0.5", "--flag", "2"}));
+  // file names made absolute (the jobs run elsewhere): --dem one, --check until the next option
+  const std::string cwd = std::filesystem::current_path().string();
+  EXPECT_EQ(plan_tool_args("--dem d/dem.tif --dem-sigma 2 --check a.tracks ./b.tracks --height-prior=-5+-3 --dem=e.tif", "rpc-adjust", "--adjust-options"),
+            (std::vector<std::string>{"--dem", cwd + "/d/dem.tif", "--dem-sigma", "2", "--check", cwd + "/a.tracks", cwd + "/b.tracks",
+                                      "--height-prior=-5+-3", "--dem=" + cwd + "/e.tif"}));
+  EXPECT_EQ(plan_tool_args("--prior-shift -1", "rpc-adjust", "--adjust-options"),  // a negative number is a value
+            (std::vector<std::string>{"--prior-shift", "-1"}));
+  for (const char* refused : {"-o x", "-ox", "--out x", "--tracks t", "--threads 4", "--model shift", "--model=shift", "--fixed a.tif", "--rpc a=b"})
+    EXPECT_THROW(plan_tool_args(refused, "rpc-adjust", "--adjust-options"), UsageError) << refused;
+  EXPECT_EQ(plan_tool_args("--crs utm --model x", "tp-ground", "--ground-options"),  // tp-ground has no --model of tp-plan's
+            (std::vector<std::string>{"--crs", "utm", "--model", "x"}));
+  for (const char* refused : {"-o x", "--output=x", "--tracks t", "--threads 4", "--rpc a=b"})
+    EXPECT_THROW(plan_tool_args(refused, "tp-ground", "--ground-options"), UsageError) << refused;
+  try {
+    plan_tool_args("--fixed a.tif", "rpc-adjust", "--adjust-options");
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("--adjust-options: --fixed is refused there: it is tp-plan's --fixed"), std::string::npos) << e.what();
   }
 }

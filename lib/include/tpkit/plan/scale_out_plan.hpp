@@ -12,7 +12,19 @@
 //                         -o WORK/tiles/pair-I-J/tile-K.matches IMG_I IMG_J (keypoints from the cache)
 //   merge     per pair:   tp-merge -o WORK/pairs/pair-I-J.matches WORK/tiles/pair-I-J/tile-*.matches
 //   chain     once:       tp-chain --images IMG... -o WORK/tracks.tracks WORK/pairs/*.matches
-// I, J, K count from 1 (I < J, in list order; regions row-major over image 1).
+//   adjust    once:       rpc-adjust IMG... --tracks WORK/tracks.tracks --model M [--fixed IMG]...
+//                         --threads T [ADJUST OPTIONS] -o WORK/adjusted   (target WORK/adjusted/rpc.bias)
+//   ground    once:       tp-ground IMG... --tracks WORK/tracks.tracks --rpc IMG=WORK/adjusted/STEM_rpc.txt...
+//                         --threads T [GROUND OPTIONS] -o WORK/ground.points
+// I, J, K count from 1 (I < J, in list order; regions row-major over image 1). IMG... of chain, adjust
+// and ground: the images of the list that are in a pair, in list order; STEM: an image's file name
+// without its extension, as rpc-adjust names the adjusted model it writes into -o.
+//
+// The adjustment (adjust and ground) needs an RPC model for every image of the chain, distinct stems
+// (rpc-adjust's outputs are named by them) and no '=' in an image's path (tp-ground's --rpc IMAGE=FILE
+// splits at the first one). PlanOptions::adjust decides what happens when one of these fails: automatic
+// (the default: the plan ends with the chain, with a warning naming the reason), on (refused: an image
+// without a model is InputError, the others UsageError), off (the plan ends with the chain, no warning).
 // Every tp-match job gets --tile detect_tile: the memory of a job is bounded by one detection tile's
 // SIFT pyramid (about 480 MB at tp-match's default of 1024 pixels, 340 MB at 768, 250 MB at 512).
 //
@@ -35,6 +47,7 @@ struct PlanImage {
   std::string path;  // absolute
   long width = 0, height = 0;
   std::optional<Footprint> footprint;
+  bool rpc = false;  // a model was found for it (its tag 50844 or a sidecar: what rpc-adjust reads)
 };
 
 // The footprint of a width x height image from its RPC model (a sidecar or the TIFF tag, rpc_io.hpp):
@@ -54,6 +67,13 @@ struct PlanOptions {
   std::string work;                       // shared work folder, absolute
   std::string bin;                        // folder of the tpkit tools; empty = found on PATH
   std::vector<std::string> match_args;    // more tp-match arguments, for every tp-match job
+  // the adjustment stages (adjust, ground) after the chain; see the comment at the top
+  enum class Adjust { automatic, on, off };
+  Adjust adjust = Adjust::automatic;
+  std::string adjust_model = "affine";    // rpc-adjust --model: shift, drift or affine (rpc-adjust's default)
+  std::vector<std::string> fixed;         // rpc-adjust --fixed: absolute paths, images of the chain
+  std::vector<std::string> adjust_args;   // more rpc-adjust arguments (relative file names already made absolute)
+  std::vector<std::string> ground_args;   // more tp-ground arguments (the same)
 };
 
 struct PlanJob {
@@ -65,9 +85,25 @@ struct PlanJob {
 
 struct Plan {
   std::vector<std::array<size_t, 2>> pairs;  // 0-based image indices
-  std::vector<PlanJob> geometry, detect, tiles, merge, chain;
+  std::vector<PlanJob> geometry, detect, tiles, merge, chain, adjust, ground;  // adjust, ground: empty without the adjustment
   std::vector<std::vector<std::string>> image_detections;  // per image: the targets of its detection jobs
 };
+
+struct PlanStage {
+  std::string name;                  // geometry, detect, tiles, merge, chain, adjust, ground
+  const std::vector<PlanJob>* jobs;  // into the plan
+};
+// The stages of the plan that have jobs, in the order they run (adjust and ground only with the adjustment).
+std::vector<PlanStage> plan_stages(const Plan& p);
+// The final target of the plan: ground.points with the adjustment, else tracks.tracks.
+std::string plan_result(const Plan& p);
+
+// More arguments of rpc-adjust (which = "rpc-adjust") or tp-ground (which = "tp-ground") from the text of
+// --adjust-options / --ground-options, split at white space: the options tp-plan sets itself are
+// refused (UsageError naming option_name: -o, --tracks, --threads, --rpc (the models are those found
+// beside the images, as for the footprints and tp-match), and for rpc-adjust --model and --fixed), and the
+// file names of --dem and --check made absolute (the jobs run in other folders).
+std::vector<std::string> plan_tool_args(const std::string& text, const std::string& which, const std::string& option_name);
 
 // Image sizes read from the files; throws InputError for an unreadable image, UsageError for fewer
 // than two images or no overlapping pair.
@@ -78,6 +114,9 @@ std::vector<PlanImage> plan_images(const std::vector<std::string>& paths);
 // device, binary content (a NUL byte) or a line longer than PATH_MAX (4096 bytes), found as the line
 // is read (a device such as /dev/zero fails at once).
 std::vector<std::string> read_image_list(const std::string& path);
+// The plan's jobs. UsageError for bad options (tile sizes, an unknown --adjust-model, a --fixed image that
+// is not in the chain), no overlapping pair, or (adjust = on) an adjustment that cannot be made: an image
+// without a model is then InputError. See the comment at the top for the stages.
 Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o);
 
 // The regions [x0, y0, w, h] of a width x height image: a grid of tile-sized cells (the last ones
@@ -97,21 +136,22 @@ std::string plan_makefile(const Plan& p);
 std::string plan_job_file(const std::vector<PlanJob>& jobs);
 // The Slurm array job: runs line $SLURM_ARRAY_TASK_ID of the job file named by its argument.
 std::string plan_sbatch_script();
-// Submits the five stages as job arrays, each after the previous (afterok); --wait waits for the last.
+// Submits the stages (plan_stages) as job arrays, each after the previous (afterok); --wait waits for the last.
 // The logs' --output pattern has the work folder's '%' doubled (Slurm expands %x, %j, ... in it) and the
 // script refuses a work folder whose path holds a backslash (which turns the expansion of %a off: every
 // job of a stage would write one log).
 std::string plan_slurm_submit(const Plan& p, const PlanOptions& o);
-// Runs the five job files with GNU parallel, stage after stage; arguments go to parallel.
-std::string plan_parallel_runner(const PlanOptions& o);
+// Runs the stages' job files with GNU parallel, stage after stage; arguments go to parallel.
+std::string plan_parallel_runner(const Plan& p, const PlanOptions& o);
 
-// Writes WORK/plan.mk, WORK/jobs/{geometry,detect,tiles,merge,chain}.jobs, WORK/slurm-array.sbatch,
+// Writes WORK/plan.mk, WORK/jobs/STAGE.jobs (every stage of plan_stages), WORK/slurm-array.sbatch,
 // WORK/submit-slurm.sh, WORK/run-parallel.sh and the output folders (cache, geometry, detect/image-I,
 // tiles/pair-I-J, pairs, logs), all in the run's output transaction.
 // A work folder already used is taken only for the same plan (plan.mk the same: same images in the
 // same order, same options), whose outputs it may then resume; the outputs of another plan would stand
 // for other pairs, images or regions (make would call them up to date), so such a folder is refused
-// (UsageError), as is one that holds outputs (geometry, detect, tiles, pairs, tracks.tracks) but no plan.
+// (UsageError), as is one that holds outputs (geometry, detect, tiles, pairs, tracks.tracks, adjusted,
+// ground.points) but no plan.
 void write_plan(const Plan& p, const PlanOptions& o);
 
 }  // namespace tpkit
