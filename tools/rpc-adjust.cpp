@@ -26,9 +26,9 @@ using namespace tpkit;
 struct Opts {
   std::vector<std::string> images, tracks, check, fixed, rpc;
   std::string model = "affine", height_prior, dem, crs = "geographic", out;
-  double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01;
+  double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01, default_sigma = NAN;
   int threads = 1, iterations = 100;
-  bool write_tiff = false, strict = false;
+  bool write_tiff = false, strict = false, unweighted = false;
 };
 
 
@@ -94,25 +94,36 @@ void write_residuals(const std::string& path, const std::vector<AdjustImage>& im
   Meta meta;
   meta_set(meta, "residual", "projected minus observed, pixels; before: zero bias and the least-squares point of "
                              "the delivered models; after: the adjusted biases and points");
+  meta_set(meta, "sigma", "the standard deviation the observation was weighted with (pixels: given, floored at " +
+                              format_number(kMinObservationSigma) + ", or the default)");
   std::ostringstream os;
   write_header(os, "rpc-residuals", 1, refs, meta,
-               {"track", "image", "x", "y", "dx_before", "dy_before", "dx_after", "dy_after", "flagged"});
+               {"track", "image", "x", "y", "dx_before", "dy_before", "dx_after", "dy_after", "flagged", "sigma"});
   for (size_t k = 0; k < r.obs_image.size(); ++k) {
     int t = r.obs_track[k];
     write_record(os, {static_cast<double>(tracks[t].id), static_cast<double>(r.obs_image[k] + 1), r.obs_xy[k][0],
                       r.obs_xy[k][1], r.res_before[k][0], r.res_before[k][1], r.res_after[k][0], r.res_after[k][1],
-                      static_cast<double>(r.flagged[t])});
+                      static_cast<double>(r.flagged[t]), r.obs_sigma[k]});
   }
   long used = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
   long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
   os << "# tracks: " << used << '\n';
   os << "# tracks_not_intersected: " << static_cast<long>(tracks.size()) - used << '\n';
+  os << "# tracks_by_length: " << format_lengths(tracks_by_length(tracks, r)) << '\n';
   os << "# observations: " << r.obs_image.size() << '\n';
+  os << "# observations_with_sigma: " << r.obs_with_sigma << '\n';
+  os << "# default_sigma_px: " << format_number(r.default_sigma_px) << '\n';
   os << "# rms_before_px: " << format_number(residual_rms(r, false)) << '\n';
   os << "# rms_after_px: " << format_number(residual_rms(r, true)) << '\n';
+  os << "# sigma0_weighted: " << format_number(r.sigma0_weighted) << '\n';
+  const std::vector<ImageReport> per = image_reports(images.size(), tracks, r);
   for (size_t i = 0; i < images.size(); ++i) {
-    os << "# image" << i + 1 << "_rms_before_px: " << format_number(residual_rms(r, false, static_cast<int>(i))) << '\n';
-    os << "# image" << i + 1 << "_rms_after_px: " << format_number(residual_rms(r, true, static_cast<int>(i))) << '\n';
+    const std::string k = "# image" + std::to_string(i + 1);
+    os << k << "_observations: " << per[i].observations << '\n';
+    os << k << "_tracks_by_length: " << format_lengths(per[i].tracks_by_length) << '\n';
+    os << k << "_median_sigma_px: " << format_number(per[i].median_sigma) << '\n';
+    os << k << "_rms_before_px: " << format_number(per[i].rms_before) << '\n';
+    os << k << "_rms_after_px: " << format_number(per[i].rms_after) << '\n';
   }
   os << "# flagged_tracks: " << flagged << '\n';
   if (check_n > 0) {
@@ -181,6 +192,10 @@ int run(const Opts& o) {
   ao.prior_linear = o.prior_linear;
   ao.threads = o.threads;
   ao.max_iterations = o.iterations;
+  ao.use_sigma = !o.unweighted;
+  if (!std::isnan(o.default_sigma) && !(o.default_sigma > 0 && std::isfinite(o.default_sigma)))
+    throw UsageError("--default-sigma: expected a positive number of pixels, got " + format_number(o.default_sigma));
+  ao.default_sigma_px = o.default_sigma;
   ao.progress = isatty(2);
   if (!o.height_prior.empty() && !o.dem.empty()) throw UsageError("--height-prior and --dem exclude each other");
   if (!o.height_prior.empty()) ao.height = parse_height_prior(o.height_prior);
@@ -234,6 +249,21 @@ int run(const Opts& o) {
             << ": rms " << format_figure(residual_rms(r, false)) << " px before, " << format_figure(residual_rms(r, true)) << " px after";
   if (check_n > 0) std::cerr << ", held-out " << format_figure(check_rms) << " px (" << check_n << " observations)";
   std::cerr << "; " << r.iterations << " iterations\n";
+  std::cerr << "rpc-adjust: tracks by length " << format_lengths(tracks_by_length(tracks, r)) << "; ";
+  if (r.obs_with_sigma == 0)
+    std::cerr << "unit weights (" << (o.unweighted ? "--unweighted" : "no sigma given") << ")\n";
+  else
+    std::cerr << r.obs_with_sigma << " observations weighted by their sigma, " << r.obs_image.size() - r.obs_with_sigma
+              << " at " << format_figure(r.default_sigma_px) << " px; weighted sigma0 " << format_figure(r.sigma0_weighted) << "\n";
+  const std::vector<ImageReport> per = image_reports(images.size(), tracks, r);
+  for (size_t i = 0; i < images.size(); ++i)
+    std::cerr << "rpc-adjust: image" << i + 1 << " " << images[i].path << (images[i].fixed ? " (fixed)" : "") << ": "
+              << per[i].observations << " observations, tracks by length " << format_lengths(per[i].tracks_by_length)
+              << ", median sigma " << format_figure(per[i].median_sigma) << " px, rms " << format_figure(per[i].rms_before)
+              << " px before, " << format_figure(per[i].rms_after) << " px after\n";
+  if (r.obs_with_sigma > 0 && r.obs_with_sigma < static_cast<long>(r.obs_image.size()) && std::isnan(o.default_sigma))
+    warn(std::to_string(r.obs_image.size() - r.obs_with_sigma) + " observations have no sigma: weighted as the median of the others, " +
+         format_figure(r.default_sigma_px) + " px (--default-sigma sets it, --unweighted ignores every sigma)");
   double worst_refit = 0;
   for (const auto& f : fits) worst_refit = std::max(worst_refit, f.max_px);
   std::cerr << "rpc-adjust: adjusted models refitted to the biased ones within " << format_figure(worst_refit, 3) << " px\n";
@@ -252,7 +282,7 @@ int main(int argc, char** argv) {
       [&](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<Opts>();
         app.add_option("images", o->images, "the images (their RPCs: tag 50844 or a sidecar beside them)");
-        app.add_option("--tracks", o->tracks, "tracks files (any number of views >= 2 each)");
+        app.add_option("--tracks", o->tracks, "tracks or matches files (tracks of any length >= 2; a match is a 2-view track)");
         app.add_option("--check", o->check, "held-out tracks files: evaluated, not used in the fit");
         app.add_option("--model", o->model, "bias model: shift, drift or affine");
         app.add_option("--fixed", o->fixed, "an image whose model is kept (repeatable)");
@@ -262,6 +292,8 @@ int main(int argc, char** argv) {
         app.add_option("--dem-sigma", o->dem_sigma, "sigma of the DEM heights (m)")->check(Positive);
         app.add_option("--crs", o->crs, "ground.points coordinates: geographic, utm or ecef");
         app.add_option("--loss", o->loss, "Huber loss scale (px)")->check(Positive);
+        app.add_flag("--unweighted", o->unweighted, "ignore the observations' sigmas (every one at --default-sigma, else 1 px)");
+        app.add_option("--default-sigma", o->default_sigma, "sigma of observations without one (px; default: median of those given, else 1)");
         app.add_option("--flag", o->flag, "flag tracks whose RMS after the fit exceeds this (px)")->check(Positive);
         app.add_option("--prior-shift", o->prior_shift, "sigma of the shift terms' prior (px)")->check(Positive);
         app.add_option("--prior-linear", o->prior_linear, "sigma of the linear terms' prior (px per px)")->check(Positive);

@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cstring>
-#include <filesystem>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
 #include <limits>
 #include <memory>
 #include <thread>
@@ -13,6 +16,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/formats.hpp"
 #include "tpkit/core/image_io.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/core/svg_plot.hpp"
@@ -34,16 +38,17 @@ ImageBias from_block(const std::array<double, 6>& p) {
   return b;
 }
 
+// (projected with bias - observed) * w, w = 1 / sigma (px^-1): the weighted residual of one observation.
 struct ObservationCost {
   const RpcModel* model;
-  double x, y;
+  double x, y, w;
   template <typename T>
   bool operator()(const T* bias, const T* g, T* r) const {
     T p[2];
     model->project_t(g, p);
     const T u = p[0] / kLinearScale, v = p[1] / kLinearScale;
-    r[0] = p[0] + bias[0] + bias[1] * u + bias[2] * v - x;
-    r[1] = p[1] + bias[3] + bias[4] * u + bias[5] * v - y;
+    r[0] = (p[0] + bias[0] + bias[1] * u + bias[2] * v - x) * w;
+    r[1] = (p[1] + bias[3] + bias[4] * u + bias[5] * v - y) * w;
     return true;
   }
 };
@@ -51,13 +56,13 @@ struct ObservationCost {
 // A fixed image: the same residual without a bias block.
 struct FixedObservationCost {
   const RpcModel* model;
-  double x, y;
+  double x, y, w;
   template <typename T>
   bool operator()(const T* g, T* r) const {
     T p[2];
     model->project_t(g, p);
-    r[0] = p[0] - x;
-    r[1] = p[1] - y;
+    r[0] = (p[0] - x) * w;
+    r[1] = (p[1] - y) * w;
     return true;
   }
 };
@@ -119,9 +124,18 @@ void check_tracks(const std::vector<AdjustImage>& images, const std::vector<Adju
   for (const auto& t : tracks) {
     const std::string id = "track " + std::to_string(t.id);
     if (t.views.size() < 2) throw InputError(t.source, t.line, id + " has fewer than two views");
+    if (!t.sigma.empty() && t.sigma.size() != t.views.size())
+      throw InputError(t.source, t.line, id + " has " + std::to_string(t.sigma.size()) + " sigmas for " +
+                                             std::to_string(t.views.size()) + " views");
     std::vector<char> seen(images.size(), 0);
     for (size_t k = 0; k < t.views.size(); ++k) {
       const auto& [i, xy] = t.views[k];
+      if (!xy.allFinite())
+        throw InputError(t.source, t.line, id + ": view " + std::to_string(k + 1) + " at (" + format_number(xy[0]) + ", " +
+                                               format_number(xy[1]) + ") is not a position (a view not seen is left out)");
+      if (!t.sigma.empty() && (t.sigma[k] < 0 || std::isinf(t.sigma[k])))
+        throw InputError(t.source, t.line, id + ": view " + std::to_string(k + 1) + " has sigma " + format_number(t.sigma[k]) +
+                                               " (a standard deviation in pixels: >= 0, or nan when not known)");
       if (i < 0 || i >= static_cast<int>(images.size())) throw InputError(t.source, t.line, id + " names an image out of range");
       if (seen[i]++) throw InputError(t.source, t.line, id + " views " + images[i].path + " twice");
       const AdjustImage& im = images[i];
@@ -185,21 +199,45 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   std::vector<int> constant_terms;
   for (int k = 0; k < 6; ++k)
     if (!used[k]) constant_terms.push_back(k);
+  // each observation's sigma (px): given (floored), else the default
+  std::vector<double> given;
+  if (o.use_sigma)
+    for (size_t t = 0; t < nt; ++t)
+      if (r.initial_ok[t])
+        for (double s : tracks[t].sigma)
+          if (std::isfinite(s)) given.push_back(std::max(s, kMinObservationSigma));
+  r.obs_with_sigma = static_cast<long>(given.size());
+  if (std::isfinite(o.default_sigma_px)) {
+    if (!(o.default_sigma_px > 0)) throw UsageError("the default sigma of an observation must be positive (pixels)");
+    r.default_sigma_px = std::max(o.default_sigma_px, kMinObservationSigma);
+  } else if (!given.empty()) {
+    std::nth_element(given.begin(), given.begin() + given.size() / 2, given.end());
+    r.default_sigma_px = given[given.size() / 2];
+  } else {
+    r.default_sigma_px = 1;
+  }
+  auto sigma_of = [&](const AdjustTrack& t, size_t k) {
+    if (o.use_sigma && !t.sigma.empty() && std::isfinite(t.sigma[k])) return std::max(t.sigma[k], kMinObservationSigma);
+    return r.default_sigma_px;
+  };
   std::vector<char> image_seen(ni, 0);
   long with_height = 0;
   for (size_t t = 0; t < nt; ++t) {
     if (!r.initial_ok[t]) continue;
     double* g = r.ground[t].data();
-    for (const auto& [i, xy] : tracks[t].views) {
+    for (size_t k = 0; k < tracks[t].views.size(); ++k) {
+      const auto& [i, xy] = tracks[t].views[k];
       image_seen[i] = 1;
-      ceres::LossFunction* loss = new ceres::HuberLoss(o.loss_px);
+      const double w = 1.0 / sigma_of(tracks[t], k);
+      // Huber on the weighted residual at loss_px * w: linear where the pixel residual exceeds loss_px
+      ceres::LossFunction* loss = new ceres::HuberLoss(o.loss_px * w);
       if (images[i].fixed) {
         problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedObservationCost, 2, 3>(
-                                     new FixedObservationCost{&images[i].model, xy[0], xy[1]}),
+                                     new FixedObservationCost{&images[i].model, xy[0], xy[1], w}),
                                  loss, g);
       } else {
         problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ObservationCost, 2, 6, 3>(
-                                     new ObservationCost{&images[i].model, xy[0], xy[1]}),
+                                     new ObservationCost{&images[i].model, xy[0], xy[1], w}),
                                  loss, block[i].data(), g);
       }
     }
@@ -256,7 +294,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   r.rms_after.assign(nt, std::numeric_limits<double>::quiet_NaN());
   r.sigma_h.assign(nt, std::numeric_limits<double>::quiet_NaN());
   r.flagged.assign(nt, 0);
-  double sum = 0;
+  double sum = 0, wsum = 0;
   long count = 0;
   std::vector<Eigen::Vector3d> before(nt);
   for (size_t t = 0; t < nt; ++t) {
@@ -274,6 +312,9 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
       r.obs_xy.push_back(v[k].xy);
       r.res_before.push_back(e0);
       r.res_after.push_back(e1);
+      const double sg = sigma_of(tracks[t], k);
+      r.obs_sigma.push_back(sg);
+      wsum += e1.squaredNorm() / (sg * sg);
       s += e1.squaredNorm();
     }
     sum += s;
@@ -282,6 +323,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     r.flagged[t] = r.rms_after[t] > o.flag_px;
   }
   r.sigma0 = std::sqrt(sum / std::max(1L, 2 * count));
+  r.sigma0_weighted = std::sqrt(wsum / std::max(1L, 2 * count));
   // a fit that leaves most tracks above the flag threshold adjusted nothing that can be trusted
   const long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
   if (2 * flagged > usable)
@@ -289,8 +331,22 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
                          format_figure(o.flag_px) + " px after the fit (rms " + format_figure(residual_rms(r, false)) +
                          " px before, " + format_figure(residual_rms(r, true)) + " px after, " +
                          std::to_string(r.iterations) + " iterations): wrong models, wrong tracks, or a --flag too tight");
-  for (size_t t = 0; t < nt; ++t)
-    if (r.initial_ok[t]) r.sigma_h[t] = r.sigma0 * height_sigma_unit(observations(images, &r.bias, tracks[t]), r.ground[t]);
+  // sigma_h: the weighted normal matrix of the point, (J^T W J)^-1 (h, h) scaled by the a posteriori
+  // variance of unit weight (unit weights: sigma0^2 (J^T J)^-1, as tp-ground's)
+  for (size_t t = 0; t < nt; ++t) {
+    if (!r.initial_ok[t]) continue;
+    auto v = observations(images, &r.bias, tracks[t]);
+    Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+    for (size_t k = 0; k < v.size(); ++k) {
+      Eigen::Matrix<double, 2, 3> J;
+      rpc_observe(v[k], r.ground[t], &J);
+      const double sg = sigma_of(tracks[t], k);
+      N += J.transpose() * J / (sg * sg);
+    }
+    Eigen::Vector3d d = N.diagonal().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
+    Eigen::Matrix3d C = d.asDiagonal() * (d.asDiagonal() * N * d.asDiagonal()).inverse() * d.asDiagonal();
+    r.sigma_h[t] = r.sigma0_weighted * std::sqrt(std::max(C(2, 2), 0.0));
+  }
   return r;
 }
 
@@ -303,6 +359,43 @@ double residual_rms(const AdjustResult& r, bool after, int image) {
     ++n;
   }
   return n ? std::sqrt(s / n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::map<int, long> tracks_by_length(const std::vector<AdjustTrack>& tracks, const AdjustResult& r) {
+  std::map<int, long> out;
+  for (size_t t = 0; t < tracks.size() && t < r.initial_ok.size(); ++t)
+    if (r.initial_ok[t]) ++out[static_cast<int>(tracks[t].views.size())];
+  return out;
+}
+
+std::string format_lengths(const std::map<int, long>& by_length) {
+  std::string s;
+  for (const auto& [len, n] : by_length) s += (s.empty() ? "" : " ") + std::to_string(len) + ":" + std::to_string(n);
+  return s.empty() ? "none" : s;
+}
+
+std::vector<ImageReport> image_reports(size_t images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r) {
+  std::vector<ImageReport> out(images);
+  for (size_t t = 0; t < tracks.size() && t < r.initial_ok.size(); ++t)
+    if (r.initial_ok[t])
+      for (const auto& [i, xy] : tracks[t].views) ++out[i].tracks_by_length[static_cast<int>(tracks[t].views.size())];
+  std::vector<std::vector<double>> sigmas(images);
+  for (size_t k = 0; k < r.obs_image.size(); ++k) {
+    ++out[r.obs_image[k]].observations;
+    if (k < r.obs_sigma.size()) sigmas[r.obs_image[k]].push_back(r.obs_sigma[k]);
+  }
+  for (size_t i = 0; i < images; ++i) {
+    out[i].rms_before = residual_rms(r, false, static_cast<int>(i));
+    out[i].rms_after = residual_rms(r, true, static_cast<int>(i));
+    auto& v = sigmas[i];
+    if (v.empty()) {
+      out[i].median_sigma = std::numeric_limits<double>::quiet_NaN();
+    } else {
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      out[i].median_sigma = v[v.size() / 2];
+    }
+  }
+  return out;
 }
 
 HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
@@ -449,33 +542,137 @@ int match_image(const std::string& track_file, const std::string& ref, const std
 }
 }  // namespace
 
+namespace {
+// A sigma read from a file: NaN (not known) or >= 0; negative or infinite refused with its line.
+double checked_sigma(double s, const std::string& source, long line, const std::string& column) {
+  if (std::isnan(s)) return s;
+  if (s < 0 || std::isinf(s))
+    throw InputError(source, line, column + " " + format_number(s) + " is not a standard deviation (pixels, >= 0; nan when not known)");
+  return s;
+}
+
+// The kind a file's header names ("" without one). Reads the first line only; stdin is read whole into
+// *text (it cannot be read twice).
+std::string header_kind(const std::string& path, std::string* text) {
+  std::string first;
+  if (path == "-") {
+    std::ostringstream os;
+    os << std::cin.rdbuf();
+    *text = os.str();
+    first = text->substr(0, text->find('\n'));
+  } else {
+    std::ifstream f = open_input_file(path, InputKind::stream, true);
+    std::getline(f, first);
+  }
+  std::istringstream ls(first);
+  std::string hash, tpkit, kind;
+  ls >> hash >> tpkit >> kind;
+  return hash == "#" && tpkit == "tpkit" ? kind : "";
+}
+}  // namespace
+
+std::vector<AdjustTrack> tracks_to_adjust(const Tracks& t, const std::vector<int>& image_of_view) {
+  const int K = t.views();
+  if (static_cast<int>(image_of_view.size()) != K)
+    throw InputError(t.source, 0, "the header names " + std::to_string(image_of_view.size()) + " images for " + std::to_string(K) + " views");
+  std::vector<int> sigma_col(K, -1);
+  for (int v = 0; v < K; ++v) sigma_col[v] = t.extra.find("sigma" + std::to_string(v + 1));
+  const bool any_sigma = std::any_of(sigma_col.begin(), sigma_col.end(), [](int c) { return c >= 0; });
+  std::vector<AdjustTrack> out;
+  out.reserve(t.size());
+  for (size_t r = 0; r < t.size(); ++r) {
+    AdjustTrack a;
+    a.source = t.source;
+    a.id = t.id[r];
+    a.line = r < t.line.size() ? t.line[r] : 0;
+    for (int v = 0; v < K; ++v) {
+      const Eigen::Vector2d xy = t.point(r, v);
+      const bool nx = std::isnan(xy[0]), ny = std::isnan(xy[1]);
+      if (nx != ny)
+        throw InputError(t.source, a.line, "track " + std::to_string(a.id) + ": view " + std::to_string(v + 1) + " has " +
+                                               (nx ? "x" : "y") + std::to_string(v + 1) + " nan and " + (nx ? "y" : "x") +
+                                               std::to_string(v + 1) + " a number: a view not seen is nan in both");
+      if (nx) continue;  // not seen in this view: no observation
+      a.views.emplace_back(image_of_view[v], xy);
+      if (any_sigma)
+        a.sigma.push_back(sigma_col[v] < 0 ? std::numeric_limits<double>::quiet_NaN()
+                                           : checked_sigma(t.extra.values(r, sigma_col[v]), t.source, a.line, "sigma" + std::to_string(v + 1)));
+    }
+    if (a.views.size() < 2)
+      throw InputError(t.source, a.line, "track " + std::to_string(a.id) + " is seen in " + std::to_string(a.views.size()) +
+                                             " view" + (a.views.size() == 1 ? "" : "s") + ": a track needs two or more");
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+std::vector<AdjustTrack> matches_to_adjust(const Matches& m, int image1, int image2) {
+  const int sc = m.extra.find("sigma");
+  std::vector<AdjustTrack> out;
+  out.reserve(m.size());
+  for (size_t r = 0; r < m.size(); ++r) {
+    AdjustTrack a;
+    a.source = m.source;
+    a.id = static_cast<long long>(r) + 1;
+    a.line = r < m.line.size() ? m.line[r] : 0;
+    const Eigen::Vector2d p1 = m.xy.block<1, 2>(r, 0).transpose(), p2 = m.xy.block<1, 2>(r, 2).transpose();
+    if (!p1.allFinite() || !p2.allFinite())
+      throw InputError(m.source, a.line, "match " + std::to_string(a.id) + ": a position that is not a number");
+    a.views = {{image1, p1}, {image2, p2}};
+    if (sc >= 0) {
+      // the sigma of (x2, y2) relative to (x1, y1): each view's own is sigma / sqrt(2)
+      const double s = checked_sigma(m.extra.values(r, sc), m.source, a.line, "sigma") / std::sqrt(2.0);
+      a.sigma = {s, s};
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
 std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, const std::vector<std::string>& images) {
   std::vector<AdjustTrack> out;
-  for (const auto& f : files) {
-    Tracks t = read_tracks(f);
+  auto image_of = [&](const std::string& f, const std::string& source, const std::vector<ImageRef>& refs) {
     std::vector<int> map;
-    for (size_t k = 0; k < t.images.size(); ++k) {
-      int i = match_image(f, t.images[k].path, images);
+    for (size_t k = 0; k < refs.size(); ++k) {
+      int i = match_image(f, refs[k].path, images);
       if (i < 0)
-        throw InputError(t.source, 0, "image" + std::to_string(k + 1) + " '" + t.images[k].path + "' is " +
-                                          (i == -2 ? "ambiguous among" : "not one of") + " the images given");
+        throw InputError(source, 0, "image" + std::to_string(k + 1) + " '" + refs[k].path + "' is " +
+                                        (i == -2 ? "ambiguous among" : "not one of") + " the images given");
       for (size_t j = 0; j < map.size(); ++j)
         if (map[j] == i)
-          throw InputError(t.source, 0, "image" + std::to_string(j + 1) + " and image" + std::to_string(k + 1) + " are both " +
-                                            images[i] + ": a track views each image once");
+          throw InputError(source, 0, "image" + std::to_string(j + 1) + " and image" + std::to_string(k + 1) + " are both " +
+                                          images[i] + ": a track views each image once");
       map.push_back(i);
     }
-    if (static_cast<int>(map.size()) != t.views())
-      throw InputError(t.source, 0, "the header names " + std::to_string(map.size()) + " images for " +
-                                        std::to_string(t.views()) + " views");
-    for (size_t r = 0; r < t.size(); ++r) {
-      AdjustTrack a;
-      a.source = t.source;
-      a.id = t.id[r];
-      a.line = r < t.line.size() ? t.line[r] : 0;
-      for (int v = 0; v < t.views(); ++v) a.views.emplace_back(map[v], t.point(r, v));
-      out.push_back(std::move(a));
+    return map;
+  };
+  for (const auto& f : files) {
+    std::string text;
+    const std::string kind = header_kind(f, &text);
+    const bool is_matches = kind == "matches";
+    if (!kind.empty() && kind != "matches" && kind != "tracks")
+      throw InputError(f == "-" ? "<stdin>" : f, 1, "a " + kind + " file: tie points are a tracks or a matches file");
+    auto table = [&](const ReadOptions& opt) {
+      if (f != "-") return read_table_file(f, opt);
+      std::istringstream in(text);
+      return read_table(in, "-", opt);
+    };
+    std::vector<AdjustTrack> part;
+    if (is_matches) {
+      Matches m = matches_from_table(table(matches_read_options()));
+      if (m.image1.path.empty() || m.image2.path.empty())
+        throw InputError(m.source, 0, "a matches file needs its image1 and image2 header lines to be matched to the images");
+      std::vector<int> map = image_of(f, m.source, {m.image1, m.image2});
+      part = matches_to_adjust(m, map[0], map[1]);
+    } else {
+      Tracks t = tracks_from_table(table(tracks_read_options()));
+      std::vector<int> map = image_of(f, t.source, t.images);
+      if (static_cast<int>(map.size()) != t.views())
+        throw InputError(t.source, 0, "the header names " + std::to_string(map.size()) + " images for " +
+                                          std::to_string(t.views()) + " views");
+      part = tracks_to_adjust(t, map);
     }
+    out.insert(out.end(), std::make_move_iterator(part.begin()), std::make_move_iterator(part.end()));
   }
   return out;
 }

@@ -1,10 +1,26 @@
 // Bundle adjustment of RPC cameras from tie points (rpc-adjust): one image-space bias per image
 // (rpc_bias.hpp: shift, drift or affine) and one ground point (lon, lat, h) per track are the unknowns;
-// each observation gives the residual  bias_v(rpc_v(g_t)) - x_tv  (pixels), under a robust (Huber) loss;
-// weak Gaussian priors pull each bias term to 0 (sigma: prior_shift_px for the shifts, prior_linear for the
-// linear terms, per pixel); `fixed` images keep a zero bias; a height prior (constant H +- S or a DEM) adds
-// (h_t - H(lon_t, lat_t)) / S per track. Solved with Ceres (Levenberg-Marquardt, Schur elimination of the
-// points).
+// each observation (view k of track t, in image v) gives the weighted residual
+//     (bias_v(rpc_v(g_t)) - x_tk) / sigma_tk          (pixels over pixels: dimensionless)
+// under a robust (Huber) loss; weak Gaussian priors pull each bias term to 0 (sigma: prior_shift_px for
+// the shifts, prior_linear for the linear terms, per pixel); `fixed` images keep a zero bias; a height
+// prior (constant H +- S or a DEM) adds (h_t - H(lon_t, lat_t)) / S per track. Solved with Ceres
+// (Levenberg-Marquardt, Schur elimination of the points).
+//
+// Weights. sigma_tk (pixels) is the standard deviation of the observed position: AdjustTrack::sigma
+// (tracks: column sigmaK of view K; matches: the record's sigma, which is that of (x2, y2) relative to
+// (x1, y1), split as sigma / sqrt(2) on each of the two views). Observations without one (no column, or
+// nan) take default_sigma_px (by default the median of the sigmas given, 1 px when none is given: unit
+// weights, the unweighted adjustment). Every sigma is floored at kMinObservationSigma (0.02 px) so that no
+// observation dominates; use_sigma = false weighs every observation at default_sigma_px (1 px when NaN).
+// The Huber scale and the flag threshold stay in pixels: an observation's loss turns linear where its
+// pixel residual |bias_v(rpc_v(g_t)) - x_tk| exceeds loss_px, whatever its sigma (the Huber scale on the
+// weighted residual is loss_px / sigma_tk); a track is flagged on the RMS of its pixel residuals.
+// Every residual and RMS that the result reports is in pixels (unweighted).
+//
+// Tracks of any length: a track has 2 or more views, each of a distinct image; a view a track is not seen
+// in is simply absent (files: a "nan nan" pair, never read as a coordinate). A matches record is a track
+// of its two images.
 //
 // Gauge: without ground control, tie points fix only the relative geometry: a common shift of every image
 // is a ground translation (and a common affine term a ground deformation) that the tie points cannot see.
@@ -12,10 +28,13 @@
 // smallest-bias solution. Heights depend on that choice; a height prior fixes their level.
 #pragma once
 #include <Eigen/Core>
+#include <cmath>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
+#include "tpkit/core/formats.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/rpc/rpc_model.hpp"
@@ -35,7 +54,14 @@ struct AdjustTrack {
   long line = 0;  // in source (0: unknown)
   long long id = 0;
   std::vector<std::pair<int, Eigen::Vector2d>> views;
+  // Per view, in the order of `views`: the standard deviation of the observed position (pixels, each
+  // coordinate); empty, or NaN for a view: not given (AdjustOptions::default_sigma_px).
+  std::vector<double> sigma;
 };
+
+// The smallest sigma an observation is weighted with (pixels): an LSM sigma below it (or 0) is taken as
+// this, so that no observation dominates the fit.
+constexpr double kMinObservationSigma = 0.02;
 
 struct HeightPrior {
   // Height (m above the ellipsoid) at (lon, lat) and, when grad is not null, its derivatives (m per degree of
@@ -50,6 +76,8 @@ struct AdjustOptions {
   double prior_linear = 0.01;   // sigma of the linear terms' prior, pixels per pixel
   double loss_px = 1;           // Huber loss scale, pixels
   double flag_px = 1;           // tracks whose RMS after the fit exceeds this are flagged
+  bool use_sigma = true;        // weigh observations by their sigma (false: every one at default_sigma_px)
+  double default_sigma_px = NAN;  // sigma of observations without one; NaN: median of those given, else 1 px
   HeightPrior height;
   int threads = 1;
   int max_iterations = 100;
@@ -66,13 +94,19 @@ struct AdjustResult {
   // Per observation, in track order then view order: residual (projected minus observed) before and after.
   std::vector<int> obs_track, obs_image;
   std::vector<Eigen::Vector2d> obs_xy, res_before, res_after;
-  double sigma0 = 0;  // per-coordinate RMS after (pixels)
+  std::vector<double> obs_sigma;  // per observation: the sigma it was weighted with (px, floored or default)
+  long obs_with_sigma = 0;        // observations whose sigma was given (and used)
+  double default_sigma_px = 1;    // the sigma of those without one
+  double sigma0 = 0;              // per-coordinate RMS after (pixels)
+  double sigma0_weighted = 0;     // per-coordinate RMS of the weighted residuals after (1 when the sigmas are right)
   int iterations = 0;
   std::string solver_report;
 };
 
 // InputError (the track's file and line) for a track with fewer than two views, a view of an image out of
-// range, two views of one image, or a view off its image (images with a size); NumericalError for none.
+// range, two views of one image, a view off its image (images with a size), a coordinate that is not
+// finite, or a sigma list of another length than the views, or a sigma negative or infinite;
+// NumericalError for none.
 void check_tracks(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks);
 
 // Throws what check_tracks throws; NumericalError when no track can be intersected, when the cost is not
@@ -99,8 +133,23 @@ struct HeightPriorCheck {
 HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                                     const AdjustOptions& options, const AdjustResult& with_prior);
 
-// RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0).
+// RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0), pixels.
 double residual_rms(const AdjustResult& r, bool after, int image = -1);
+
+// Per image, over the tracks that were intersected (AdjustResult::initial_ok): its observations, the
+// tracks that view it by their number of views (length -> count), the RMS of its residuals before and
+// after (pixels, as residual_rms), and the median sigma of its observations (px).
+struct ImageReport {
+  long observations = 0;
+  std::map<int, long> tracks_by_length;
+  double rms_before = 0, rms_after = 0;
+  double median_sigma = 0;
+};
+std::vector<ImageReport> image_reports(size_t images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r);
+// Tracks by their number of views, over the intersected tracks: length -> count.
+std::map<int, long> tracks_by_length(const std::vector<AdjustTrack>& tracks, const AdjustResult& r);
+// "2:5120 3:4155"
+std::string format_lengths(const std::map<int, long>& by_length);
 
 // Reprojection residuals of tracks not used in the fit (held-out): each intersected with the given
 // biases; returns sqrt(mean |r|^2) over their observations, and their count in *n.
@@ -128,10 +177,22 @@ struct GroundSolution {
 GroundSolution ground_points(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                              const GroundOptions& options);
 
-// Tracks of several files on one set of images: each file's image k is matched to one of `images` (same
-// path as written, the same file, relative to the tracks file's folder or not, or else the one image of that
-// file name); InputError (file: imageK 'PATH' is not one of the images) otherwise. Track ids are the files'.
+// Tracks of several files on one set of images. Each file is a tracks file or a matches file, told apart by
+// its header's kind ("# tpkit matches": matches; "# tpkit tracks" or no header: tracks). Each file's image k
+// is matched to one of `images` (same path as written, the same file, relative to the file's folder or not,
+// or else the one image of that file name); InputError (file: imageK 'PATH' is not one of the images)
+// otherwise. Track ids are the tracks files'; a matches record's is its record number (1, 2, ...).
 std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, const std::vector<std::string>& images);
+
+// The tracks of one tracks file; its view k is image image_of_view[k]. A view whose x and y are both NaN
+// is not an observation (left out); a track keeps its observed views in file order, with column sigmaK
+// (if present) as the sigma of view K. InputError (file:line) for NaN in only one of x, y, a track with
+// fewer than two observed views, and a sigma that is negative or infinite.
+std::vector<AdjustTrack> tracks_to_adjust(const Tracks& t, const std::vector<int>& image_of_view);
+// The records of one matches file as 2-view tracks of images image1, image2; column sigma (if present; the
+// sigma of (x2, y2) relative to (x1, y1)) gives each view sigma / sqrt(2). InputError (file:line) for a
+// coordinate that is not finite and a sigma that is negative or infinite.
+std::vector<AdjustTrack> matches_to_adjust(const Matches& m, int image1, int image2);
 
 // The smallest sigma of a height prior (m): a millimetre; below it the weights overflow the cost.
 constexpr double kMinHeightSigma = 1e-3;
