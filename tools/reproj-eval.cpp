@@ -39,9 +39,11 @@ std::string brief(const tpkit::ReprojectionStats& s) {
 }
 
 const tpkit::Tracks three_view_tracks(const std::string& path) {
-  tpkit::Tracks t = tpkit::read_tracks(path);
-  if (t.views() != 3)
-    throw tpkit::InputError(t.source, 0, "needs tracks with exactly three views; found " + std::to_string(t.views()));
+  size_t left_out = 0;
+  tpkit::Tracks t = tpkit::read_tracks_seen_in_all_views(path, 3, &left_out);
+  if (left_out)
+    tpkit::warn(t.source + ": " + std::to_string(left_out) + " tracks not seen in all three views left out; evaluating the " +
+                std::to_string(t.size()) + " that are");
   return t;
 }
 

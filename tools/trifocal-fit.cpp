@@ -49,10 +49,11 @@ int main(int argc, char** argv) {
           const TrifocalMethod m = parse_trifocal_method(o->method);
           if (!o->inliers.empty() && !(o->ransac > 0)) throw UsageError("--inliers needs --ransac");
           if (o->ransac < 0) throw UsageError("--ransac: the threshold must be positive");
-          const Tracks tracks = read_tracks(o->input);
-          if (tracks.views() != 3)
-            throw InputError(tracks.source, 0,
-                             "trifocal-fit needs tracks with exactly three views; found " + std::to_string(tracks.views()));
+          size_t left_out = 0;
+          const Tracks tracks = read_tracks_seen_in_all_views(o->input, 3, &left_out);
+          if (left_out)
+            warn(tracks.source + ": " + std::to_string(left_out) + " tracks not seen in all three views left out; fitting the " +
+                 std::to_string(tracks.size()) + " that are");
           Trifocal out;
           out.images = tracks.images;
           Eigen::MatrixXd fit_xy;

@@ -32,3 +32,7 @@ tpkit_tool_test(reproj-eval.bad-trifocal
 tpkit_tool_test(reproj-eval.transfer-empty-stdin
   COMMAND "tp-synth --out s --size 128 --relief 10 --points 20 >/dev/null 2>&1 && reproj-eval --transfer s/truth.trifocal -o t.points < /dev/null"
   EXPECT_FAIL STDERR_MATCH "empty input" NO_FILE t.points)
+# issue 24: tracks not seen in all three views are left out with a count on stderr
+tpkit_tool_test(reproj-eval.partial-tracks-left-out
+  COMMAND "${_rsynth} && awk '/^#/{print;next} {n++} n<=25{$2=\"nan\"; $3=\"nan\"} {print}' syn/truth.tracks > part.tracks && reproj-eval syn/truth.trifocal part.tracks -o r.txt && grep '^# n:' r.txt"
+  STDOUT_MATCH "# n: 275" STDERR_MATCH "warning: part.tracks: 25 tracks not seen in all three views left out; evaluating the 275 that are")

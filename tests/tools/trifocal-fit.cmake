@@ -44,8 +44,19 @@ tpkit_tool_test(trifocal-fit.duplicated-track
   COMMAND "${_synth} && (cat syn/truth.tracks; grep -v '^#' syn/truth.tracks | head -1) > dup.tracks && trifocal-fit dup.tracks -o t.trifocal"
   EXPECT_FAIL STDERR_MATCH "duplicated track" NO_FILE t.trifocal)
 tpkit_tool_test(trifocal-fit.non-finite
+  COMMAND "${_synth} && awk '/^#/{print;next} !done{$2=\"inf\"; done=1} {print}' syn/truth.tracks > inf.tracks && trifocal-fit inf.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "inf.tracks:[0-9]+: field 'x1' is not finite: 'inf'" NO_FILE t.trifocal)
+# issue 24: a view not seen is nan in x and y; nan in one of them is refused with its line
+tpkit_tool_test(trifocal-fit.half-missing-view
   COMMAND "${_synth} && awk '/^#/{print;next} !done{$2=\"nan\"; done=1} {print}' syn/truth.tracks > nan.tracks && trifocal-fit nan.tracks -o t.trifocal"
-  EXPECT_FAIL STDERR_MATCH "not finite" NO_FILE t.trifocal)
+  EXPECT_FAIL STDERR_MATCH "nan.tracks:[0-9]+: view 1 has x1 nan and y1 a number: a view not seen is nan in both columns" NO_FILE t.trifocal)
+# tracks not seen in all three views (tp-chain --min-views 2) are left out with a count; none seen in all: refused
+tpkit_tool_test(trifocal-fit.partial-tracks-left-out
+  COMMAND "${_synth} && awk '/^#/{print;next} {n++} n<=40{$6=\"nan\"; $7=\"nan\"} {print}' syn/truth.tracks > part.tracks && trifocal-fit part.tracks -o t.trifocal"
+  STDERR_MATCH "warning: part.tracks: 40 tracks not seen in all three views left out; fitting the 260 that are" CHECK_FILE t.trifocal FILE_MATCH "# tpkit trifocal 1")
+tpkit_tool_test(trifocal-fit.no-complete-track
+  COMMAND "${_synth} && awk '/^#/{print;next} {$6=\"nan\"; $7=\"nan\"} {print}' syn/truth.tracks > part.tracks && trifocal-fit part.tracks -o t.trifocal"
+  EXPECT_FAIL STDERR_MATCH "part.tracks: none of its 300 tracks is seen in all three views" NO_FILE t.trifocal)
 tpkit_tool_test(trifocal-fit.two-views
   COMMAND "printf '1 2 3 4\\n5 6 7 8\\n9 1 2 3\\n4 5 6 8\\n' > two.tracks && trifocal-fit two.tracks -o t.trifocal"
   EXPECT_FAIL STDERR_MATCH "three views" NO_FILE t.trifocal)

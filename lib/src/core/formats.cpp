@@ -91,6 +91,16 @@ ReadOptions matches_read_options() {
 ReadOptions tracks_read_options() {
   ReadOptions o;
   o.kind = "tracks";
+  o.max_version = 2;  // 2: views not seen are "nan nan"
+  // x<k>, y<k> and sigma<k> may be "nan": the track is not seen in image k
+  o.may_be_missing = [](const std::string& c) {
+    if (c.empty()) return false;
+    size_t p = c[0] == 'x' || c[0] == 'y' ? 1 : c.compare(0, 5, "sigma") == 0 ? 5 : std::string::npos;
+    if (p == std::string::npos || p >= c.size()) return false;
+    for (size_t i = p; i < c.size(); ++i)
+      if (c[i] < '0' || c[i] > '9') return false;
+    return true;
+  };
   o.default_columns = [](size_t n) -> std::vector<std::string> {
     if (n == 0) return seq_columns("track", 3);
     if (n >= 4 && n % 2 == 0) return seq_columns("", static_cast<int>(n / 2));       // x1 y1 ... (ids = index)
@@ -180,12 +190,72 @@ Tracks tracks_from_table(const TextTable& t) {
   tr.id.resize(n);
   for (size_t r = 0; r < n; ++r) {
     for (int c = 0; c < 2 * k; ++c) tr.xy(r, c) = t.rows[r][own[1 + c]];
+    int seen = 0;
+    for (int v = 0; v < k; ++v) {
+      const bool nx = std::isnan(tr.xy(r, 2 * v)), ny = std::isnan(tr.xy(r, 2 * v + 1));
+      if (nx != ny)
+        throw InputError(t.source, t.row_line[r],
+                         std::string("view ") + std::to_string(v + 1) + " has " + (nx ? "x" : "y") + std::to_string(v + 1) +
+                             " nan and " + (nx ? "y" : "x") + std::to_string(v + 1) +
+                             " a number: a view not seen is nan in both columns");
+      seen += !nx;
+    }
+    if (seen < 2)
+      throw InputError(t.source, t.row_line[r],
+                       "track seen in " + std::to_string(seen) + " view" + (seen == 1 ? "" : "s") + ": a track needs two or more");
     if (cid >= 0) check_id(t, r, cid);
     tr.id[r] = cid >= 0 ? static_cast<long long>(t.rows[r][cid]) : static_cast<long long>(r);
   }
   tr.extra = extras_of(t, own);
   tr.line = t.row_line;
   return tr;
+}
+
+int Tracks::seen_views(size_t track) const {
+  int n = 0;
+  for (int v = 0; v < views(); ++v) n += seen(track, v);
+  return n;
+}
+
+bool Tracks::complete() const { return !xy.hasNaN(); }
+
+Tracks tracks_seen_in_all_views(const Tracks& t, size_t* left_out) {
+  std::vector<Eigen::Index> keep;
+  keep.reserve(t.size());
+  for (size_t r = 0; r < t.size(); ++r)
+    if (t.seen_views(r) == t.views()) keep.push_back(static_cast<Eigen::Index>(r));
+  if (left_out) *left_out = t.size() - keep.size();
+  Tracks o;
+  o.source = t.source;
+  o.images = t.images;
+  o.meta = t.meta;
+  o.extra.names = t.extra.names;
+  o.xy.resize(static_cast<Eigen::Index>(keep.size()), t.xy.cols());
+  o.extra.values.resize(static_cast<Eigen::Index>(keep.size()), t.extra.values.cols());
+  for (size_t i = 0; i < keep.size(); ++i) {
+    const Eigen::Index r = keep[i], j = static_cast<Eigen::Index>(i);
+    o.xy.row(j) = t.xy.row(r);
+    if (t.extra.values.cols() > 0) o.extra.values.row(j) = t.extra.values.row(r);
+    if (!t.id.empty()) o.id.push_back(t.id[static_cast<size_t>(r)]);
+    if (!t.line.empty()) o.line.push_back(t.line[static_cast<size_t>(r)]);
+  }
+  return o;
+}
+
+Tracks read_tracks_seen_in_all_views(const std::string& path, int views, size_t* left_out) {
+  const Tracks t = read_tracks(path);
+  if (t.views() != views)
+    throw InputError(t.source, 0, "needs tracks with exactly " + (views == 3 ? std::string("three") : std::to_string(views)) +
+                                      " views; found " + std::to_string(t.views()));
+  if (t.complete()) {
+    if (left_out) *left_out = 0;
+    return t;
+  }
+  Tracks all = tracks_seen_in_all_views(t, left_out);
+  if (all.size() == 0)
+    throw InputError(t.source, 0, "none of its " + std::to_string(t.size()) + " tracks is seen in all " +
+                                      (views == 3 ? std::string("three") : std::to_string(views)) + " views");
+  return all;
 }
 
 Points points_from_table(const TextTable& t) {
@@ -302,7 +372,7 @@ void write_tracks(std::ostream& os, const Tracks& t) {
   int k = t.views();
   auto cols = seq_columns("track", k);
   write_extra_names(cols, t.extra);
-  write_header(os, "tracks", 1, t.images, t.meta, cols);
+  write_header(os, "tracks", t.complete() ? 1 : 2, t.images, t.meta, cols);
   std::vector<double> rec;
   for (Eigen::Index r = 0; r < t.xy.rows(); ++r) {
     rec.assign(1, static_cast<double>(t.id.empty() ? r : t.id[r]));

@@ -1,6 +1,7 @@
 // Round trips and rejections of every file kind, and atomic writing.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -51,6 +52,55 @@ TEST(Formats, TracksRoundTrip) {
   EXPECT_EQ(meta_get(r.meta, "source"), "unit test");
   EXPECT_EQ(r.extra.values(0, 0), 100.5);
   EXPECT_EQ(r.line[1], 9);  // header: kind, writer, 3 images, 1 meta, columns; records on lines 8 and 9
+}
+
+// Issue 24: a view a track is not seen in is "nan nan"; such a file is version 2, reads back with the
+// same NaNs, and its complete tracks can be selected.
+TEST(Formats, TracksWithViewsNotSeen) {
+  const std::string text =
+      "# tpkit tracks 2\n# image1: a 10 10\n# image2: b 10 10\n# image3: c 10 10\n"
+      "# columns: track x1 y1 x2 y2 x3 y3 sigma1 sigma2 sigma3\n"
+      "0 1 2 3 4 5 6 0.1 0.1 0.2\n1 nan nan 3 4 5 6 nan 0.1 0.2\n2 1 2 nan nan 5.5 6.5 0.1 nan 0.1\n";
+  std::istringstream in(text);
+  Tracks t = tracks_from_table(read_table(in, "t", tracks_read_options()));
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_FALSE(t.complete());
+  EXPECT_TRUE(t.seen(0, 0));
+  EXPECT_FALSE(t.seen(1, 0));
+  EXPECT_FALSE(t.seen(2, 1));
+  EXPECT_EQ(t.seen_views(1), 2);
+  EXPECT_TRUE(std::isnan(t.extra.values(1, 0)));
+  std::ostringstream out;
+  write_tracks(out, t);
+  EXPECT_NE(out.str().find("# tpkit tracks 2\n"), std::string::npos);
+  EXPECT_NE(out.str().find("\n1 nan nan 3 4 5 6 nan 0.1 0.2\n"), std::string::npos);
+  size_t left = 0;
+  Tracks all = tracks_seen_in_all_views(t, &left);
+  EXPECT_EQ(left, 2u);
+  ASSERT_EQ(all.size(), 1u);
+  EXPECT_EQ(all.id[0], 0);
+  EXPECT_EQ(all.xy(0, 5), 6);
+  EXPECT_EQ(all.extra.values(0, 2), 0.2);
+  // complete tracks are still written as version 1
+  std::ostringstream out1;
+  write_tracks(out1, all);
+  EXPECT_EQ(out1.str().rfind("# tpkit tracks 1\n", 0), 0u);
+  auto refused = [](const std::string& body) {
+    std::istringstream s("# tpkit tracks 2\n# columns: track x1 y1 x2 y2 x3 y3 kp\n" + body);
+    try {
+      tracks_from_table(read_table(s, "t", tracks_read_options()));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refused("0 nan 2 3 4 5 6 1\n"), "t:3: view 1 has x1 nan and y1 a number: a view not seen is nan in both columns");
+  EXPECT_EQ(refused("0 nan nan nan nan 5 6 1\n"), "t:3: track seen in 1 view: a track needs two or more");
+  EXPECT_EQ(refused("0 1 2 3 4 5 6 nan\n"), "t:3: field 'kp' is not finite: 'nan'");  // only view columns may be nan
+  EXPECT_EQ(refused("0 1 2 inf 4 5 6 1\n"), "t:3: field 'x2' is not finite: 'inf'");
+  // nan stays an error in every other kind
+  std::istringstream m("# tpkit matches 1\n# columns: id1 x1 y1 id2 x2 y2\n1 nan nan 2 3 4\n");
+  EXPECT_THROW(matches_from_table(read_table(m, "m", matches_read_options())), InputError);
 }
 
 TEST(Formats, TrifocalNormalizedAndRoundTrip) {

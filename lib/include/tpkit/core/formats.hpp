@@ -1,7 +1,10 @@
 // The file kinds that tpkit tools exchange (man/tpkit-formats.5), on top of text_table.hpp.
 //
 //   matches     columns id1 x1 y1 id2 x2 y2 [extra...]       pair of images (image1, image2)
-//   tracks      columns track x1 y1 ... xK yK [extra...]     K images (image1..imageK)
+//   tracks      columns track x1 y1 ... xK yK [extra...]     K images (image1..imageK); a view the track
+//               is not seen in is "nan nan" (x and y both), every track is seen in 2 views or more;
+//               a file holding such views is written as version 2 (version 1 readers refuse it);
+//               optional columns sigma1 ... sigmaK: standard deviation of each view's position, px
 //   points      columns x y [extra...]                       a point cluster
 //   trifocal    three records of nine numbers: record i = T_i (i = 1..3), row j, column k, row-major,
 //               Hartley & Zisserman T_i^{jk}; acts on homogeneous pixels (x, y, 1); Frobenius norm 1
@@ -13,6 +16,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -47,9 +51,23 @@ struct Tracks {
   ExtraColumns extra;
   std::vector<long> line;
   size_t size() const { return static_cast<size_t>(xy.rows()); }
+  // Number of images (column pairs); a track is seen in 2 of them or more.
   int views() const { return static_cast<int>(xy.cols() / 2); }
   Eigen::Vector2d point(size_t track, int view) const { return xy.block<1, 2>(track, 2 * view).transpose(); }
+  // Whether the track is seen in image view+1 (its x is not NaN).
+  bool seen(size_t track, int view) const { return !std::isnan(xy(static_cast<Eigen::Index>(track), 2 * view)); }
+  // Images the track is seen in.
+  int seen_views(size_t track) const;
+  // Whether every track is seen in every image.
+  bool complete() const;
 };
+
+// The tracks seen in every image (extra columns and source lines kept), for the methods that need all
+// views (trifocal-fit, reproj-eval); `left_out`, when not null, receives the number of tracks dropped.
+Tracks tracks_seen_in_all_views(const Tracks& t, size_t* left_out = nullptr);
+// A tracks file of exactly `views` images, its tracks seen in all of them: a file of another number of
+// images, or none of whose tracks is seen in all, is refused (InputError); `left_out` as above.
+Tracks read_tracks_seen_in_all_views(const std::string& path, int views, size_t* left_out);
 
 struct Points {
   std::string source;

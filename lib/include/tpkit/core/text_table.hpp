@@ -65,6 +65,9 @@ struct ReadOptions {
   std::function<std::vector<std::string>(size_t nfields)> default_columns;
   // When false, records may have any number of fields (matrix kinds); columns are not checked.
   bool columnar = true;
+  // Columns whose field may be "nan" (a value that is not there, e.g. a view a track is not seen in); in
+  // every other column, and for infinities everywhere, a non-finite field is an error. Empty: none.
+  std::function<bool(const std::string& column)> may_be_missing;
 };
 
 // Parses a whole stream. `source` names it in messages.
