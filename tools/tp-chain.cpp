@@ -1,4 +1,5 @@
 // tp-chain: pairwise matches files joined by (image, keypoint id) into multi-view tracks.
+#include <algorithm>
 #include <cstdlib>
 #include <iostream>
 #include <memory>
@@ -16,7 +17,7 @@ namespace {
 struct Opts {
   std::vector<std::string> files, images;
   std::string out = "-";
-  int min_views = 0;  // 0: not given (the option takes 2 or more); default 3, or 2 with two images
+  int min_views = 0;  // 0: not given (the option takes 2 or more); default 3 with three images, else 2
   double same = 0.01;
   bool quiet = false;
 };
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
         auto o = std::make_shared<Opts>();
         app.add_option("MATCHES", o->files, "matches files")->required();
         app.add_option("--images", o->images, "images of the output, in column order (first = reference)");
-        app.add_option("--min-views", o->min_views, "fewest views of a track (default: 3, or 2 with two images)")
+        app.add_option("--min-views", o->min_views, "fewest views of a written track (default: 3 with three images, else 2)")
             ->check(CLI::Validator(
                 [](std::string& v) -> std::string {
                   char* end = nullptr;
@@ -44,39 +45,44 @@ int main(int argc, char** argv) {
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
           tpkit::check_outputs({{"-o", o->out}}, o->files);
-          std::vector<tpkit::Matches> ms;
-          for (const auto& f : o->files) ms.push_back(tpkit::read_matches(f));
-          tpkit::ChainOptions co;
           for (size_t i = 0; i < o->images.size(); ++i)
             for (size_t j = 0; j < i; ++j)
               if (o->images[i] == o->images[j])
                 throw tpkit::UsageError("--images names " + o->images[i] + " twice (columns " + std::to_string(j + 1) +
                                         " and " + std::to_string(i + 1) + ")");
+          // the default --min-views depends on the number of images: the files are read first (one at a
+          // time, each dropped once its links are taken), the option applied at the join
+          tpkit::ChainOptions co;
           co.images = o->images;
           co.same_position = o->same;
-          if (o->min_views == 0) {
-            size_t k = o->images.size();
-            if (k == 0) {
-              std::vector<std::string> seen;
-              for (const auto& m : ms)
-                for (const auto* r : {&m.image1, &m.image2})
-                  if (std::find(seen.begin(), seen.end(), r->path) == seen.end()) seen.push_back(r->path);
-              k = seen.size();
-            }
-            co.min_views = k == 2 ? 2 : 3;
-          } else {
-            co.min_views = o->min_views;
+          co.min_views = 2;
+          tpkit::TrackChainer chainer(co);
+          std::vector<std::string> seen;
+          for (const auto& f : o->files) {
+            const tpkit::Matches m = tpkit::read_matches(f);
+            for (const auto* r : {&m.image1, &m.image2})
+              if (std::find(seen.begin(), seen.end(), r->path) == seen.end()) seen.push_back(r->path);
+            chainer.add(m);
           }
-          tpkit::ChainStats st;
-          tpkit::Tracks t = tpkit::chain_tracks(ms, co, &st);
-          tpkit::save_tracks(o->out, t);
+          const size_t k = o->images.empty() ? seen.size() : o->images.size();
+          co.min_views = o->min_views != 0 ? o->min_views : k == 3 ? 3 : 2;
+          chainer.set_min_views(co.min_views);
+          const tpkit::ChainStats& st = chainer.join();
+          tpkit::AtomicOutput out(o->out);
+          chainer.write(out.stream());
+          out.commit();
           if (!o->quiet) {
             std::ostringstream line;
             line << st.components << " components; tracks by views:";
             for (const auto& kv : st.by_length) line << " " << kv.first << ":" << kv.second;
             line << "; merged duplicates " << st.merged_duplicates << ", dropped (reference conflict) "
                  << st.dropped_reference_conflicts << ", views dropped (conflict) " << st.views_dropped_conflicts << "; written "
-                 << st.written << " tracks with " << t.views() << " views";
+                 << st.written << " tracks of " << co.min_views << " views or more among " << k << " images";
+            if (st.written > 0) {
+              line << " (by views:";
+              for (const auto& kv : st.written_by_length) line << " " << kv.first << ":" << kv.second;
+              line << ")";
+            }
             tpkit::summary(line.str());
           }
           return 0;

@@ -6,10 +6,10 @@ set(_ac "printf '# tpkit matches 1\\n# image1: A 100 100\\n# image2: C 100 100\\
 tpkit_tool_test(tp-chain.triplet
   COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m -o t.tracks"
   STDERR_MATCH "tracks by views: 3:1; merged duplicates 1, dropped \\(reference conflict\\) 1"
-  CHECK_FILE t.tracks FILE_MATCH "# image1: A 100 100\n# image2: B 100 100\n# image3: C 100 100\n.*# columns: track x1 y1 x2 y2 x3 y3 kp1\n0 10 20 11.25 21.5 30.5 40.25 5\n$")
+  CHECK_FILE t.tracks FILE_MATCH "# image1: A 100 100\n# image2: B 100 100\n# image3: C 100 100\n.*# tracks_by_views: 3:1\n# columns: track x1 y1 x2 y2 x3 y3 kp ref\n0 10 20 11.25 21.5 30.5 40.25 5 1\n$")
 tpkit_tool_test(tp-chain.images-order
   COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m --images C B A"
-  STDOUT_MATCH "# image1: C.*\n0 30 40 10.75 21.25 9.5 19.75 9\n")
+  STDOUT_MATCH "# image1: C.*\n0 30 40 10.75 21.25 9.5 19.75 9 1\n")
 tpkit_tool_test(tp-chain.unknown-image
   COMMAND "${_ab} && tp-chain ab.m --images A Z -o t.tracks"
   EXPECT_FAIL STDERR_MATCH "Z: image given with --images appears in no matches file" NO_FILE t.tracks)
@@ -30,3 +30,23 @@ tpkit_tool_test(tp-chain.tracks-labelled-matches
 tpkit_tool_test(tp-chain.min-views-below-two
   COMMAND "${_ab} && tp-chain ab.m --min-views -5 -o t.tracks @SEMI@ echo exit $?"
   STDOUT_MATCH "exit 2" STDERR_MATCH "--min-views: must be at least 2, got '-5'" NO_FILE t.tracks)
+# issue 24: tracks of any subset of the images. With --min-views 2 the 2-view tracks are written too
+# (before, only those seen in every image were: a track missing a view could not be written), nan where
+# a track is not seen, its reference image in `ref`; the file says version 2 and its counts by length.
+set(_bc "printf '# tpkit matches 1\\n# image1: B 100 100\\n# image2: C 100 100\\n# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\\n11 80 80 12 81.5 82 81 82\\n' > bc.m")
+tpkit_tool_test(tp-chain.partial-tracks
+  COMMAND "${_ab} && ${_ac} && ${_bc} && tp-chain ab.m ac.m bc.m --min-views 2 -o t.tracks"
+  STDERR_MATCH "tracks by views: 2:1 3:1; .*written 2 tracks of 2 views or more among 3 images \\(by views: 2:1 3:1\\)"
+  CHECK_FILE t.tracks FILE_MATCH "^# tpkit tracks 2\n.*# tracks_by_views: 2:1 3:1\n# columns: track x1 y1 x2 y2 x3 y3 kp ref\n0 10 20 11.25 21.5 30.5 40.25 5 1\n1 nan nan 80 80 81.5 82 11 2\n$")
+# four images: the default --min-views is 2, and the partial tracks read back in trifocal-fit's
+# selection (none in all three of its views here: refused by name)
+set(_cd "printf '# tpkit matches 1\\n# image1: C 100 100\\n# image2: D 100 100\\n# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\\n9 30 40 1 33 44 33 44\\n' > cd.m")
+tpkit_tool_test(tp-chain.four-images-default-two-views
+  COMMAND "${_ab} && ${_ac} && ${_bc} && ${_cd} && tp-chain ab.m ac.m bc.m cd.m -o t.tracks"
+  STDERR_MATCH "written 2 tracks of 2 views or more among 4 images \\(by views: 2:1 4:1\\)"
+  CHECK_FILE t.tracks FILE_MATCH "# min_views: 2\n.*\n0 10 20 11.25 21.5 30.5 40.25 33.5 44.25 5 1\n1 nan nan 80 80 81.5 82 nan nan 11 2\n$")
+# the LSM sigma of each record is carried to the views (half its variance on each end, summed along
+# the path): A-B 0.1 px, A-C 0.2 px, C-D 0.3 px
+tpkit_tool_test(tp-chain.sigma-carried
+  COMMAND "printf '# tpkit matches 1\\n# image1: A 100 100\\n# image2: B 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n5 10 20 7 11 21 0.1\\n' > ab.m && printf '# tpkit matches 1\\n# image1: A 100 100\\n# image2: C 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n5 10 20 9 30 40 0.2\\n' > ac.m && printf '# tpkit matches 1\\n# image1: C 100 100\\n# image2: D 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n9 30 40 1 33 44 0.3\\n' > cd.m && tp-chain ab.m ac.m cd.m -o t.tracks"
+  CHECK_FILE t.tracks FILE_MATCH "# columns: track x1 y1 x2 y2 x3 y3 x4 y4 kp ref sigma1 sigma2 sigma3 sigma4\n0 10 20 11 21 30 40 33 44 5 1 0.07071 0.07071 0.1414 0.255\n$")

@@ -1,32 +1,61 @@
 #include "tpkit/match/tracks_chain.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <set>
-#include <unordered_map>
 
 #include "tpkit/core/error.hpp"
 
 namespace tpkit {
 
 namespace {
-struct UnionFind {
-  std::vector<size_t> p;
-  size_t add() {
-    p.push_back(p.size());
-    return p.size() - 1;
+using Index = std::uint32_t;  // nodes and links; more than 2^31 of either is refused
+constexpr std::uint64_t kMaxIndex = (std::uint64_t{1} << 31) - 1;
+
+// An array grown by chunks of 2^16 elements: no reallocation, so no copy of everything held and no
+// moment with two copies in memory while matches files are added.
+template <class T>
+class Chunked {
+ public:
+  void push_back(const T& v) {
+    if ((n_ & kMask) == 0) chunks_.emplace_back(new T[kChunk]);
+    chunks_.back()[n_ & kMask] = v;
+    ++n_;
   }
-  size_t find(size_t a) {
+  T& operator[](size_t i) { return chunks_[i >> kShift][i & kMask]; }
+  const T& operator[](size_t i) const { return chunks_[i >> kShift][i & kMask]; }
+  size_t size() const { return n_; }
+  void release() {
+    chunks_.clear();
+    chunks_.shrink_to_fit();
+    n_ = 0;
+  }
+
+ private:
+  static constexpr size_t kShift = 16, kChunk = size_t{1} << kShift, kMask = kChunk - 1;
+  std::vector<std::unique_ptr<T[]>> chunks_;
+  size_t n_ = 0;
+};
+
+struct UnionFind {
+  std::vector<Index> p;
+  Index find(Index a) {
     while (p[a] != a) a = p[a] = p[p[a]];
     return a;
   }
-  void unite(size_t a, size_t b) {
+  // smallest index as root: the root of a component is its first node (reference image, smallest id)
+  void unite(Index a, Index b) {
     a = find(a);
     b = find(b);
     if (a == b) return;
     if (b < a) std::swap(a, b);
-    p[b] = a;  // smallest index as root: deterministic
+    p[b] = a;
   }
 };
 
@@ -36,23 +65,47 @@ std::string canonical(const std::string& p) {
   return ec ? p : c.string();
 }
 
-struct Node {
-  int image;
+struct Keypoint {
   long long id;
   double x, y;  // keypoint position
 };
-struct Link {
-  size_t u, v;    // nodes: u in the file's image 1, v in its image 2
-  double x2, y2;  // refined position of v's ground point (relative to u's keypoint)
+
+// An estimate written with the digits it has (sigmas are held as float).
+double four_digits(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return std::strtod(buf, nullptr);
+}
+
+struct FileSpan {
+  int a, b;            // images of the file (image 1, image 2)
+  size_t begin, end;   // its links
 };
 }  // namespace
 
-Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, ChainStats* stats) {
+struct TrackChainer::Impl {
+  ChainOptions o;
   ChainStats st;
-  // images: given order first, then order of first appearance
   std::vector<ImageRef> imgs;
   std::vector<std::string> canon;
-  auto image_index = [&](const ImageRef& r, bool add) -> int {
+  std::vector<char> seen_given;
+  bool has_sigma = true;
+  bool joined = false;
+  int K = 0;
+  // while adding: per image its keypoint occurrences (one per record end); links refer to them
+  std::vector<Chunked<Keypoint>> occ;
+  std::vector<FileSpan> files;
+  // links (a record each): u in the file's image 1, v in its image 2 (occurrence indices while adding,
+  // node indices after join), the refined position of v relative to u's keypoint, the record's sigma
+  Chunked<Index> lu, lv;
+  Chunked<double> lx2, ly2;
+  Chunked<float> lsig;
+  // after join: nodes ordered by image, then keypoint id; image i's nodes are [base[i], base[i+1])
+  Chunked<Keypoint> nodes;
+  std::vector<size_t> base;
+  std::vector<Index> adj_at, adj, comp_at, comp_nodes, local;
+
+  int image_index(const ImageRef& r, bool add) {
     for (size_t i = 0; i < imgs.size(); ++i)
       if (imgs[i].path == r.path) return static_cast<int>(i);
     std::string c = canonical(r.path);
@@ -61,99 +114,121 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
     if (!add) return -1;
     imgs.push_back(r);
     canon.push_back(c);
+    occ.emplace_back();
     return static_cast<int>(imgs.size() - 1);
-  };
-  for (const auto& p : o.images) image_index(ImageRef{p, 0, 0}, true);
-  const size_t given = o.images.size();
-  std::vector<char> seen(given, 0);
-  for (const auto& m : files) {
-    if (m.image1.path.empty() || m.image2.path.empty())
-      throw InputError(m.source, 0, "matches file without image1/image2 header lines: tp-chain needs them to join files");
-    for (const ImageRef* r : {&m.image1, &m.image2}) {
-      int k = image_index(*r, true);
-      if (k < static_cast<int>(given)) {
-        seen[k] = 1;
-        if (imgs[k].width == 0) {
-          imgs[k].width = r->width;
-          imgs[k].height = r->height;
-        }
+  }
+  int image_of(Index n) const {
+    return static_cast<int>(std::upper_bound(base.begin(), base.end(), static_cast<size_t>(n)) - base.begin()) - 1;
+  }
+
+  void add(const Matches& m);
+  void join();
+  void dedup_keypoints();
+  void merge_same_positions(UnionFind& uf);
+  void build_adjacency();
+  void build_components(UnionFind& uf);
+  // Walks every component in output order; calls f(ref image, reference keypoint id, have, view, var)
+  // for each track holding the reference without conflict.
+  // `conflicts`, when not null, counts the conflicts (the first walk).
+  template <class F>
+  void walk(F&& f, ChainStats* conflicts) const;
+};
+
+void TrackChainer::Impl::add(const Matches& m) {
+  if (joined) throw std::logic_error("TrackChainer::add after join");
+  if (m.image1.path.empty() || m.image2.path.empty())
+    throw InputError(m.source, 0, "matches file without image1/image2 header lines: tp-chain needs them to join files");
+  int ab[2];
+  int k = 0;
+  for (const ImageRef* r : {&m.image1, &m.image2}) {
+    const int i = image_index(*r, true);
+    ab[k++] = i;
+    if (i < static_cast<int>(seen_given.size())) {
+      seen_given[i] = 1;
+      if (imgs[i].width == 0) {
+        imgs[i].width = r->width;
+        imgs[i].height = r->height;
       }
     }
   }
-  for (size_t k = 0; k < given; ++k)
-    if (!seen[k]) throw InputError(o.images[k], 0, "image given with --images appears in no matches file");
-  const int K = given ? static_cast<int>(given) : static_cast<int>(imgs.size());
-  if (o.min_views < 2) throw UsageError("--min-views must be at least 2");
-  if (o.min_views > K)
-    throw UsageError("--min-views " + std::to_string(o.min_views) + " is more than the " + std::to_string(K) + " images");
+  if (ab[0] == ab[1]) throw InputError(m.source, 0, "both images of the file are the same image");
+  if (lu.size() + m.size() > kMaxIndex || occ[ab[0]].size() + m.size() > kMaxIndex || occ[ab[1]].size() + m.size() > kMaxIndex)
+    throw InputError(m.source, 0, "more than 2^31 matches in one chain: chain the study area's groups of images apart");
+  const int ckx = m.extra.find("kx2"), cky = m.extra.find("ky2"), cs = m.extra.find("sigma");
+  if (cs < 0) has_sigma = false;
+  const size_t begin = lu.size();
+  for (size_t r = 0; r < m.size(); ++r) {
+    const Eigen::Index e = static_cast<Eigen::Index>(r);
+    const double kx = ckx >= 0 ? m.extra.values(e, ckx) : m.xy(e, 2);
+    const double ky = cky >= 0 ? m.extra.values(e, cky) : m.xy(e, 3);
+    lu.push_back(static_cast<Index>(occ[ab[0]].size()));
+    occ[ab[0]].push_back({m.id1[r], m.xy(e, 0), m.xy(e, 1)});
+    lv.push_back(static_cast<Index>(occ[ab[1]].size()));
+    occ[ab[1]].push_back({m.id2[r], kx, ky});
+    lx2.push_back(m.xy(e, 2));
+    ly2.push_back(m.xy(e, 3));
+    lsig.push_back(cs >= 0 ? static_cast<float>(m.extra.values(e, cs)) : std::numeric_limits<float>::quiet_NaN());
+  }
+  files.push_back({ab[0], ab[1], begin, lu.size()});
+}
 
-  // nodes and links
-  std::vector<Node> nodes;
-  UnionFind uf;
-  std::vector<Link> links;
-  std::vector<std::unordered_map<long long, size_t>> node_of(imgs.size());  // per image: id -> node
-  {
-    std::vector<size_t> records(imgs.size(), 0);
-    size_t total = 0;
-    for (const auto& m : files) {
-      records[static_cast<size_t>(image_index(m.image1, false))] += m.size();
-      records[static_cast<size_t>(image_index(m.image2, false))] += m.size();
-      total += m.size();
+// Occurrences of one (image, id) become one node (the first occurrence's position), image by image, so
+// that at any time only one image's occurrences and permutation are held beside the nodes made so far.
+void TrackChainer::Impl::dedup_keypoints() {
+  base.assign(imgs.size() + 1, 0);
+  std::vector<Index> perm, node_of;
+  for (size_t i = 0; i < imgs.size(); ++i) {
+    base[i] = nodes.size();
+    Chunked<Keypoint>& oc = occ[i];
+    perm.resize(oc.size());
+    for (size_t j = 0; j < perm.size(); ++j) perm[j] = static_cast<Index>(j);
+    std::sort(perm.begin(), perm.end(), [&](Index p, Index q) { return oc[p].id < oc[q].id || (oc[p].id == oc[q].id && p < q); });
+    node_of.assign(oc.size(), 0);
+    for (size_t j = 0; j < perm.size(); ++j) {
+      if (j == 0 || oc[perm[j]].id != oc[perm[j - 1]].id) nodes.push_back(oc[perm[j]]);
+      node_of[perm[j]] = static_cast<Index>(nodes.size() - 1);
     }
-    for (size_t i = 0; i < imgs.size(); ++i) node_of[i].reserve(records[i]);
-    nodes.reserve(2 * total);
-    links.reserve(total);
-    uf.p.reserve(2 * total);
-  }
-  auto node = [&](int img, long long id, double x, double y) {
-    auto it = node_of[img].find(id);
-    if (it != node_of[img].end()) return it->second;
-    size_t n = uf.add();
-    nodes.push_back({img, id, x, y});
-    node_of[img].emplace(id, n);
-    return n;
-  };
-  for (const auto& m : files) {
-    int a = image_index(m.image1, false), b = image_index(m.image2, false);
-    if (a == b) throw InputError(m.source, 0, "both images of the file are the same image");
-    int ckx = m.extra.find("kx2"), cky = m.extra.find("ky2");
-    for (size_t r = 0; r < m.size(); ++r) {
-      double kx = ckx >= 0 ? m.extra.values(r, ckx) : m.xy(r, 2);
-      double ky = cky >= 0 ? m.extra.values(r, cky) : m.xy(r, 3);
-      size_t u = node(a, m.id1[r], m.xy(r, 0), m.xy(r, 1));
-      size_t v = node(b, m.id2[r], kx, ky);
-      links.push_back({u, v, m.xy(r, 2), m.xy(r, 3)});
-      uf.unite(u, v);
+    for (const FileSpan& f : files) {
+      if (f.a == static_cast<int>(i))
+        for (size_t l = f.begin; l < f.end; ++l) lu[l] = node_of[lu[l]];
+      if (f.b == static_cast<int>(i))
+        for (size_t l = f.begin; l < f.end; ++l) lv[l] = node_of[lv[l]];
     }
+    oc.release();
   }
-  std::vector<std::unordered_map<long long, size_t>>().swap(node_of);  // not needed past here: memory back
-  // same-position keypoints of one image are one point: every pair (p, q) of one image with
-  // |x_q - x_p| <= same_position and |y_q - y_p| <= same_position is joined. A sweep in x order with the
-  // window of the points within same_position in x, searched by y: O(n log n + pairs found) per image
-  // (the plain window scan was O(n * points in a same_position-wide strip), quadratic on a grid).
-  std::vector<std::vector<size_t>> by_image(imgs.size());
-  for (size_t n = 0; n < nodes.size(); ++n) by_image[static_cast<size_t>(nodes[n].image)].push_back(n);
+  base[imgs.size()] = nodes.size();
+  std::vector<Chunked<Keypoint>>().swap(occ);
+  std::vector<Index>().swap(perm);
+  std::vector<Index>().swap(node_of);
+}
+
+// Same-position keypoints of one image are one point: every pair (p, q) of one image with
+// |x_q - x_p| <= same_position and |y_q - y_p| <= same_position is joined. A sweep in x order with the
+// window of the points within same_position in x, searched by y: O(n log n + pairs found) per image
+// (the plain window scan was O(n * points in a same_position-wide strip), quadratic on a grid).
+void TrackChainer::Impl::merge_same_positions(UnionFind& uf) {
   const double sp = o.same_position;
-  auto join = [&](size_t p, size_t q) {
+  auto join_nodes = [&](Index p, Index q) {
     if (uf.find(p) != uf.find(q)) {
       uf.unite(p, q);
       ++st.merged_duplicates;
     }
   };
+  std::vector<Index> ns, rep;
   for (size_t img = 0; img < imgs.size(); ++img) {
-    std::vector<size_t>& ns = by_image[img];
-    std::sort(ns.begin(), ns.end(), [&](size_t p, size_t q) {
+    ns.resize(base[img + 1] - base[img]);
+    for (size_t j = 0; j < ns.size(); ++j) ns[j] = static_cast<Index>(base[img] + j);
+    std::sort(ns.begin(), ns.end(), [&](Index p, Index q) {
       if (nodes[p].x != nodes[q].x) return nodes[p].x < nodes[q].x;
       if (nodes[p].y != nodes[q].y) return nodes[p].y < nodes[q].y;
       return p < q;
     });
     // Keypoints at exactly the same position: joined to the first of them, which stands for them all
     // below (the test depends on the coordinates only).
-    std::vector<size_t> rep;
-    rep.reserve(ns.size());
+    rep.clear();
     for (size_t i = 0; i < ns.size(); ++i) {
       if (!rep.empty() && nodes[ns[i]].x == nodes[rep.back()].x && nodes[ns[i]].y == nodes[rep.back()].y)
-        join(rep.back(), ns[i]);
+        join_nodes(rep.back(), ns[i]);
       else
         rep.push_back(ns[i]);
     }
@@ -166,7 +241,7 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
     bool use_set = false;
     size_t lo = 0;
     for (size_t j = 0; j < rep.size(); ++j) {
-      const Node& nj = nodes[rep[j]];
+      const Keypoint& nj = nodes[rep[j]];
       while (nj.x - nodes[rep[lo]].x > sp) {
         if (use_set) act.erase({nodes[rep[lo]].y, lo});
         ++lo;
@@ -181,82 +256,111 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
       }
       if (!use_set) {
         for (size_t i = lo; i < j; ++i)
-          if (std::abs(nj.y - nodes[rep[i]].y) <= sp) join(rep[i], rep[j]);
+          if (std::abs(nj.y - nodes[rep[i]].y) <= sp) join_nodes(rep[i], rep[j]);
       } else {
         auto it = act.lower_bound({nj.y, 0});
-        for (auto u = it; u != act.end() && u->first - nj.y <= sp; ++u) join(rep[u->second], rep[j]);
+        for (auto u = it; u != act.end() && u->first - nj.y <= sp; ++u) join_nodes(rep[u->second], rep[j]);
         for (auto d = it; d != act.begin();) {
           --d;
           if (nj.y - d->first > sp) break;
-          join(rep[d->second], rep[j]);
+          join_nodes(rep[d->second], rep[j]);
         }
         act.emplace(nj.y, j);
       }
     }
   }
-  by_image.clear();
-  by_image.shrink_to_fit();
-  // links of each node, in link order (compressed rows)
-  std::vector<size_t> adj_at(nodes.size() + 1, 0), adj;
-  for (const Link& L : links) ++adj_at[L.u + 1], ++adj_at[L.v + 1];
-  for (size_t n = 0; n < nodes.size(); ++n) adj_at[n + 1] += adj_at[n];
-  adj.resize(adj_at[nodes.size()]);
-  {
-    std::vector<size_t> fill(adj_at.begin(), adj_at.end() - 1);
-    for (size_t l = 0; l < links.size(); ++l) {
-      adj[fill[links[l].u]++] = l;
-      adj[fill[links[l].v]++] = l;
-    }
+}
+
+// links of each node, in link order (compressed rows)
+void TrackChainer::Impl::build_adjacency() {
+  const size_t N = nodes.size(), L = lu.size();
+  adj_at.assign(N + 1, 0);
+  for (size_t l = 0; l < L; ++l) ++adj_at[lu[l] + 1], ++adj_at[lv[l] + 1];
+  for (size_t n = 0; n < N; ++n) adj_at[n + 1] += adj_at[n];
+  adj.resize(adj_at[N]);
+  std::vector<Index> fill(adj_at.begin(), adj_at.end() - 1);
+  for (size_t l = 0; l < L; ++l) {
+    adj[fill[lu[l]]++] = static_cast<Index>(l);
+    adj[fill[lv[l]]++] = static_cast<Index>(l);
   }
-  // components: nodes grouped by root (compressed rows; the output order does not depend on the
-  // order of the components, see the sort below)
-  std::vector<size_t> root(nodes.size()), comp_at(nodes.size() + 1, 0), comp_nodes(nodes.size());
-  for (size_t n = 0; n < nodes.size(); ++n) {
-    root[n] = uf.find(n);
-    ++comp_at[root[n] + 1];
-  }
-  for (size_t n = 0; n < nodes.size(); ++n) {
+}
+
+// components: nodes grouped by root (compressed rows), each group in node order (image, then id); the
+// union-find's array is then reused as each node's index within its component
+void TrackChainer::Impl::build_components(UnionFind& uf) {
+  const size_t N = nodes.size();
+  for (size_t n = 0; n < N; ++n) uf.p[n] = uf.find(static_cast<Index>(n));
+  comp_at.assign(N + 1, 0);
+  for (size_t n = 0; n < N; ++n) ++comp_at[uf.p[n] + 1];
+  for (size_t n = 0; n < N; ++n) {
     if (comp_at[n + 1] > 0) ++st.components;
     comp_at[n + 1] += comp_at[n];
   }
-  {
-    std::vector<size_t> fill(comp_at.begin(), comp_at.end() - 1);
-    for (size_t n = 0; n < nodes.size(); ++n) comp_nodes[fill[root[n]]++] = n;
+  comp_nodes.resize(N);
+  std::vector<Index> fill(comp_at.begin(), comp_at.end() - 1);
+  for (size_t n = 0; n < N; ++n) {
+    const Index at = fill[uf.p[n]]++;
+    comp_nodes[at] = static_cast<Index>(n);
+    uf.p[n] = at - comp_at[uf.p[n]];
   }
-  std::vector<size_t>().swap(root);
-  std::vector<size_t>().swap(uf.p);
+  local.swap(uf.p);
+}
 
-  // the tracks found: reference keypoint ids and their 2K coordinates, flat (one block, not one per track)
-  std::vector<long long> out_ref;
-  std::vector<double> out_xy;
-  auto same = [&](size_t p, size_t q) {
+void TrackChainer::Impl::join() {
+  const size_t given = o.images.size();
+  for (size_t k = 0; k < given; ++k)
+    if (!seen_given[k]) throw InputError(o.images[k], 0, "image given with --images appears in no matches file");
+  K = given ? static_cast<int>(given) : static_cast<int>(imgs.size());
+  if (o.min_views < 2) throw UsageError("--min-views must be at least 2");
+  if (o.min_views > K)
+    throw UsageError("--min-views " + std::to_string(o.min_views) + " is more than the " + std::to_string(K) + " images");
+  if (files.empty()) has_sigma = false;
+  dedup_keypoints();
+  UnionFind uf;
+  uf.p.resize(nodes.size());
+  for (size_t n = 0; n < nodes.size(); ++n) uf.p[n] = static_cast<Index>(n);
+  for (size_t l = 0; l < lu.size(); ++l) uf.unite(lu[l], lv[l]);
+  merge_same_positions(uf);
+  build_adjacency();
+  build_components(uf);
+  joined = true;
+  // first walk: the counts (the header names them before the tracks)
+  walk([&](int, long long, const std::vector<char>& have, const std::vector<Eigen::Vector2d>&, const std::vector<double>&) {
+    int views = 0;
+    for (int im = 0; im < K; ++im) views += have[im];
+    if (views >= 2) st.by_length[views]++;
+    if (views >= o.min_views) {
+      st.written_by_length[views]++;
+      ++st.written;
+    }
+  }, &st);
+}
+
+template <class F>
+void TrackChainer::Impl::walk(F&& f, ChainStats* conflicts) const {
+  auto same = [&](Index p, Index q) {
     return std::abs(nodes[p].x - nodes[q].x) <= o.same_position && std::abs(nodes[p].y - nodes[q].y) <= o.same_position;
   };
-  // per-component scratch: reset per component (O(images)) or marked by the component's stamp
-  std::vector<char> present(imgs.size()), conflict(imgs.size()), have(imgs.size());
-  std::vector<size_t> first(imgs.size());
-  std::vector<Eigen::Vector2d> view(imgs.size());
-  std::vector<Eigen::Vector2d> pos(nodes.size());
-  std::vector<size_t> reached(nodes.size(), 0);  // stamp of the component whose search reached the node
-  std::vector<size_t> q;
-  q.reserve(64);
-  size_t stamp = 0;
-  for (size_t rt = 0; rt < nodes.size(); ++rt) {
-    if (comp_at[rt + 1] == comp_at[rt]) continue;
-    ++stamp;
-    auto nb = comp_nodes.begin() + static_cast<std::ptrdiff_t>(comp_at[rt]);
-    auto ne = comp_nodes.begin() + static_cast<std::ptrdiff_t>(comp_at[rt + 1]);
-    std::sort(nb, ne, [&](size_t p, size_t r) {
-      if (nodes[p].image != nodes[r].image) return nodes[p].image < nodes[r].image;
-      return nodes[p].id < nodes[r].id;
-    });
+  const size_t nimg = imgs.size();
+  std::vector<char> present(nimg), conflict(nimg), have(nimg);
+  std::vector<Index> first(nimg);
+  std::vector<Eigen::Vector2d> view(nimg);
+  std::vector<double> var(nimg);
+  // per component (indexed by local): position, variance, reached
+  std::vector<Eigen::Vector2d> pos;
+  std::vector<double> pvar;
+  std::vector<char> reached;
+  std::vector<Index> q;
+  const size_t N = nodes.size();
+  for (size_t rt = 0; rt < N; ++rt) {
+    const Index nb = comp_at[rt], ne = comp_at[rt + 1];
+    if (nb == ne) continue;
     // per image: conflicting (two different positions)?
     std::fill(present.begin(), present.end(), 0);
     std::fill(conflict.begin(), conflict.end(), 0);
-    std::fill(first.begin(), first.end(), 0);
-    for (auto it = nb; it != ne; ++it) {
-      size_t n = *it;
-      int im = nodes[n].image;
+    for (Index c = nb; c < ne; ++c) {
+      const Index n = comp_nodes[c];
+      const int im = image_of(n);
       if (!present[im]) {
         present[im] = 1;
         first[im] = n;
@@ -264,81 +368,157 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
         conflict[im] = 1;
       }
     }
-    int ref = -1;
-    for (size_t im = 0; im < imgs.size(); ++im)
-      if (present[im]) {
-        ref = static_cast<int>(im);
-        break;
-      }
+    const int ref = image_of(comp_nodes[nb]);  // nodes in image order: the first image present
     if (conflict[ref]) {
-      ++st.dropped_reference_conflicts;
+      if (conflicts) ++conflicts->dropped_reference_conflicts;
       continue;
     }
-    for (size_t im = 0; im < imgs.size(); ++im)
-      if (conflict[im]) ++st.views_dropped_conflicts;
+    if (conflicts)
+      for (size_t im = 0; im < nimg; ++im)
+        if (conflict[im]) ++conflicts->views_dropped_conflicts;
     // breadth first from the reference keypoint(s)
+    const size_t size = ne - nb;
+    pos.resize(size);
+    pvar.assign(size, std::numeric_limits<double>::quiet_NaN());
+    reached.assign(size, 0);
     q.clear();
-    for (auto it = nb; it != ne; ++it)
-      if (nodes[*it].image == ref) {
-        pos[*it] = {nodes[*it].x, nodes[*it].y};
-        reached[*it] = stamp;
-        q.push_back(*it);
-      }
+    for (Index c = nb; c < ne && image_of(comp_nodes[c]) == ref; ++c) {
+      const Index n = comp_nodes[c];
+      pos[c - nb] = {nodes[n].x, nodes[n].y};
+      reached[c - nb] = 1;
+      q.push_back(n);
+    }
     std::fill(have.begin(), have.end(), 0);
-    std::fill(view.begin(), view.end(), Eigen::Vector2d::Zero());
     have[ref] = 1;
     view[ref] = {nodes[first[ref]].x, nodes[first[ref]].y};
+    var[ref] = std::numeric_limits<double>::quiet_NaN();
     for (size_t head = 0; head < q.size(); ++head) {
-      size_t n = q[head];
-      const Eigen::Vector2d pn = pos[n];
-      for (size_t a = adj_at[n]; a < adj_at[n + 1]; ++a) {
-        const Link& L = links[adj[a]];
-        size_t m = L.u == n ? L.v : L.u;
-        int im = nodes[m].image;
-        if (conflict[im] || reached[m] == stamp) continue;
+      const Index n = q[head];
+      const Eigen::Vector2d pn = pos[local[n]];
+      const double vn = pvar[local[n]];
+      for (Index a = adj_at[n]; a < adj_at[n + 1]; ++a) {
+        const Index l = adj[a];
+        const bool forward = lu[l] == n;
+        const Index m = forward ? lv[l] : lu[l];
+        const int im = image_of(m);
+        const double half = 0.5 * static_cast<double>(lsig[l]) * static_cast<double>(lsig[l]);
+        if (std::isnan(var[ref]) && image_of(n) == ref) var[ref] = half;  // the first record leaving the reference
+        if (conflict[im] || reached[local[m]]) continue;
         Eigen::Vector2d pm;
-        if (L.u == n)  // forward: refined position in image 2, moved by n's offset from its keypoint
-          pm = Eigen::Vector2d(L.x2, L.y2) + (pn - Eigen::Vector2d(nodes[n].x, nodes[n].y));
-        else  // reversed: L.x2 is n's refined position relative to m's keypoint
-          pm = Eigen::Vector2d(nodes[m].x, nodes[m].y) - (Eigen::Vector2d(L.x2, L.y2) - pn);
-        pos[m] = pm;
-        reached[m] = stamp;
+        if (forward)  // refined position in image 2, moved by n's offset from its keypoint
+          pm = Eigen::Vector2d(lx2[l], ly2[l]) + (pn - Eigen::Vector2d(nodes[n].x, nodes[n].y));
+        else  // reversed: x2 is n's refined position relative to m's keypoint
+          pm = Eigen::Vector2d(nodes[m].x, nodes[m].y) - (Eigen::Vector2d(lx2[l], ly2[l]) - pn);
+        pos[local[m]] = pm;
+        pvar[local[m]] = (std::isnan(vn) ? 0.0 : vn) + half;
+        reached[local[m]] = 1;
         q.push_back(m);
         if (!have[im]) {
           have[im] = 1;
           view[im] = pm;
+          var[im] = pvar[local[m]];
         }
       }
     }
+    if (ref < K) f(ref, nodes[first[ref]].id, have, view, var);
+  }
+}
+
+TrackChainer::TrackChainer(const ChainOptions& o) : impl_(std::make_unique<Impl>()) {
+  impl_->o = o;
+  for (const auto& p : o.images) impl_->image_index(ImageRef{p, 0, 0}, true);
+  impl_->seen_given.assign(o.images.size(), 0);
+}
+
+TrackChainer::~TrackChainer() = default;
+
+void TrackChainer::add(const Matches& m) { impl_->add(m); }
+
+void TrackChainer::set_min_views(int n) { impl_->o.min_views = n; }
+
+const ChainStats& TrackChainer::join() {
+  impl_->join();
+  return impl_->st;
+}
+
+Tracks TrackChainer::header() const {
+  const Impl& I = *impl_;
+  Tracks T;
+  T.images.assign(I.imgs.begin(), I.imgs.begin() + I.K);
+  T.xy.resize(0, 2 * I.K);
+  T.extra.names = {"kp", "ref"};
+  if (I.has_sigma)
+    for (int v = 1; v <= I.K; ++v) T.extra.names.push_back("sigma" + std::to_string(v));
+  T.extra.values.resize(0, static_cast<Eigen::Index>(T.extra.names.size()));
+  meta_set(T.meta, "positions", "refer to the reference keypoint: image number ref, its id kp in that image's matches files");
+  meta_set(T.meta, "min_views", std::to_string(I.o.min_views));
+  std::string counts;
+  for (const auto& kv : I.st.written_by_length) counts += (counts.empty() ? "" : " ") + std::to_string(kv.first) + ":" + std::to_string(kv.second);
+  meta_set(T.meta, "tracks_by_views", counts.empty() ? "none" : counts);
+  if (I.has_sigma) meta_set(T.meta, "sigma", "px, each record's variance split between its two ends and added along the path");
+  return T;
+}
+
+void TrackChainer::for_each(const std::function<void(long long, const double*, const double*)>& f) const {
+  const Impl& I = *impl_;
+  if (!I.joined) throw std::logic_error("TrackChainer::for_each before join");
+  const int K = I.K;
+  std::vector<double> xy(static_cast<size_t>(2 * K)), extra(2 + (I.has_sigma ? static_cast<size_t>(K) : 0));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  long long track = 0;
+  I.walk([&](int ref, long long kp, const std::vector<char>& have, const std::vector<Eigen::Vector2d>& view,
+             const std::vector<double>& var) {
     int views = 0;
     for (int im = 0; im < K; ++im) views += have[im];
-    if (views >= 2) st.by_length[views]++;
-    if (views < K || views < o.min_views) continue;
-    out_ref.push_back(nodes[first[ref]].id);
+    if (views < I.o.min_views) return;
+    extra[0] = static_cast<double>(kp);
+    extra[1] = ref + 1;
     for (int im = 0; im < K; ++im) {
-      out_xy.push_back(view[im].x());
-      out_xy.push_back(view[im].y());
+      xy[2 * im] = have[im] ? view[im].x() : nan;
+      xy[2 * im + 1] = have[im] ? view[im].y() : nan;
+      if (I.has_sigma) extra[2 + im] = have[im] ? four_digits(std::sqrt(var[im])) : nan;
     }
+    f(track++, xy.data(), extra.data());
+  }, nullptr);
+}
+
+void TrackChainer::write(std::ostream& os) const {
+  const Tracks h = header();
+  std::vector<std::string> cols = {"track"};
+  for (int v = 1; v <= impl_->K; ++v) {
+    cols.push_back("x" + std::to_string(v));
+    cols.push_back("y" + std::to_string(v));
   }
-  // Written tracks hold every output image, so their reference is image 0 and their reference ids
-  // (keypoint ids of image 0, one node each) are distinct: the order is total.
-  std::vector<size_t> order(out_ref.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return out_ref[a] < out_ref[b]; });
-  Tracks T;
-  T.images.assign(imgs.begin(), imgs.begin() + K);
-  T.xy.resize(static_cast<Eigen::Index>(order.size()), 2 * K);
-  T.extra.names = {"kp1"};
-  T.extra.values.resize(static_cast<Eigen::Index>(order.size()), 1);
-  T.id.reserve(order.size());
-  for (size_t i = 0; i < order.size(); ++i) {
-    T.id.push_back(static_cast<long long>(i));
-    for (int c = 0; c < 2 * K; ++c) T.xy(static_cast<Eigen::Index>(i), c) = out_xy[order[i] * static_cast<size_t>(2 * K) + static_cast<size_t>(c)];
-    T.extra.values(static_cast<Eigen::Index>(i), 0) = static_cast<double>(out_ref[order[i]]);
-  }
-  st.written = static_cast<long>(order.size());
-  meta_set(T.meta, "positions", "refer to the keypoint of image1 (kp1 = its id in image1's matches files)");
-  meta_set(T.meta, "min_views", std::to_string(o.min_views));
+  for (const auto& n : h.extra.names) cols.push_back(n);
+  long complete = 0;
+  auto it = impl_->st.written_by_length.find(impl_->K);
+  if (it != impl_->st.written_by_length.end()) complete = it->second;
+  write_header(os, "tracks", complete == impl_->st.written ? 1 : 2, h.images, h.meta, cols);
+  const size_t nx = static_cast<size_t>(2 * impl_->K), ne = h.extra.names.size();
+  std::vector<double> rec(1 + nx + ne);
+  for_each([&](long long track, const double* xy, const double* extra) {
+    rec[0] = static_cast<double>(track);
+    std::copy(xy, xy + nx, rec.begin() + 1);
+    std::copy(extra, extra + ne, rec.begin() + 1 + static_cast<std::ptrdiff_t>(nx));
+    write_record(os, rec);
+  });
+}
+
+Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, ChainStats* stats) {
+  TrackChainer c(o);
+  for (const auto& m : files) c.add(m);
+  const ChainStats st = c.join();
+  Tracks T = c.header();
+  const Eigen::Index n = st.written, nx = T.xy.cols(), ne = static_cast<Eigen::Index>(T.extra.names.size());
+  T.xy.resize(n, nx);
+  T.extra.values.resize(n, ne);
+  T.id.reserve(static_cast<size_t>(n));
+  c.for_each([&](long long track, const double* xy, const double* extra) {
+    const Eigen::Index r = static_cast<Eigen::Index>(track);
+    T.id.push_back(track);
+    for (Eigen::Index k = 0; k < nx; ++k) T.xy(r, k) = xy[k];
+    for (Eigen::Index k = 0; k < ne; ++k) T.extra.values(r, k) = extra[k];
+  });
   if (stats) *stats = st;
   return T;
 }

@@ -4,6 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <random>
+#include <set>
+
 #include "tpkit/core/error.hpp"
 
 using namespace tpkit;
@@ -118,4 +122,69 @@ TEST(TracksChain, DeterministicWhateverTheFileOrder) {
   ASSERT_EQ(t1.size(), 200u);
   EXPECT_TRUE(t1.xy == t2.xy);
   EXPECT_DOUBLE_EQ(t1.xy(3, 0), 3.0);  // sorted by reference keypoint id
+}
+
+// Issue 24: a block of 8 images, each ground point seen by a random subset of them (2 to 8), matched in
+// every pair of its views (an image's keypoint ids are its own): every point comes back as one track
+// with exactly its views, at its positions, the incomplete ones with nan, whatever the file order.
+TEST(TracksChain, BlockTracksOfAnyLength) {
+  const int N = 8, P = 400;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0, 1000);
+  std::vector<std::vector<int>> sees(P);
+  std::vector<std::vector<Eigen::Vector2d>> at(P, std::vector<Eigen::Vector2d>(N));
+  std::map<std::pair<int, int>, std::vector<std::array<double, 8>>> recs;
+  auto name = [](int i) { return "img" + std::to_string(i); };
+  std::map<int, long> by_length;
+  for (int p = 0; p < P; ++p) {
+    for (int i = 0; i < N; ++i) {
+      if (rng() % 3 == 0) sees[p].push_back(i);
+      at[p][i] = {U(rng), U(rng)};
+    }
+    if (sees[p].size() < 2) sees[p] = {static_cast<int>(rng() % 4), 4 + static_cast<int>(rng() % 4)};
+    by_length[static_cast<int>(sees[p].size())]++;
+    for (size_t a = 0; a < sees[p].size(); ++a)
+      for (size_t b = a + 1; b < sees[p].size(); ++b) {
+        const int i = sees[p][a], j = sees[p][b];
+        const Eigen::Vector2d u = at[p][i], v = at[p][j];
+        recs[{i, j}].push_back({{double(1000 * i + p), u.x(), u.y(), double(1000 * j + p), v.x(), v.y(), v.x(), v.y()}});
+      }
+  }
+  std::vector<Matches> files;
+  for (const auto& kv : recs) files.push_back(make(name(kv.first.first), name(kv.first.second), kv.second));
+  for (auto& m : files) m.image1.width = m.image1.height = m.image2.width = m.image2.height = 1000;
+  ChainOptions o;
+  for (int i = 0; i < N; ++i) o.images.push_back(name(i));
+  o.min_views = 2;
+  ChainStats st;
+  const Tracks t = chain_tracks(files, o, &st);
+  ASSERT_EQ(t.size(), static_cast<size_t>(P));
+  EXPECT_EQ(st.by_length, by_length);
+  EXPECT_EQ(st.written_by_length, by_length);
+  const int ckp = t.extra.find("kp"), cref = t.extra.find("ref");
+  ASSERT_GE(ckp, 0);
+  ASSERT_GE(cref, 0);
+  std::set<int> found;
+  for (size_t r = 0; r < t.size(); ++r) {
+    const int ref = static_cast<int>(t.extra.values(static_cast<Eigen::Index>(r), cref)) - 1;
+    const int p = static_cast<int>(t.extra.values(static_cast<Eigen::Index>(r), ckp)) - 1000 * ref;
+    ASSERT_TRUE(p >= 0 && p < P);
+    found.insert(p);
+    EXPECT_EQ(ref, sees[p][0]);
+    EXPECT_EQ(t.seen_views(r), static_cast<int>(sees[p].size()));
+    for (int i : sees[p]) {
+      ASSERT_TRUE(t.seen(r, i));
+      EXPECT_EQ(t.point(r, i), at[p][i]);
+    }
+  }
+  EXPECT_EQ(found.size(), static_cast<size_t>(P));
+  // the same tracks from the files in reverse order; and --min-views 5 keeps the long ones only
+  std::vector<Matches> rev(files.rbegin(), files.rend());
+  const Tracks t2 = chain_tracks(rev, o, nullptr);
+  EXPECT_TRUE(t2.xy.cwiseEqual(t.xy).count() + t2.xy.array().isNaN().count() == t.xy.size());
+  o.min_views = 5;
+  const Tracks t5 = chain_tracks(files, o, &st);
+  long five = 0;
+  for (const auto& kv : by_length) five += kv.first >= 5 ? kv.second : 0;
+  EXPECT_EQ(static_cast<long>(t5.size()), five);
 }

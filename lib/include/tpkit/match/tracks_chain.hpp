@@ -1,10 +1,10 @@
-// Pairwise matches files joined into multi-view tracks (tp-chain).
+// Pairwise matches files joined into multi-view tracks (tp-chain), for any set of pairs of N images.
 //
 // Nodes are (image, keypoint id); every record of every file links its two nodes (union-find).
 // Keypoints of one image at the same position (within `same_position` px; SIFT emits one keypoint per
 // dominant orientation) are merged into one node first. A track is a connected component:
 //  - images follow `images` (default: order of first appearance in the files); the reference is the
-//    first of them that the track holds;
+//    first of them that the track holds (column `ref`, 1-based; `kp` is its keypoint id);
 //  - a track that holds two different keypoints (positions) of the reference image is dropped; one
 //    that holds two different keypoints of another image loses that view (counted as a conflict);
 //  - view positions refer to the reference keypoint: the reference view is its keypoint position; a
@@ -14,10 +14,23 @@
 //    reversed record, u = kp(u) - (x2 - pos(v)). Shortest paths first, then file and record order.
 //  - keypoint positions: image 1's is (x1, y1); image 2's is (kx2, ky2) when the file has these
 //    columns, else (x2, y2).
-// The output holds the tracks with a position in every image of `images` and at least `min_views`
-// views, sorted by reference keypoint id; track ids count from 0. Deterministic.
+//  - sigmas (when every file has a `sigma` column: the standard deviation of the record's (x2, y2)
+//    relative to (x1, y1), px): each record's variance is split equally between its two ends; a view
+//    reached over several records adds half the variance of each record on its path, and the reference
+//    takes half that of the first record leaving it. Written as sigma1 ... sigmaK (nan: not seen).
+// The output holds every track with at least `min_views` views among the images of `images` (a view
+// it is not seen in: nan nan), sorted by reference image then reference keypoint id; track ids count
+// from 0. Deterministic.
+//
+// Memory: the files are added one at a time and not kept; per match about 28 bytes of links and 24
+// per distinct keypoint, then 4-byte indices for the union-find, the adjacency and the components
+// (under 100 bytes per match in all when keypoints are shared by two records on average; see
+// bench_chain). The tracks are streamed out: none is held in memory.
 #pragma once
+#include <functional>
 #include <map>
+#include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -33,6 +46,7 @@ struct ChainOptions {
 
 struct ChainStats {
   std::map<int, long> by_length;    // number of views -> tracks (after conflict handling)
+  std::map<int, long> written_by_length;
   long components = 0;
   long dropped_reference_conflicts = 0;
   long views_dropped_conflicts = 0;
@@ -40,6 +54,33 @@ struct ChainStats {
   long written = 0;
 };
 
+// Adds matches files one by one (each may be dropped after add), joins them, writes the tracks.
+class TrackChainer {
+ public:
+  explicit TrackChainer(const ChainOptions& o);
+  ~TrackChainer();
+  TrackChainer(const TrackChainer&) = delete;
+  TrackChainer& operator=(const TrackChainer&) = delete;
+  void add(const Matches& m);
+  // The fewest views of a written track, when it depends on the files (before join()).
+  void set_min_views(int n);
+  // Joins every file added; the statistics are final after it. Throws when --images names an image of
+  // no file or min_views exceeds the images.
+  const ChainStats& join();
+  // The output's images, metadata and columns (a Tracks of zero rows): after join().
+  Tracks header() const;
+  // Each track in output order: after join(). `xy` holds 2K coordinates (nan where not seen), `extra`
+  // the values of header().extra.names.
+  void for_each(const std::function<void(long long track, const double* xy, const double* extra)>& f) const;
+  // header() and every track, as write_tracks would write them.
+  void write(std::ostream& os) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The tracks of files held in memory (tests, benchmarks).
 Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, ChainStats* stats = nullptr);
 
 }  // namespace tpkit
