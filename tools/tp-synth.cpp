@@ -1,4 +1,4 @@
-// tp-synth: a synthetic satellite triplet with exact ground truth (man/tp-synth.1).
+// tp-synth: a synthetic satellite triplet, or a block of views, with exact ground truth (man/tp-synth.1).
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
     std::string cross_track;
     std::string origin;
     std::vector<std::string> rpc_bias;
+    double random_bias = 0;
   };
   return tpkit::run_tool(
       "tp-synth", argc, argv,
@@ -36,6 +37,10 @@ int main(int argc, char** argv) {
         app.add_option("--cross-track", o->cross_track, "cross-track angle(s) of the views, DEG or DEG,DEG,DEG");
         app.add_option("--origin", o->origin, "LAT,LON,H of the scene centre (degrees, degrees, m above the WGS84 ellipsoid)");
         app.add_option("--rpc-bias", o->rpc_bias, "VIEW:dx,dy[,dxy,dyy[,dxx,dyx]]: bias injected into a view's RPC (px, px/px)");
+        app.add_option("--views", o->p.views, "views in all (3: the tri-stereo; 2 to 96)");
+        app.add_option("--dates", o->p.dates, "acquisitions of a block (default: views / 3)");
+        app.add_option("--random-bias", o->random_bias,
+                       "seeded RPC bias of at most PX pixels (shift, drift, affine) on every view but view 1 and those of --rpc-bias");
         return [o]() {
           if (!o->cross_track.empty()) o->p.cross_track = tpkit::parse_cross_track(o->cross_track);
           tpkit::check_params(o->p);
@@ -46,13 +51,18 @@ int main(int argc, char** argv) {
           w.threads = o->threads;
           if (!o->origin.empty()) w.origin = tpkit::parse_geo_origin(o->origin, "--origin");
           for (const auto& b : o->rpc_bias) {
-            auto vb = tpkit::parse_view_bias(b);
+            auto vb = tpkit::parse_view_bias(b, o->p.views);
             if (!w.rpc_bias.emplace(vb.first, vb.second).second)
               throw tpkit::UsageError("--rpc-bias: view " + std::to_string(vb.first + 1) + " given twice");
           }
+          if (!(o->random_bias >= 0 && o->random_bias <= 1000))
+            throw tpkit::UsageError("--random-bias must be between 0 and 1000 pixels");
+          if (o->random_bias > 0)
+            for (int v = 1; v < scene.views(); ++v)  // view 1 stays unbiased; --rpc-bias views keep theirs
+              w.rpc_bias.emplace(v, tpkit::synth_random_bias(scene, v, o->random_bias));
           tpkit::write_synth_scene(scene, o->out, w);
           std::ostringstream line;
-          line << "wrote " << o->out << ": 3 views " << o->p.size << "x" << o->p.size << " (" << o->p.camera
+          line << "wrote " << o->out << ": " << scene.views() << " views " << o->p.size << "x" << o->p.size << " (" << o->p.camera
                << "), scene square " << scene.scene_size() << " m, relief " << o->p.relief << " m, " << o->p.points
                << " truth tracks";
           tpkit::summary(line.str());

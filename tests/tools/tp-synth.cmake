@@ -79,3 +79,36 @@ tpkit_tool_test(tp-synth.bad-rpc-bias
 tpkit_tool_test(tp-synth.interrupted-leaves-no-folder
   COMMAND "(tp-synth --out new/scene --size 3000 --relief 10 --points 20 & pid=$! @SEMI@ sleep 2 @SEMI@ kill -TERM $pid @SEMI@ wait $pid @SEMI@ echo killed $?) && test ! -e new && echo nothing-left"
   STDOUT_MATCH "killed 143\nnothing-left")
+
+# Blocks (--views N, --dates D): N views, truth tracks with nan for the views that do not see a point and
+# 2 views or more each, no trifocal tensor; bad view counts and out-of-range --rpc-bias views refused.
+tpkit_tool_test(tp-synth.block-truth
+  COMMAND "tp-synth --out b --views 6 --dates 2 --size 128 --relief 10 --points 60 --supersample 1 --threads 2 2>/dev/null && ls b/view*.tif | wc -l && awk '/^# columns:/{print} !/^#/{n=0 @SEMI@ for(v=0 @SEMI@ v<6 @SEMI@ v++) if($(2+2*v)!=\"nan\") n++ @SEMI@ if(n<2) bad++ @SEMI@ if(n<6) part++ @SEMI@ rec++} END{print \"records\", rec, \"short\", bad+0, \"partial\", (part>0)}' b/truth.tracks"
+  STDOUT_MATCH "^6\n# columns: track x1 y1 x2 y2 x3 y3 x4 y4 x5 y5 x6 y6 X Y Z lon lat h\nrecords 60 short 0 partial 1\n$"
+  CHECK_FILE b/truth.tracks
+  FILE_MATCH "# image6: view6.tif 128 128\n.*# block: 2 dates x 3 views.*# footprint_overlap: 1-2 0\\.[3-6][0-9], 1-4 .*# tracks_by_views: 2:"
+  NO_FILE b/truth.trifocal)
+# --random-bias: every view but view 1 and those of --rpc-bias (here 5, kept unbiased) gets a seeded bias
+# of at most 10 px; the same seed gives the same truth.bias
+tpkit_tool_test(tp-synth.block-random-bias
+  COMMAND "tp-synth --out a --views 12 --size 96 --relief 5 --points 40 --supersample 1 --random-bias 10 --rpc-bias 5:0,0 2>/dev/null && tp-synth --out b --views 12 --size 96 --relief 5 --points 40 --supersample 1 --random-bias 10 --rpc-bias 5:0,0 2>/dev/null && cmp <(grep -v '^# written-by' a/truth.bias) <(grep -v '^# written-by' b/truth.bias) && awk '!/^#/{z=($2==0&&$3==0&&$4==0&&$5==0&&$6==0&&$7==0) @SEMI@ big=0 @SEMI@ for(x=0 @SEMI@ x<=95 @SEMI@ x+=95) for(y=0 @SEMI@ y<=95 @SEMI@ y+=95){dx=$2+$3*x+$4*y @SEMI@ dy=$5+$6*x+$7*y @SEMI@ if(dx*dx>100||dy*dy>100) big=1} printf \"%s%s \", $1, (z?\"=0\":(big?\"!\":\"b\"))} END{print \"\"}' a/truth.bias"
+  STDOUT_MATCH "^1=0 2b 3b 4b 5=0 6b 7b 8b 9b 10b 11b 12b \n$")
+tpkit_tool_test(tp-synth.block-views-not-multiple-of-dates
+  COMMAND "tp-synth --out out --views 12 --dates 5"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --views 12 must be --dates \\(5\\) times 1 to 5 views per date" NO_FILE out)
+tpkit_tool_test(tp-synth.block-views-need-dates
+  COMMAND "tp-synth --out out --views 4"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --views 4 is not a multiple of 3.*give --dates" NO_FILE out)
+tpkit_tool_test(tp-synth.block-too-many-views
+  COMMAND "tp-synth --out out --views 200"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --views must be between 2 and 96" NO_FILE out)
+tpkit_tool_test(tp-synth.block-rpc-bias-view-out-of-range
+  COMMAND "tp-synth --out out --views 12 --rpc-bias 13:1,2"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --rpc-bias: the view must be between 1 and 12, got '13'" NO_FILE out)
+tpkit_tool_test(tp-synth.block-bad-random-bias
+  COMMAND "tp-synth --out out --views 12 --random-bias -1"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --random-bias must be between 0 and 1000" NO_FILE out)
+# a triplet written over a block leaves none of the block's views 4..N behind
+tpkit_tool_test(tp-synth.block-then-triplet-no-stale-views
+  COMMAND "tp-synth --out s --views 6 --size 64 --relief 5 --points 10 --supersample 1 2>/dev/null && test -e s/view6.tif && tp-synth --out s --size 64 --relief 5 --points 10 --supersample 1 2>/dev/null && ls s | tr '\\n' ' '"
+  STDOUT_MATCH "^scene.params truth.bias truth.cameras truth.dem.tif truth.tracks truth.trifocal view1.tif view1_rpc.txt view2.tif view2_rpc.txt view3.tif view3_rpc.txt $")

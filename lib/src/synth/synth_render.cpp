@@ -9,10 +9,12 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <thread>
 #include <vector>
 
@@ -107,7 +109,7 @@ std::vector<RpcModel> synth_rpc_models(const SynthScene& scene, const SynthGeoFr
   const auto& o = geo.origin();
   meta_set(meta, "origin", format_number(o.lat) + "," + format_number(o.lon) + "," + format_number(o.h) +
                                " (lat, lon degrees WGS84, h m above the ellipsoid of the scene centre X = Y = S/2, Z = 0)");
-  for (int v = 0; v < SynthScene::kViews; ++v) {
+  for (int v = 0; v < scene.views(); ++v) {
     auto it = bias.find(v);
     RpcFit f = synth_view_rpc(scene, geo, v, it == bias.end() ? ImageBias{} : it->second);
     if (!(f.max_px <= 0.01))
@@ -121,17 +123,49 @@ std::vector<RpcModel> synth_rpc_models(const SynthScene& scene, const SynthGeoFr
 
 void write_synth_rpc_files(const std::string& dir, const std::vector<ImageRef>& images, const Meta& meta,
                            const std::vector<RpcModel>& rpcs, const std::map<int, ImageBias>& bias) {
-  for (int v = 0; v < SynthScene::kViews; ++v) write_rpc_txt(dir + "/view" + std::to_string(v + 1) + "_rpc.txt", rpcs[v]);
+  const int N = static_cast<int>(images.size());
+  for (int v = 0; v < N; ++v) write_rpc_txt(dir + "/view" + std::to_string(v + 1) + "_rpc.txt", rpcs[v]);
   BiasTable bt;
   bt.images = images;
   bt.meta = meta;
   meta_set(bt.meta, "bias", "injected into the written RPCs: truth pixel = written RPC projection + (a0 + a1 x + a2 y, "
                             "b0 + b1 x + b2 y) (pixels, x y of the written projection)");
-  for (int v = 0; v < SynthScene::kViews; ++v) {
+  for (int v = 0; v < N; ++v) {
     auto it = bias.find(v);
     bt.bias.push_back(it == bias.end() ? ImageBias{} : it->second);
   }
   save_bias_table(dir + "/truth.bias", bt);
+}
+// Files view<K>.tif and view<K>_rpc.txt with K > views in dir: an older scene's, removed when this run commits.
+void remove_stale_views(const std::string& dir, int views) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() < 5 || name.compare(0, 4, "view") != 0) continue;
+    size_t i = 4;
+    while (i < name.size() && std::isdigit(static_cast<unsigned char>(name[i]))) ++i;
+    const std::string rest = name.substr(i);
+    if (i == 4 || i > 8 || (rest != ".tif" && rest != "_rpc.txt")) continue;
+    if (std::stoi(name.substr(4, i - 4)) > views) remove_on_commit(dir + "/" + name);
+  }
+}
+
+std::string fixed(double v, int decimals) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(decimals);
+  os << v;
+  return os.str();
+}
+
+// Description of view v for the TIFF and the metadata.
+std::string view_text(const SynthScene& scene, int v) {
+  if (!scene.is_block()) return v == 0 ? "forward" : v == 1 ? "nadir" : "backward";
+  const Eigen::Vector3d a = scene.view_angles(v);
+  const int k = synth_views_per_date(scene.params()), i = scene.index_in_date(v);
+  const std::string kind = k == 1 ? "nadir" : i == 0 ? "forward" : i == k - 1 ? "backward" : k == 3 ? "nadir" : "middle";
+  return "date " + std::to_string(scene.date_of(v) + 1) + " view " + std::to_string(i + 1) + " " + kind + ": along-track " +
+         fixed(a[0], 2) + " deg, cross-track " + fixed(a[1], 2) + " deg, roll " + fixed(a[2], 2) + " deg";
 }
 }  // namespace
 
@@ -156,11 +190,24 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     for (double c : p.cross_track) ct += (ct.empty() ? "" : ",") + format_number(c);
     meta_set(meta, "cross_track_deg", ct);
   }
+  const int N = scene.views();
+  if (scene.is_block()) {
+    const int k = synth_views_per_date(p);
+    meta_set(meta, "block", std::to_string(p.dates) + " dates x " + std::to_string(k) + " views; view v is view ((v - 1) mod " +
+                                std::to_string(k) + ") + 1 of date floor((v - 1) / " + std::to_string(k) + ") + 1");
+    for (int v = 0; v < N; ++v) meta_set(meta, "view" + std::to_string(v + 1), view_text(scene, v));
+    std::string ov;
+    for (const auto& nb : synth_neighbours(scene))
+      ov += (ov.empty() ? "" : ", ") + std::to_string(nb.first + 1) + "-" + std::to_string(nb.second + 1) + " " +
+            fixed(synth_footprint_overlap(scene, nb.first, nb.second), 2);
+    meta_set(meta, "footprint_overlap", ov + " (neighbouring views: area of the intersection of their footprints on Z = 0 "
+                                             "over the smaller footprint)");
+  }
   meta_set(meta, "scene", "ground square [0, " + format_number(scene.scene_size()) +
                               "] m x [0, same] m; X east, Y north, Z up (m)");
 
   std::vector<ImageRef> images;
-  for (int v = 0; v < SynthScene::kViews; ++v) images.push_back({"view" + std::to_string(v + 1) + ".tif", p.size, p.size});
+  for (int v = 0; v < N; ++v) images.push_back({"view" + std::to_string(v + 1) + ".tif", p.size, p.size});
   std::vector<RpcModel> rpcs;
   std::optional<SynthGeoFrame> geo;
   if (opt.rpc) {
@@ -172,10 +219,9 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
   const long W = p.size, rows = std::max(1L, opt.strip_rows);
   int threads = opt.threads > 0 ? opt.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const long strips = (W + rows - 1) / rows;
-  Progress progress("rendering", strips * SynthScene::kViews);
-  for (int v = 0; v < SynthScene::kViews; ++v) {
-    std::string desc = "tp-synth view " + std::to_string(v + 1) + " (" + (v == 0 ? "forward" : v == 1 ? "nadir" : "backward") +
-                       "); seed " + std::to_string(p.seed) + "; 12-bit DN = gain * radiance + offset + noise; gain " +
+  Progress progress("rendering", strips * N);
+  for (int v = 0; v < N; ++v) {
+    std::string desc = "tp-synth view " + std::to_string(v + 1) + " (" + view_text(scene, v) + "); seed " + std::to_string(p.seed) + "; 12-bit DN = gain * radiance + offset + noise; gain " +
                        format_number(scene.gain(v)) + ", offset " + format_number(scene.offset(v));
     TiffWriterU16 writer(dir + "/" + images[v].path, W, W, {{"ImageDescription", desc},
                                                                  // fixed, so that the same seed gives the same bytes
@@ -204,14 +250,27 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
   Tracks tr;
   tr.images = images;
   tr.meta = meta;
-  meta_set(tr.meta, "truth", "noise-free projections of ground points visible in all three views; X Y Z in metres");
+  const std::string seen_by = scene.is_block() ? "visible in two views or more (nan nan: not seen by that view)" : "visible in all three views";
+  meta_set(tr.meta, "truth", "noise-free projections of ground points " + seen_by + "; X Y Z in metres");
+  if (scene.is_block()) {
+    std::vector<long> by(static_cast<size_t>(N) + 1, 0);
+    for (Eigen::Index i = 0; i < truth.xy.rows(); ++i) {
+      int c = 0;
+      for (int v = 0; v < N; ++v) c += !std::isnan(truth.xy(i, 2 * v));
+      ++by[static_cast<size_t>(c)];
+    }
+    std::string t;
+    for (int c = 2; c <= N; ++c)
+      if (by[c]) t += (t.empty() ? "" : " ") + std::to_string(c) + ":" + std::to_string(by[c]);
+    meta_set(tr.meta, "tracks_by_views", t);
+  }
   tr.xy = truth.xy;
   tr.id.resize(truth.xy.rows());
   for (Eigen::Index i = 0; i < truth.xy.rows(); ++i) tr.id[i] = i + 1;
   tr.extra.names = {"X", "Y", "Z"};
   tr.extra.values = truth.ground;
   if (opt.rpc) {
-    meta_set(tr.meta, "truth", "noise-free projections of ground points visible in all three views; X Y Z in metres "
+    meta_set(tr.meta, "truth", "noise-free projections of ground points " + seen_by + "; X Y Z in metres "
                                "(local frame); lon lat in degrees WGS84, h in metres above the ellipsoid");
     tr.extra.names = {"X", "Y", "Z", "lon", "lat", "h"};
     tr.extra.values.resize(truth.ground.rows(), 6);
@@ -223,7 +282,7 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     write_synth_rpc_files(dir, images, meta, rpcs, opt.rpc_bias);
     write_geotiff_grid(dir + "/truth.dem.tif", synth_dem(scene, *geo, 1.0));
   } else {
-    for (int v = 0; v < SynthScene::kViews; ++v) remove_on_commit(dir + "/view" + std::to_string(v + 1) + "_rpc.txt");
+    for (int v = 0; v < N; ++v) remove_on_commit(dir + "/view" + std::to_string(v + 1) + "_rpc.txt");
     remove_on_commit(dir + "/truth.bias");
     remove_on_commit(dir + "/truth.dem.tif");
   }
@@ -232,11 +291,12 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
   Cameras cams;
   cams.images = images;
   cams.meta = meta;
-  meta_set(cams.meta, "cameras", "x ~ P [X Y Z 1]^T: ground metres (local frame) to pixels; view 1 forward, 2 nadir, 3 backward");
-  for (int v = 0; v < SynthScene::kViews; ++v) cams.P.push_back(scene.camera(v));
+  meta_set(cams.meta, "cameras", scene.is_block() ? "x ~ P [X Y Z 1]^T: ground metres (local frame) to pixels; views as in block"
+                                                  : "x ~ P [X Y Z 1]^T: ground metres (local frame) to pixels; view 1 forward, 2 nadir, 3 backward");
+  for (int v = 0; v < N; ++v) cams.P.push_back(scene.camera(v));
   save_cameras(dir + "/truth.cameras", cams);
 
-  if (p.camera == "affine") {
+  if (p.camera == "affine" && N == 3) {
     Trifocal tf;
     tf.images = images;
     tf.meta = meta;
@@ -246,6 +306,7 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
   } else {
     remove_on_commit(dir + "/truth.trifocal");  // an older affine scene's tensor is not this scene's truth
   }
+  remove_stale_views(dir, N);
   save_params(dir + "/scene.params", p);
 }
 

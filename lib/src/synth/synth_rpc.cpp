@@ -54,14 +54,21 @@ RpcFit synth_view_rpc(const SynthScene& scene, const SynthGeoFrame& geo, int vie
   RpcFitVolume v;
   v.lon0 = v.lat0 = INFINITY;
   v.lon1 = v.lat1 = -INFINITY;
-  for (double X : {0.0, S})
-    for (double Y : {0.0, S}) {
-      Eigen::Vector3d g = geo.to_llh({X, Y, 0});
-      v.lon0 = std::min(v.lon0, g[0]);
-      v.lon1 = std::max(v.lon1, g[0]);
-      v.lat0 = std::min(v.lat0, g[1]);
-      v.lat1 = std::max(v.lat1, g[1]);
-    }
+  auto extend = [&](double X, double Y) {
+    Eigen::Vector3d g = geo.to_llh({X, Y, 0});
+    v.lon0 = std::min(v.lon0, g[0]);
+    v.lon1 = std::max(v.lon1, g[0]);
+    v.lat0 = std::min(v.lat0, g[1]);
+    v.lat1 = std::max(v.lat1, g[1]);
+  };
+  if (!scene.is_block()) {
+    for (double X : {0.0, S})
+      for (double Y : {0.0, S}) extend(X, Y);
+  } else {
+    // a block's view sees part of the scene square: its footprint at heights -r and r
+    for (double Z : {-r, r})
+      for (const Eigen::Vector2d& c : scene.footprint(view, Z)) extend(c.x(), c.y());
+  }
   v.h0 = geo.origin().h - r;
   v.h1 = geo.origin().h + r;
   // model = (I + d)^-1 o truth: p = c + (I + A) q  =>  q = (I + A)^-1 (p - c)
@@ -103,12 +110,17 @@ GeoGrid synth_dem(const SynthScene& scene, const SynthGeoFrame& geo, double spac
   return g;
 }
 
-std::pair<int, ImageBias> parse_view_bias(const std::string& text) {
+std::pair<int, ImageBias> parse_view_bias(const std::string& text, int views) {
   size_t colon = text.find(':');
   if (colon == std::string::npos) throw UsageError("--rpc-bias: expected VIEW:dx,dy[,dxy,dyy[,dxx,dyx]], got '" + text + "'");
   std::string vs = text.substr(0, colon);
-  if (vs != "1" && vs != "2" && vs != "3") throw UsageError("--rpc-bias: the view must be 1, 2 or 3, got '" + vs + "'");
-  return {std::stoi(vs) - 1, parse_image_bias(text.substr(colon + 1), "--rpc-bias")};
+  const bool digits = !vs.empty() && vs.size() <= 3 && vs.find_first_not_of("0123456789") == std::string::npos && vs[0] != '0';
+  const int view = digits ? std::stoi(vs) : 0;
+  if (view < 1 || view > views) {
+    if (views == 3) throw UsageError("--rpc-bias: the view must be 1, 2 or 3, got '" + vs + "'");
+    throw UsageError("--rpc-bias: the view must be between 1 and " + std::to_string(views) + ", got '" + vs + "'");
+  }
+  return {view - 1, parse_image_bias(text.substr(colon + 1), "--rpc-bias")};
 }
 
 }  // namespace tpkit

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <sstream>
@@ -36,10 +37,13 @@ struct SynthScene::Impl {
   double z_top = 0;     // ray origins of affine views: just above the highest terrain
   SynthTerrain terrain;
   SynthTexture texture;
-  SynthCamera cam[kViews];
-  double gain[kViews] = {}, offset[kViews] = {};
+  std::vector<SynthCamera> cam;
+  std::vector<double> gain, offset;
+  std::vector<Eigen::Vector3d> angles;  // along, cross, roll (deg) per view
   Eigen::Vector3d sun = Eigen::Vector3d::UnitZ();
 };
+
+int synth_dates(const SynthParams& p) { return p.dates > 0 ? p.dates : std::max(1, p.views / 3); }
 
 void check_params(const SynthParams& p) {
   // 40000: a full Pléiades scene. Beyond it a run takes days and its terrain grid alone gigabytes (man page).
@@ -51,8 +55,24 @@ void check_params(const SynthParams& p) {
   if (p.points < 0) throw UsageError("--points must be >= 0");
   if (!(p.noise >= 0) || !std::isfinite(p.noise)) throw UsageError("--noise must be >= 0 DN");
   if (p.supersample < 1 || p.supersample > 16) throw UsageError("--supersample must be between 1 and 16");
-  if (p.cross_track.size() != 0 && p.cross_track.size() != 1 && p.cross_track.size() != 3)
-    throw UsageError("--cross-track takes one angle or three, got " + std::to_string(p.cross_track.size()));
+  if (p.views < 2 || p.views > kMaxSynthViews)
+    throw UsageError("--views must be between 2 and " + std::to_string(kMaxSynthViews) + ", got " + std::to_string(p.views));
+  if (p.dates < 0 || p.dates > p.views)
+    throw UsageError("--dates must be between 1 and --views (" + std::to_string(p.views) + "), got " + std::to_string(p.dates));
+  if (p.dates == 0 && p.views % 3 != 0)
+    throw UsageError("--views " + std::to_string(p.views) + " is not a multiple of 3 (tri-stereo dates): give --dates");
+  const int dates = synth_dates(p);
+  if (p.views % dates != 0 || p.views / dates > kMaxSynthViewsPerDate)
+    throw UsageError("--views " + std::to_string(p.views) + " must be --dates (" + std::to_string(dates) + ") times 1 to " +
+                     std::to_string(kMaxSynthViewsPerDate) + " views per date");
+  const size_t nct = p.cross_track.size();
+  if (!synth_is_block(p)) {
+    if (nct != 0 && nct != 1 && nct != 3)
+      throw UsageError("--cross-track takes one angle or three, got " + std::to_string(nct));
+  } else if (nct != 0 && nct != 1 && nct != static_cast<size_t>(dates) && nct != static_cast<size_t>(p.views)) {
+    throw UsageError("--cross-track takes one angle, one per date (" + std::to_string(dates) + ") or one per view (" +
+                     std::to_string(p.views) + "), got " + std::to_string(nct));
+  }
   for (double c : p.cross_track)
     if (!(std::fabs(c) <= kMaxCrossTrack))
       throw UsageError("--cross-track angles must be between -30 and 30 degrees, got " + format_number(c));
@@ -77,9 +97,9 @@ std::vector<double> parse_cross_track(const std::string& s) {
     if (e == std::string::npos) break;
     b = e + 1;
   }
-  SynthParams p;
-  p.cross_track = out;
-  check_params(p);
+  for (double c : out)
+    if (!(std::fabs(c) <= kMaxCrossTrack))
+      throw UsageError("--cross-track angles must be between -30 and 30 degrees, got " + format_number(c));
   return out;
 }
 
@@ -104,6 +124,7 @@ void save_params(const std::string& path, const SynthParams& p) {
      << "noise = " << format_number(p.noise) << "\n"
      << "supersample = " << p.supersample << "\n";
   if (!p.cross_track.empty()) os << "cross_track = " << cross_track_text(p.cross_track) << "\n";  // default: no key
+  if (synth_is_block(p)) os << "views = " << p.views << "\n" << "dates = " << synth_dates(p) << "\n";  // triplet: no keys
   os << "model = " << kSynthModel << "\n";
   write_file_atomic(path, os.str());
 }
@@ -174,6 +195,14 @@ SynthParams load_params(const std::string& path) {
       } catch (const UsageError& e) {
         throw InputError(path, n, std::string("cross_track: ") + e.what());
       }
+    } else if (key == "views") {
+      integer(i);
+      if (i < 0 || i > kMaxSynthViews) throw InputError(path, n, "views: out of range: '" + val + "'");
+      p.views = static_cast<int>(i);
+    } else if (key == "dates") {
+      integer(i);
+      if (i < 0 || i > kMaxSynthViews) throw InputError(path, n, "dates: out of range: '" + val + "'");
+      p.dates = static_cast<int>(i);
     } else if (key == "model") {
       integer(i);
       if (i != kSynthModel)
@@ -202,58 +231,150 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
   check_params(params);
   Impl& m = *impl_;
   m.p = params;
+  m.p.dates = synth_dates(params);
+  const int N = params.views;
+  m.cam.resize(N);
+  m.gain.resize(N);
+  m.offset.resize(N);
+  m.angles.resize(N);
   const uint64_t gs = synth::hash(params.seed, 0x6e0);
   auto u = [&](int k) { return synth::uniform(gs, k); };
-  // Three-line geometry: along-track +22 / 0 / -22 deg (forward, nadir, backward) with small seeded
-  // deviations, the same cross-track pointing (2..3 deg) give or take 0.3 deg, small rolls; or the
-  // cross-track angles of params.cross_track (one for all views: coplanar viewing directions).
-  const double cross = (2.0 + 1.0 * u(1)) * kDeg;
-  const std::vector<double>& ct = params.cross_track;
-  double along[kViews], crossv[kViews], roll[kViews];
-  for (int v = 0; v < kViews; ++v) {
-    along[v] = ((v == 0 ? 22.0 : v == 2 ? -22.0 : 0.0) + 0.5 * (2 * u(10 + v) - 1)) * kDeg;
-    crossv[v] = ct.empty() ? cross + 0.3 * (2 * u(20 + v) - 1) * kDeg : ct[ct.size() == 3 ? v : 0] * kDeg;
-    roll[v] = 0.4 * (2 * u(30 + v) - 1) * kDeg;
-    m.gain[v] = 3000 + 600 * u(40 + v);
-    m.offset[v] = 60 + 200 * u(50 + v);
-  }
   const bool affine = params.camera == "affine";
-  // Focal length (pixels): the nadir view's pixel spans gsd at the scene centre's range.
-  const double range1 = kAltitude * Eigen::Vector3d(std::tan(crossv[1]), std::tan(along[1]), 1).norm();
-  const double focal = range1 / params.gsd;
   const long n = params.size;
-  auto build = [&](double S) {
-    const Eigen::Vector3d centre(S / 2, S / 2, 0);
-    for (int v = 0; v < kViews; ++v) m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal, centre, n);
-  };
-  // The scene square: the largest S for which the box [0, S]^2 x [-relief/2, relief/2] projects inside
-  // every view with a margin of max(4, 3% of size) pixels.
-  const double margin = std::max(4.0, 0.03 * n);
-  auto fits = [&](double S) {
-    build(S);
-    for (int v = 0; v < kViews; ++v)
-      for (int k = 0; k < 8; ++k) {
-        const Eigen::Vector3d X((k & 1) ? S : 0, (k & 2) ? S : 0, (k & 4) ? params.relief / 2 : -params.relief / 2);
-        const Eigen::Vector2d x = m.cam[v].project(X);
-        if (!(x.x() >= margin && x.y() >= margin && x.x() <= n - 1 - margin && x.y() <= n - 1 - margin)) return false;
+  if (!synth_is_block(params)) {
+    // Three-line geometry: along-track +22 / 0 / -22 deg (forward, nadir, backward) with small seeded
+    // deviations, the same cross-track pointing (2..3 deg) give or take 0.3 deg, small rolls; or the
+    // cross-track angles of params.cross_track (one for all views: coplanar viewing directions).
+    const double cross = (2.0 + 1.0 * u(1)) * kDeg;
+    const std::vector<double>& ct = params.cross_track;
+    double along[kViews], crossv[kViews], roll[kViews];
+    for (int v = 0; v < kViews; ++v) {
+      along[v] = ((v == 0 ? 22.0 : v == 2 ? -22.0 : 0.0) + 0.5 * (2 * u(10 + v) - 1)) * kDeg;
+      crossv[v] = ct.empty() ? cross + 0.3 * (2 * u(20 + v) - 1) * kDeg : ct[ct.size() == 3 ? v : 0] * kDeg;
+      roll[v] = 0.4 * (2 * u(30 + v) - 1) * kDeg;
+      m.gain[v] = 3000 + 600 * u(40 + v);
+      m.offset[v] = 60 + 200 * u(50 + v);
+      m.angles[v] = Eigen::Vector3d(along[v], crossv[v], roll[v]) / kDeg;
+    }
+    // Focal length (pixels): the nadir view's pixel spans gsd at the scene centre's range.
+    const double range1 = kAltitude * Eigen::Vector3d(std::tan(crossv[1]), std::tan(along[1]), 1).norm();
+    const double focal = range1 / params.gsd;
+    auto build = [&](double S) {
+      const Eigen::Vector3d centre(S / 2, S / 2, 0);
+      for (int v = 0; v < kViews; ++v) m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal, centre, n);
+    };
+    // The scene square: the largest S for which the box [0, S]^2 x [-relief/2, relief/2] projects inside
+    // every view with a margin of max(4, 3% of size) pixels.
+    const double margin = std::max(4.0, 0.03 * n);
+    auto fits = [&](double S) {
+      build(S);
+      for (int v = 0; v < kViews; ++v)
+        for (int k = 0; k < 8; ++k) {
+          const Eigen::Vector3d X((k & 1) ? S : 0, (k & 2) ? S : 0, (k & 4) ? params.relief / 2 : -params.relief / 2);
+          const Eigen::Vector2d x = m.cam[v].project(X);
+          if (!(x.x() >= margin && x.y() >= margin && x.x() <= n - 1 - margin && x.y() <= n - 1 - margin)) return false;
+        }
+      return true;
+    };
+    double lo = 0, hi = 2 * n * params.gsd;
+    if (!fits(1e-6 * params.gsd))
+      throw UsageError("--relief " + format_number(params.relief) + " m is too large for views of " + std::to_string(n) +
+                       " pixels at --gsd " + format_number(params.gsd));
+    for (int it = 0; it < 60; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (fits(mid) ? lo : hi) = mid;
+    }
+    m.S = lo;
+    build(m.S);
+  } else {
+    // Block (synth_scene.hpp): its own stream of random numbers, so that the tri-stereo above is unchanged.
+    const int D = m.p.dates, k = N / D;
+    const uint64_t bs = synth::hash(params.seed, 0xb10c);
+    auto ub = [&](int a, int b) { return synth::uniform(bs, a, b); };
+    const std::vector<double>& ct = params.cross_track;
+    std::vector<double> along(N), crossv(N), roll(N);
+    for (int v = 0; v < N; ++v) {
+      const int d = v / k, i = v % k;
+      const double base = k == 1 ? 0.0 : 22.0 - 44.0 * i / (k - 1);
+      along[v] = (base + 0.5 * (2 * ub(1, v) - 1)) * kDeg;
+      const double date_cross = (d % 2 == 0 ? 1 : -1) * (3 + 9 * ub(2, d));
+      const double c = ct.empty() ? date_cross : ct.size() == 1 ? ct[0] : ct.size() == static_cast<size_t>(N) ? ct[v] : ct[d];
+      crossv[v] = c * kDeg;
+      roll[v] = (1.0 * (2 * ub(3, d) - 1) + 0.2 * (2 * ub(4, v) - 1)) * kDeg;
+      m.gain[v] = 3000 + 600 * ub(5, v);
+      m.offset[v] = 60 + 200 * ub(6, v);
+      m.angles[v] = Eigen::Vector3d(along[v], crossv[v], roll[v]) / kDeg;
+    }
+    const double focal = kAltitude / params.gsd;
+    // Footprint extents (bounding box on Z = 0, m) of each view looking at the origin.
+    std::vector<Eigen::Vector2d> ext(N);
+    for (int v = 0; v < N; ++v) {
+      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal, Eigen::Vector3d::Zero(), n);
+      Eigen::Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+      for (int c = 0; c < 4; ++c) {
+        Eigen::Vector3d o, dir;
+        m.cam[v].ray((c & 1) ? n - 0.5 : -0.5, (c & 2) ? n - 0.5 : -0.5, 0, o, dir);
+        const Eigen::Vector3d X = o + (o.z() / -dir.z()) * dir;
+        lo = lo.cwiseMin(X.head<2>());
+        hi = hi.cwiseMax(X.head<2>());
       }
-    return true;
-  };
-  double lo = 0, hi = 2 * n * params.gsd;
-  if (!fits(1e-6 * params.gsd))
-    throw UsageError("--relief " + format_number(params.relief) + " m is too large for views of " + std::to_string(n) +
-                     " pixels at --gsd " + format_number(params.gsd));
-  for (int it = 0; it < 60; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (fits(mid) ? lo : hi) = mid;
+      ext[v] = hi - lo;
+    }
+    // Window centres: view i + 1 of a date lies south of view i by the mean of their along-track (Y) extents
+    // less f_i times the smaller one (their extents then overlap by f_i of the smaller); date d + 1 lies east of
+    // date d likewise with g_d and the dates' mean cross-track (X) extents; f in [0.58, 0.68] (the first and
+    // last views of a tri-stereo date still overlap by about a quarter), g in [0.45, 0.6]; plus +-2% of the
+    // extent on each axis.
+    std::vector<double> f(static_cast<size_t>(k), 0.5), g(static_cast<size_t>(D), 0.5);
+    for (int i = 0; i < k; ++i) f[i] = 0.58 + 0.1 * ub(7, i);
+    for (int d = 0; d < D; ++d) g[d] = 0.45 + 0.15 * ub(8, d);
+    auto mean_ext = [&](int d, int axis) {
+      double s = 0;
+      for (int i = 0; i < k; ++i) s += ext[d * k + i][axis];
+      return s / k;
+    };
+    std::vector<Eigen::Vector2d> centre(N);
+    double xd = 0;
+    for (int d = 0; d < D; ++d) {
+      if (d > 0) {
+        const double a = mean_ext(d - 1, 0), b = mean_ext(d, 0);
+        xd += 0.5 * (a + b) - g[d - 1] * std::min(a, b);
+      }
+      double yi = 0;
+      for (int i = 0; i < k; ++i) {
+        const int v = d * k + i;
+        if (i > 0) yi -= 0.5 * (ext[v - 1].y() + ext[v].y()) - f[i - 1] * std::min(ext[v - 1].y(), ext[v].y());
+        centre[v] = Eigen::Vector2d(xd + 0.02 * (2 * ub(9, v) - 1) * ext[v].x(), yi + 0.02 * (2 * ub(10, v) - 1) * ext[v].y());
+      }
+    }
+    // The scene square: about the footprints of every view at heights +-relief/2, with a margin of 2% of the
+    // largest extent; the layout shifted to its middle.
+    Eigen::Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+    double emax = 0;
+    for (int v = 0; v < N; ++v) {
+      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal,
+                                   Eigen::Vector3d(centre[v].x(), centre[v].y(), 0), n);
+      emax = std::max(emax, ext[v].maxCoeff());
+      for (int c = 0; c < 8; ++c) {
+        Eigen::Vector3d o, dir;
+        const double z = (c & 4) ? params.relief / 2 : -params.relief / 2;
+        m.cam[v].ray((c & 1) ? n - 0.5 : -0.5, (c & 2) ? n - 0.5 : -0.5, z, o, dir);
+        const Eigen::Vector3d X = o + ((o.z() - z) / -dir.z()) * dir;
+        lo = lo.cwiseMin(X.head<2>());
+        hi = hi.cwiseMax(X.head<2>());
+      }
+    }
+    m.S = (hi - lo).maxCoeff() + 0.04 * emax;
+    const Eigen::Vector2d shift = Eigen::Vector2d::Constant(m.S / 2) - 0.5 * (lo + hi);
+    for (int v = 0; v < N; ++v)
+      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal,
+                                   Eigen::Vector3d(centre[v].x() + shift.x(), centre[v].y() + shift.y(), 0), n);
   }
-  m.S = lo;
-  build(m.S);
   // Terrain grid: covers what any pixel of any view can see at heights within +-relief (the clamp of the
   // terrain), plus the scene square.
   double x0 = 0, y0 = 0, x1 = m.S, y1 = m.S;
   const double zb = std::max(params.relief, 1.0);
-  for (int v = 0; v < kViews; ++v)
+  for (int v = 0; v < N; ++v)
     for (int k = 0; k < 4; ++k) {
       const double px = (k & 1) ? n + 1.0 : -2.0, py = (k & 2) ? n + 1.0 : -2.0;
       Eigen::Vector3d o, d;
@@ -296,6 +417,24 @@ double SynthScene::radiance(double X, double Y, const Eigen::Vector2d& g) const 
   const double shade = 0.3 + 0.7 * std::max(0.0, nrm.dot(impl_->sun));
   return impl_->texture.albedo(X, Y) * shade;
 }
+int SynthScene::views() const { return impl_->p.views; }
+bool SynthScene::is_block() const { return synth_is_block(impl_->p); }
+int SynthScene::date_of(int view) const { return view / synth_views_per_date(impl_->p); }
+int SynthScene::index_in_date(int view) const { return view % synth_views_per_date(impl_->p); }
+Eigen::Vector3d SynthScene::view_angles(int view) const { return impl_->angles.at(static_cast<size_t>(view)); }
+
+std::array<Eigen::Vector2d, 4> SynthScene::footprint(int view, double Z) const {
+  const double n = static_cast<double>(impl_->p.size);
+  const double cx[4] = {-0.5, n - 0.5, n - 0.5, -0.5}, cy[4] = {-0.5, -0.5, n - 0.5, n - 0.5};
+  std::array<Eigen::Vector2d, 4> out;
+  for (int c = 0; c < 4; ++c) {
+    Eigen::Vector3d o, d;
+    impl_->cam.at(static_cast<size_t>(view)).ray(cx[c], cy[c], Z, o, d);
+    out[c] = (o + ((o.z() - Z) / -d.z()) * d).head<2>();
+  }
+  return out;
+}
+
 double SynthScene::gain(int view) const { return impl_->gain[view]; }
 double SynthScene::offset(int view) const { return impl_->offset[view]; }
 
@@ -328,18 +467,22 @@ bool SynthScene::visible(int view, const Eigen::Vector3d& X) const {
 }
 
 SynthTruth synth_truth_points(const SynthScene& scene, long points) {
+  const int N = scene.views();
+  // The tri-stereo keeps points seen by all three views (as it always has); a block those seen by two or more.
+  const int min_views = scene.is_block() ? 2 : N;
   SynthTruth truth;
-  truth.xy.resize(points, 6);
+  truth.xy.resize(points, 2 * N);
   truth.ground.resize(points, 3);
   if (points == 0) return truth;
   const double S = scene.scene_size();
   // Stratified: g x g cells over the scene square, visited in a seeded random order, one candidate per
-  // cell per round, until `points` candidates visible in all three views are found.
+  // cell per round, until `points` candidates visible in min_views views are found.
   const long g = std::max(1L, static_cast<long>(std::ceil(std::sqrt(points * 1.25))));
   std::vector<long> order(static_cast<size_t>(g * g));
   std::iota(order.begin(), order.end(), 0L);
   std::mt19937_64 rng(synth::hash(scene.params().seed, 0x77a));
   std::uniform_real_distribution<double> unif(0.0, 1.0);
+  std::vector<char> seen(static_cast<size_t>(N));
   long found = 0;
   for (int round = 0; round < 50 && found < points; ++round) {
     std::shuffle(order.begin(), order.end(), rng);
@@ -347,18 +490,95 @@ SynthTruth synth_truth_points(const SynthScene& scene, long points) {
       if (found == points) break;
       const double X = (c % g + unif(rng)) * S / g, Y = (c / g + unif(rng)) * S / g;
       const Eigen::Vector3d P(X, Y, scene.height(X, Y));
-      bool ok = true;
-      for (int v = 0; v < SynthScene::kViews && ok; ++v) ok = scene.visible(v, P);
-      if (!ok) continue;
-      for (int v = 0; v < SynthScene::kViews; ++v) truth.xy.block<1, 2>(found, 2 * v) = scene.project(v, P).transpose();
+      int count = 0;
+      for (int v = 0; v < N && count + (N - v) >= min_views; ++v) {
+        seen[v] = scene.visible(v, P);
+        count += seen[v];
+      }
+      if (count < min_views) continue;
+      for (int v = 0; v < N; ++v)
+        truth.xy.block<1, 2>(found, 2 * v) =
+            seen[v] ? Eigen::RowVector2d(scene.project(v, P).transpose())
+                    : Eigen::RowVector2d::Constant(std::numeric_limits<double>::quiet_NaN());
       truth.ground.row(found) = P.transpose();
       ++found;
     }
   }
   if (found < points)
-    throw NumericalError("only " + std::to_string(found) + " of " + std::to_string(points) +
-                         " truth points are visible in all three views");
+    throw NumericalError("only " + std::to_string(found) + " of " + std::to_string(points) + " truth points are visible in " +
+                         (scene.is_block() ? std::string("two views or more") : std::string("all three views")));
   return truth;
+}
+
+namespace {
+// Area of a simple polygon (shoelace; either orientation).
+double polygon_area(const std::vector<Eigen::Vector2d>& p) {
+  double a = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector2d& q = p[i];
+    const Eigen::Vector2d& r = p[(i + 1) % p.size()];
+    a += q.x() * r.y() - r.x() * q.y();
+  }
+  return 0.5 * std::fabs(a);
+}
+// Sutherland-Hodgman: the convex polygon `subject` clipped by the convex polygon `clip` (any orientation).
+std::vector<Eigen::Vector2d> clip_convex(std::vector<Eigen::Vector2d> subject, std::vector<Eigen::Vector2d> clip) {
+  auto cross = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& p) {
+    return (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
+  };
+  double orient = 0;  // > 0: counter-clockwise
+  for (size_t i = 0; i < clip.size(); ++i) orient += cross(clip[i], clip[(i + 1) % clip.size()], clip[(i + 2) % clip.size()]);
+  if (orient < 0) std::reverse(clip.begin(), clip.end());
+  for (size_t i = 0; i < clip.size() && !subject.empty(); ++i) {
+    const Eigen::Vector2d a = clip[i], b = clip[(i + 1) % clip.size()];
+    std::vector<Eigen::Vector2d> out;
+    for (size_t j = 0; j < subject.size(); ++j) {
+      const Eigen::Vector2d p = subject[j], q = subject[(j + 1) % subject.size()];
+      const double cp = cross(a, b, p), cq = cross(a, b, q);
+      if (cp >= 0) out.push_back(p);
+      if ((cp >= 0) != (cq >= 0)) out.push_back(p + (cp / (cp - cq)) * (q - p));
+    }
+    subject = std::move(out);
+  }
+  return subject;
+}
+}  // namespace
+
+double synth_footprint_overlap(const SynthScene& scene, int a, int b) {
+  const auto fa = scene.footprint(a), fb = scene.footprint(b);
+  const std::vector<Eigen::Vector2d> pa(fa.begin(), fa.end()), pb(fb.begin(), fb.end());
+  const std::vector<Eigen::Vector2d> in = clip_convex(pa, pb);
+  const double smaller = std::min(polygon_area(pa), polygon_area(pb));
+  return in.size() < 3 || !(smaller > 0) ? 0.0 : polygon_area(in) / smaller;
+}
+
+std::vector<std::pair<int, int>> synth_neighbours(const SynthScene& scene) {
+  std::vector<std::pair<int, int>> out;
+  const int N = scene.views();
+  if (!scene.is_block()) {
+    for (int a = 0; a < N; ++a)
+      for (int b = a + 1; b < N; ++b) out.emplace_back(a, b);
+    return out;
+  }
+  const int k = synth_views_per_date(scene.params());
+  for (int v = 0; v < N; ++v) {
+    if (v % k + 1 < k) out.emplace_back(v, v + 1);  // next view of the date
+    if (v + k < N) out.emplace_back(v, v + k);      // same view of the next date
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+ImageBias synth_random_bias(const SynthScene& scene, int view, double px) {
+  // Terms (rpc_bias.hpp): shift a0, b0 in +-px/2; a2, b2 (per row: drift) and a1, b1 (per column: affine)
+  // each in +-(px/4) / (size - 1), so that each changes by at most px/4 across the image.
+  const uint64_t s = synth::hash(scene.params().seed, 0xb1a5, view);
+  auto r = [&](int k) { return 2 * synth::uniform(s, k) - 1; };
+  const double span = static_cast<double>(std::max(1L, scene.params().size - 1));
+  ImageBias b;
+  b.a = {0.5 * px * r(0), 0.25 * px / span * r(1), 0.25 * px / span * r(2)};
+  b.b = {0.5 * px * r(3), 0.25 * px / span * r(4), 0.25 * px / span * r(5)};
+  return b;
 }
 
 }  // namespace tpkit

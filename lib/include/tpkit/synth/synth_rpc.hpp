@@ -1,4 +1,4 @@
-// RPC cameras of the synthetic triplet (tp-synth): the scene's local frame placed on the WGS84 ellipsoid,
+// RPC cameras of the synthetic triplet or block (tp-synth): the scene's local frame placed on the WGS84 ellipsoid,
 // and an RPC00B per view fitted to its camera over the scene volume (terrain-independent fit on a 3-D grid,
 // as vendors do), optionally perturbed by a known image-space bias.
 //
@@ -40,8 +40,8 @@ class SynthGeoFrame {
   std::unique_ptr<Impl> impl_;
 };
 
-// The RPC00B of `view` (0-based) with bias d (none: zero): fitted on the scene square x [-relief/2 - 10,
-// relief/2 + 10] m about the origin height. fit.rms_px / max_px: against the biased camera on the check grid.
+// The RPC00B of `view` (0-based) with bias d (none: zero): fitted on the scene square (a block: the view's
+// footprint at heights -+(relief/2 + 10)) x [-relief/2 - 10, relief/2 + 10] m about the origin height. fit.rms_px / max_px: against the biased camera on the check grid.
 RpcFit synth_view_rpc(const SynthScene& scene, const SynthGeoFrame& geo, int view, const ImageBias& bias = {});
 
 // The terrain as a DEM on a geographic grid of about `spacing` metres covering the scene square: heights above
@@ -49,7 +49,7 @@ RpcFit synth_view_rpc(const SynthScene& scene, const SynthGeoFrame& geo, int vie
 struct GeoGrid;
 GeoGrid synth_dem(const SynthScene& scene, const SynthGeoFrame& geo, double spacing);
 
-// "VIEW:dx,dy[,dxy,dyy[,dxx,dyx]]" (VIEW 1..3) -> view index (0-based) and bias; UsageError otherwise.
-std::pair<int, ImageBias> parse_view_bias(const std::string& text);
+// "VIEW:dx,dy[,dxy,dyy[,dxx,dyx]]" (VIEW 1..views) -> view index (0-based) and bias; UsageError otherwise.
+std::pair<int, ImageBias> parse_view_bias(const std::string& text, int views = 3);
 
 }  // namespace tpkit

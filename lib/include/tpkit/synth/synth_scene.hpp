@@ -1,4 +1,5 @@
-// A synthetic satellite triplet with exact ground truth (tp-synth, man/tp-synth.1).
+// A synthetic satellite triplet, or a block of views from several acquisitions, with exact ground truth
+// (tp-synth, man/tp-synth.1).
 //
 // Local ground frame: X east, Y north, Z up, metres. The scene is the ground square [0, S] x [0, S]
 // (S = scene_size()), over which the terrain height spans exactly `relief` metres, centred on Z = 0.
@@ -8,6 +9,17 @@
 // (about -22 deg); files view1.tif .. view3.tif. The satellite flies south (-Y): image rows (y) increase
 // along-track (southward), columns (x) increase eastward. Pixels: x = column, y = row, (0, 0) the centre
 // of the top-left pixel. The nadir view has ground sampling distance `gsd` at the scene centre.
+//
+// Blocks (views != 3 or dates != 1): `dates` acquisitions of k = views / dates views each; view v (0-based)
+// is view i = v % k of date d = v / k. Along-track angles within a date run evenly from +22 (forward) to -22
+// deg (backward) (k = 1: nadir), each give or take 0.5 deg; each date has its own cross-track angle (seeded,
+// 3..12 deg, east for even d, west for odd d; or --cross-track) and roll. Each view looks at its own window
+// centre: the windows form a k x dates grid, view i of a date stepping south (along track), dates stepping
+// east (adjacent orbits); each step makes the two footprints' extents on that axis overlap by a seeded
+// fraction f of the smaller one (one f per gap, shared by every date resp. view index), f in [0.58, 0.68]
+// along track and [0.45, 0.6] across, plus a seeded jitter of +-2% of the footprint side on each axis. The scene square is then the square about all
+// footprints, and every view sees a different part of it. The focal length is altitude / gsd (a vertical
+// view has ground sampling distance gsd).
 #pragma once
 #include <Eigen/Core>
 #include <array>
@@ -34,11 +46,23 @@ struct SynthParams {
   // Cross-track angles of the views, degrees (satellite east of the scene > 0). Empty: seeded, one
   // angle of 2..3 deg for all views give or take 0.3 deg per view (the default). One value: every view
   // exactly that angle, so the three viewing directions (tan c, tan a_v, 1) lie in one plane, as in a
-  // single-pass tri-stereo acquisition. Three values: views 1, 2, 3.
+  // single-pass tri-stereo acquisition. Three values: views 1, 2, 3. Blocks: one value (every view), one
+  // per date, or one per view.
   std::vector<double> cross_track;
+  int views = 3;   // views in all (2..kMaxSynthViews); 3 with dates = 1 is the tri-stereo above
+  int dates = 0;   // acquisitions; 0: views / 3 (views must then be a multiple of 3)
 };
+constexpr int kMaxSynthViews = 96;
+constexpr int kMaxSynthViewsPerDate = 5;
 
-// "DEG" or "DEG,DEG,DEG" (each finite, |DEG| <= 30) -> SynthParams::cross_track; UsageError otherwise.
+// The number of dates of p (p.dates, or p.views / 3 when 0) and the views per date.
+int synth_dates(const SynthParams& p);
+inline int synth_views_per_date(const SynthParams& p) { return p.views / synth_dates(p); }
+// True for a block (anything but the single-date tri-stereo).
+inline bool synth_is_block(const SynthParams& p) { return !(p.views == 3 && synth_dates(p) == 1); }
+
+// "DEG[,DEG...]" (each finite, |DEG| <= 30) -> SynthParams::cross_track; UsageError otherwise (the count
+// is checked by check_params).
 std::vector<double> parse_cross_track(const std::string&);
 
 // Throws UsageError naming the bad parameter (size < 16, relief < 0, gsd <= 0, unknown camera, ...).
@@ -58,8 +82,17 @@ class SynthScene {
   SynthScene& operator=(SynthScene&&) noexcept;
   ~SynthScene();
 
-  const SynthParams& params() const;
-  static constexpr int kViews = 3;  // view 0 = forward, 1 = nadir, 2 = backward (files view1..view3.tif)
+  const SynthParams& params() const;  // dates resolved (synth_dates)
+  static constexpr int kViews = 3;  // views of the tri-stereo (view 0 = forward, 1 = nadir, 2 = backward)
+  int views() const;                // views of this scene (files view1.tif .. viewN.tif)
+  bool is_block() const;
+  // Date (0-based) and index within its date (0-based) of `view`; along-, cross-track angles and roll (deg).
+  int date_of(int view) const;
+  int index_in_date(int view) const;
+  Eigen::Vector3d view_angles(int view) const;
+  // Where view's image lies on the ground plane Z: the ground points of its image corners (-0.5, -0.5),
+  // (n - 0.5, -0.5), (n - 0.5, n - 0.5), (-0.5, n - 0.5) (m, counter-clockwise or clockwise in order).
+  std::array<Eigen::Vector2d, 4> footprint(int view, double Z = 0) const;
   double height(double X, double Y) const;                          // terrain height Z (m) at ground X, Y (m)
   Eigen::Vector2d project(int view, const Eigen::Vector3d& X) const;// ground (m) -> pixel (x col, y row)
   // First intersection of the viewing ray through pixel (x, y) of `view` with the terrain; nothing if it misses.
@@ -99,13 +132,28 @@ class SynthScene {
   explicit SynthScene(std::unique_ptr<Impl>);
 };
 
-// Truth tracks: `points` ground points in the scene square visible in all three views, stratified over
-// the scene (deterministic for the seed). Rows of xy: x1 y1 x2 y2 x3 y3 (pixels); rows of ground: X Y Z (m).
+// Truth tracks: `points` ground points on the terrain in the scene square, stratified over the scene
+// (deterministic for the seed): for the tri-stereo each visible in all three views; for a block each
+// visible (inside the image and not hidden by terrain) in 2 views or more. Rows of xy: x1 y1 .. xN yN
+// (pixels; NaN NaN where the view does not see the point); rows of ground: X Y Z (m).
 struct SynthTruth {
-  Eigen::MatrixXd xy;      // n x 6
+  Eigen::MatrixXd xy;      // n x 2N
   Eigen::MatrixX3d ground; // n x 3
 };
 SynthTruth synth_truth_points(const SynthScene&, long points);
+
+// Footprint overlap of views a and b: area of the intersection of their footprints on Z = 0 over the area of
+// the smaller one (0..1).
+double synth_footprint_overlap(const SynthScene&, int a, int b);
+// Neighbouring views of the block layout (a < b, 0-based): consecutive views of one date, and the same view
+// index of consecutive dates. The tri-stereo: every pair.
+std::vector<std::pair<int, int>> synth_neighbours(const SynthScene&);
+
+// Seeded random RPC biases (synth_rpc.hpp convention) for every view of the scene: each component at every
+// pixel of the view at most `px` pixels: shift uniform in +-px/2, and the drift (per row) and affine (per
+// column) terms each uniform so that they change by at most +-px/4 across the image. Deterministic for the
+// scene's seed and the view.
+ImageBias synth_random_bias(const SynthScene&, int view, double px);
 
 // H&Z trifocal tensor T[i](j, k) = T_i^{jk} of the three pixel cameras P1, P2, P3 (views 0, 1, 2):
 // camera 1 is made canonical by H with P1 H = [I | 0], then T_i = a_i b_4^T - a_4 b_i^T with
@@ -123,8 +171,9 @@ struct SynthWriteOptions {
   SynthGeoOrigin origin;
   std::map<int, ImageBias> rpc_bias;  // view (0-based) -> bias
 };
-// Writes view1..3.tif, truth.tracks, truth.cameras, truth.trifocal (affine only) and scene.params into
-// dir (created if needed), each atomically; with rpc also view1..3_rpc.txt and truth.bias.
+// Writes view1..N.tif, truth.tracks, truth.cameras, truth.trifocal (three views, affine only) and
+// scene.params into dir (created if needed), each atomically; with rpc also view1..N_rpc.txt, truth.bias and
+// truth.dem.tif. Files view<K>.tif / view<K>_rpc.txt of an older scene with more views are removed.
 void write_synth_scene(const SynthScene&, const std::string& dir, const SynthWriteOptions& = {});
 
 }  // namespace tpkit
