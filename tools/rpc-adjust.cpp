@@ -113,6 +113,7 @@ void write_residuals(const std::string& path, const std::vector<AdjustImage>& im
   os << "# observations: " << r.obs_image.size() << '\n';
   os << "# observations_with_sigma: " << r.obs_with_sigma << '\n';
   os << "# default_sigma_px: " << format_number(r.default_sigma_px) << '\n';
+  os << "# reference_sigma_px: " << format_number(r.reference_sigma_px) << '\n';
   os << "# rms_before_px: " << format_number(residual_rms(r, false)) << '\n';
   os << "# rms_after_px: " << format_number(residual_rms(r, true)) << '\n';
   os << "# sigma0_weighted: " << format_number(r.sigma0_weighted) << '\n';
@@ -254,7 +255,8 @@ int run(const Opts& o) {
     std::cerr << "unit weights (" << (o.unweighted ? "--unweighted" : "no sigma given") << ")\n";
   else
     std::cerr << r.obs_with_sigma << " observations weighted by their sigma, " << r.obs_image.size() - r.obs_with_sigma
-              << " at " << format_figure(r.default_sigma_px) << " px; weighted sigma0 " << format_figure(r.sigma0_weighted) << "\n";
+              << " at " << format_figure(r.default_sigma_px) << " px; weights reference sigma " << format_figure(r.reference_sigma_px)
+              << " px / sigma, weighted sigma0 " << format_figure(r.sigma0_weighted) << " px\n";
   const std::vector<ImageReport> per = image_reports(images.size(), tracks, r);
   for (size_t i = 0; i < images.size(); ++i)
     std::cerr << "rpc-adjust: image" << i + 1 << " " << images[i].path << (images[i].fixed ? " (fixed)" : "") << ": "

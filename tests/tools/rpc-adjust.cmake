@@ -53,3 +53,29 @@ tpkit_tool_test(rpc-adjust.contradicting-height-prior
 tpkit_tool_test(rpc-adjust.agreeing-dem
   COMMAND "${synth_biased} && ${adjust} --dem syn/truth.dem.tif --strict -o adj"
   STDERR_MATCH "--dem syn/truth.dem.tif agrees with the tie points: rms after [0-9.e-]+ px with it")
+# Tracks of any length (issue 24): the truth tracks with views blanked to nan nan (2 in 5 keep three views,
+# the others miss view 1, 2 or 3 in turn), a version-2 tracks file: 2- and 3-view tracks, reported per image,
+# and the adjusted models put the truth ground points at the truth heights (tp-ground on the full tracks).
+set(blank "sed 's/^# tpkit tracks 1/# tpkit tracks 2/' syn/truth.tracks | awk '/^#/ { print @SEMI@ next } { n++ } n % 5 == 2 { $2 = $3 = \"nan\" } n % 5 == 3 { $4 = $5 = \"nan\" } n % 5 == 4 { $6 = $7 = \"nan\" } { print }'")
+tpkit_tool_test(rpc-adjust.tracks-with-missing-views
+  COMMAND "${synth_biased} && ${blank} > syn/mixed.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/mixed.tracks --fixed syn/view1.tif --dem syn/truth.dem.tif -o adj && tp-ground syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --rpc syn/view2.tif=adj/view2_rpc.txt --rpc syn/view3.tif=adj/view3.RPB -o g.points && paste <(grep -v '^#' syn/truth.tracks) <(grep -v '^#' g.points) | awk '{ s += ($13 - $17)^2 @SEMI@ n++ } END { r = sqrt(s / n) @SEMI@ print (r < 0.25 ? \"heights ok\" : \"heights off\"), r }'"
+  STDOUT_MATCH "^heights ok "
+  STDERR_MATCH "rpc-adjust: 400 tracks, 960 observations, .*\nrpc-adjust: tracks by length 2:240 3:160@SEMI@ unit weights \\(no sigma given\\)\nrpc-adjust: image1 syn/view1.tif \\(fixed\\): 320 observations, tracks by length 2:160 3:160, median sigma 1 px, rms [0-9.]+ px before, [0-9.e-]+ px after\nrpc-adjust: image2 syn/view2.tif: 320 observations, tracks by length 2:160 3:160, median sigma 1 px, rms [1-9][0-9.]* px before, 0\\.00[0-9]* px after\n"
+  CHECK_FILE adj/rpc.residuals
+  FILE_MATCH "# tracks_by_length: 2:240 3:160\n.*# rms_after_px: (0\\.00[0-9]*|[0-9.]+e-[0-9]+)\n.*# image3_observations: 320\n# image3_tracks_by_length: 2:160 3:160\n")
+# Matches files given directly (each record a 2-view track; image paths from the header), sigma weighted:
+# the pairs 1-2 and 2-3 of the truth with a sigma column, adjusted as the 3-view tracks are.
+set(to_matches "awk -v a=1 -v b=2 'BEGIN { print \"# tpkit matches 1\\n# image1: view\" a \".tif\\n# image2: view\" b \".tif\\n# columns: id1 x1 y1 id2 x2 y2 sigma\" } /^#/ { next } { print $1, $(2 * a), $(2 * a + 1), $1, $(2 * b), $(2 * b + 1), 0.05 }' syn/truth.tracks")
+string(REPLACE "-v a=1 -v b=2" "-v a=2 -v b=3" to_matches_23 "${to_matches}")
+tpkit_tool_test(rpc-adjust.matches-files
+  COMMAND "${synth_biased} && ${to_matches} > syn/p12.matches && ${to_matches_23} > syn/p23.matches && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/p12.matches syn/p23.matches --fixed syn/view1.tif --dem syn/truth.dem.tif -o adj"
+  STDERR_MATCH "rpc-adjust: 800 tracks, 1600 observations, model affine: rms [1-9][0-9.]* px before, [0-9.e-]+ px after.*\nrpc-adjust: tracks by length 2:800@SEMI@ 1600 observations weighted by their sigma, 0 at 0.03536 px@SEMI@ weights reference sigma 0.03536 px / sigma.*\nrpc-adjust: image2 syn/view2.tif: 800 observations, tracks by length 2:800, median sigma 0.03536 px"
+  CHECK_FILE adj/rpc.residuals
+  FILE_MATCH "# rms_after_px: (0\\.00[0-9]*|[0-9.]+e-[0-9]+)\n")
+# Refused with the file and line, nothing written: a track seen in one view, nan in x but not in y.
+tpkit_tool_test(rpc-adjust.track-of-one-view
+  COMMAND "${synth_biased} && ${blank} | awk '!/^#/ && ++n == 7 { $4 = $5 = \"nan\" } { print }' > syn/one.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/one.tracks -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/one.tracks:[0-9]+: .*1 view" NO_FILE adj)
+tpkit_tool_test(rpc-adjust.nan-in-x-only
+  COMMAND "${synth_biased} && ${blank} | awk '!/^#/ && ++n == 1 { $2 = \"nan\" } { print }' > syn/half.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/half.tracks -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/half.tracks:[0-9]+: .*x1 nan" NO_FILE adj)

@@ -220,6 +220,16 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     if (o.use_sigma && !t.sigma.empty() && std::isfinite(t.sigma[k])) return std::max(t.sigma[k], kMinObservationSigma);
     return r.default_sigma_px;
   };
+  // the reference sigma: the median over the observations; weights are s_ref / sigma (see the header)
+  {
+    std::vector<double> all;
+    for (size_t t = 0; t < nt; ++t)
+      if (r.initial_ok[t])
+        for (size_t k = 0; k < tracks[t].views.size(); ++k) all.push_back(sigma_of(tracks[t], k));
+    std::nth_element(all.begin(), all.begin() + all.size() / 2, all.end());
+    r.reference_sigma_px = all[all.size() / 2];
+  }
+  const double s_ref = r.reference_sigma_px;
   std::vector<char> image_seen(ni, 0);
   long with_height = 0;
   for (size_t t = 0; t < nt; ++t) {
@@ -228,7 +238,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     for (size_t k = 0; k < tracks[t].views.size(); ++k) {
       const auto& [i, xy] = tracks[t].views[k];
       image_seen[i] = 1;
-      const double w = 1.0 / sigma_of(tracks[t], k);
+      const double w = s_ref / sigma_of(tracks[t], k);
       // Huber on the weighted residual at loss_px * w: linear where the pixel residual exceeds loss_px
       ceres::LossFunction* loss = new ceres::HuberLoss(o.loss_px * w);
       if (images[i].fixed) {
@@ -314,7 +324,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
       r.res_after.push_back(e1);
       const double sg = sigma_of(tracks[t], k);
       r.obs_sigma.push_back(sg);
-      wsum += e1.squaredNorm() / (sg * sg);
+      wsum += e1.squaredNorm() * (s_ref * s_ref) / (sg * sg);
       s += e1.squaredNorm();
     }
     sum += s;
@@ -332,7 +342,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
                          " px before, " + format_figure(residual_rms(r, true)) + " px after, " +
                          std::to_string(r.iterations) + " iterations): wrong models, wrong tracks, or a --flag too tight");
   // sigma_h: the weighted normal matrix of the point, (J^T W J)^-1 (h, h) scaled by the a posteriori
-  // variance of unit weight (unit weights: sigma0^2 (J^T J)^-1, as tp-ground's)
+  // variance of unit weight, W = (s_ref / sigma)^2 (unit weights: sigma0^2 (J^T J)^-1, as tp-ground's)
   for (size_t t = 0; t < nt; ++t) {
     if (!r.initial_ok[t]) continue;
     auto v = observations(images, &r.bias, tracks[t]);
@@ -341,7 +351,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
       Eigen::Matrix<double, 2, 3> J;
       rpc_observe(v[k], r.ground[t], &J);
       const double sg = sigma_of(tracks[t], k);
-      N += J.transpose() * J / (sg * sg);
+      N += J.transpose() * J * (s_ref * s_ref) / (sg * sg);
     }
     Eigen::Vector3d d = N.diagonal().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
     Eigen::Matrix3d C = d.asDiagonal() * (d.asDiagonal() * N * d.asDiagonal()).inverse() * d.asDiagonal();

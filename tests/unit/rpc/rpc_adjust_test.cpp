@@ -263,10 +263,21 @@ TEST(RpcAdjust, SigmaWeightsLowerANoisyView) {
   const double tw = truth_rms(T, rw, 1), tu = truth_rms(T, ru, 1);
   EXPECT_LT(tw, 0.5 * tu) << "image 2 against the truth: weighted " << tw << " px, unweighted " << tu << " px";
   EXPECT_GT(residual_rms(rw, true, 2), residual_rms(ru, true, 2));
-  // the sigmas are right: the weighted residuals' RMS per coordinate is sqrt(redundancy / observations),
-  // (6 - 3) / 6 per track: 0.71
-  EXPECT_GT(rw.sigma0_weighted, 0.65);
-  EXPECT_LT(rw.sigma0_weighted, 0.77);
+  // the sigmas are right: the weighted residuals' RMS per coordinate is s_ref (the median sigma, 0.05 px)
+  // times sqrt(redundancy / observations), (6 - 3) / 6 per track: 0.035 px
+  EXPECT_EQ(rw.reference_sigma_px, 0.05);
+  EXPECT_GT(rw.sigma0_weighted, 0.65 * 0.05);
+  EXPECT_LT(rw.sigma0_weighted, 0.77 * 0.05);
+  // one sigma for all (LSM's 0.02 px): the unweighted fit, not a fit whose priors weigh 2500 times less
+  // (which drifts along the height plane the tie points cannot see)
+  std::vector<AdjustTrack> equal = tracks;
+  for (auto& t : equal) t.sigma = {0.02, 0.02, 0.02};
+  const AdjustResult re = adjust_rpcs(T.images, equal, weighted);
+  for (int i = 1; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(re.bias[i].a[k], ru.bias[i].a[k], 1e-6 * (k ? 1e-3 : 1)) << "image " << i + 1 << " a" << k;
+      EXPECT_NEAR(re.bias[i].b[k], ru.bias[i].b[k], 1e-6 * (k ? 1e-3 : 1)) << "image " << i + 1 << " b" << k;
+    }
   // the floor: a sigma of 0 weighs as kMinObservationSigma, not infinitely
   std::vector<AdjustTrack> zero = tracks;
   for (auto& t : zero) t.sigma = {0.0, 0.0, 1.0};

@@ -1,7 +1,7 @@
 // Bundle adjustment of RPC cameras from tie points (rpc-adjust): one image-space bias per image
 // (rpc_bias.hpp: shift, drift or affine) and one ground point (lon, lat, h) per track are the unknowns;
 // each observation (view k of track t, in image v) gives the weighted residual
-//     (bias_v(rpc_v(g_t)) - x_tk) / sigma_tk          (pixels over pixels: dimensionless)
+//     (bias_v(rpc_v(g_t)) - x_tk) * s_ref / sigma_tk          (pixels)
 // under a robust (Huber) loss; weak Gaussian priors pull each bias term to 0 (sigma: prior_shift_px for
 // the shifts, prior_linear for the linear terms, per pixel); `fixed` images keep a zero bias; a height
 // prior (constant H +- S or a DEM) adds (h_t - H(lon_t, lat_t)) / S per track. Solved with Ceres
@@ -10,13 +10,20 @@
 // Weights. sigma_tk (pixels) is the standard deviation of the observed position: AdjustTrack::sigma
 // (tracks: column sigmaK of view K; matches: the record's sigma, which is that of (x2, y2) relative to
 // (x1, y1), split as sigma / sqrt(2) on each of the two views). Observations without one (no column, or
-// nan) take default_sigma_px (by default the median of the sigmas given, 1 px when none is given: unit
-// weights, the unweighted adjustment). Every sigma is floored at kMinObservationSigma (0.02 px) so that no
-// observation dominates; use_sigma = false weighs every observation at default_sigma_px (1 px when NaN).
+// nan) take default_sigma_px (by default the median of the sigmas given, 1 px when none is given). Every
+// sigma is floored at kMinObservationSigma (0.02 px) so that no observation dominates; use_sigma = false
+// weighs every observation at default_sigma_px (1 px when NaN). The sigmas weigh observations against
+// each other: s_ref, the median sigma over the observations, keeps their common scale at the unweighted
+// fit's (an observation of sigma s_ref weighs as one of 1 px did without sigmas), so that the bias priors
+// and the height prior keep their balance with the tie points. (Absolute weights 1 / sigma made the tie
+// points 2500 times heavier at LSM sigmas of 0.02 px, the priors that hold the unobservable height plane
+// (see Gauge) 2500 times weaker, and the fit drift along it: on Marseille a 57 px shift and 0.08 px/px
+// linear terms at the same RMS; LSM sigmas are also about 4 times below the residuals there.) Without
+// sigmas (or all equal) the fit is the unweighted one.
 // The Huber scale and the flag threshold stay in pixels: an observation's loss turns linear where its
 // pixel residual |bias_v(rpc_v(g_t)) - x_tk| exceeds loss_px, whatever its sigma (the Huber scale on the
-// weighted residual is loss_px / sigma_tk); a track is flagged on the RMS of its pixel residuals.
-// Every residual and RMS that the result reports is in pixels (unweighted).
+// weighted residual is loss_px * s_ref / sigma_tk); a track is flagged on the RMS of its pixel residuals.
+// Every residual and RMS that the result reports is in pixels, unweighted, except sigma0_weighted.
 //
 // Tracks of any length: a track has 2 or more views, each of a distinct image; a view a track is not seen
 // in is simply absent (files: a "nan nan" pair, never read as a coordinate). A matches record is a track
@@ -97,8 +104,9 @@ struct AdjustResult {
   std::vector<double> obs_sigma;  // per observation: the sigma it was weighted with (px, floored or default)
   long obs_with_sigma = 0;        // observations whose sigma was given (and used)
   double default_sigma_px = 1;    // the sigma of those without one
+  double reference_sigma_px = 1;  // s_ref: the median sigma over the observations (weight 1)
   double sigma0 = 0;              // per-coordinate RMS after (pixels)
-  double sigma0_weighted = 0;     // per-coordinate RMS of the weighted residuals after (1 when the sigmas are right)
+  double sigma0_weighted = 0;     // per-coordinate RMS of the weighted residuals after (px at s_ref)
   int iterations = 0;
   std::string solver_report;
 };
