@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
       [&](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<Opts>();
         app.add_option("images", o->images, "the images (their RPCs: tag 50844 or a sidecar beside them)");
-        app.add_option("--tracks", o->tracks, "tracks files (any number of views >= 2 each)");
+        app.add_option("--tracks", o->tracks, "tracks or matches files (tracks of any length >= 2; a match is a 2-view track)");
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--crs", o->crs, "output coordinates: geographic, utm or ecef");
         app.add_option("--threads", o->threads, "threads");
