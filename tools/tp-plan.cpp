@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
         app.add_flag("--adjust", o->adjust, "end with rpc-adjust and tp-ground; refused when an image has no RPC model");
         app.add_flag("--no-adjust", o->no_adjust, "end with the chain (tracks.tracks)");
         app.add_option("--adjust-model", o->adjust_model, "rpc-adjust --model: shift, drift or affine (default affine)");
-        app.add_option("--fixed", o->fixed, "rpc-adjust --fixed: an image whose model is kept (repeatable)");
+        app.add_option("--fixed", o->fixed, "rpc-adjust --fixed: an image whose model is kept (repeatable)")
+            ->allow_extra_args(false);  // one image each: `--fixed A B C` leaves B and C to IMAGES
         app.add_option("--adjust-options", o->adjust_options, "more rpc-adjust options, space separated");
         app.add_option("--ground-options", o->ground_options, "more tp-ground options, space separated");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");

@@ -4,7 +4,7 @@
 set(_imgs "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 >/dev/null && mkdir -p 'my imgs' && cp s/view1.tif \"my imgs/it's 1.tif\" && cp s/view2.tif 'my imgs/$x 2.tif'")
 tpkit_tool_test(tp-plan.files
   COMMAND "${_imgs} && tp-plan -q -o 'w d' --tile 256 \"my imgs/it's 1.tif\" 'my imgs/$x 2.tif' && cat 'w d/jobs/tiles.jobs' 'w d/plan.mk' 'w d/jobs/chain.jobs' && bash -n 'w d/submit-slurm.sh' && bash -n 'w d/run-parallel.sh' && bash -n 'w d/slurm-array.sbatch'"
-  STDOUT_MATCH "^tp-match -q --threads 1 --tile 768 --geometry '[^']*/w d/geometry/pair-1-2.geometry' --region 0 0 256 256 --cache '[^']*/w d/cache' -o '[^']*/w d/tiles/pair-1-2/tile-1.matches' '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/my imgs/[$]x 2.tif'\n.*--region 256 256 44 44 .*tile-4.matches.*\ntpkit-all: tracks.tracks\n.*detect/image-2/block-1.detection: geometry/pair-1-2.geometry\n\t[^\n]*--detect 2 --region 0 0 256 256 [^\n]*\n.*tiles/pair-1-2/tile-1.matches: geometry/pair-1-2.geometry [$][(]detect-image-1[)] [$][(]detect-image-2[)]\n\t.*'[^']*/my imgs/[$][$]x 2.tif'\n.*tracks.tracks: pairs/pair-1-2.matches\n\ttp-chain -q --images ")
+  STDOUT_MATCH "^tp-match -q --threads 1 --tile 768 --geometry '[^']*/w d/geometry/pair-1-2.geometry' --region 0 0 256 256 --cache '[^']*/w d/cache' -o '[^']*/w d/tiles/pair-1-2/tile-1.matches' '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/my imgs/[$]x 2.tif'\n.*--region 256 256 44 44 .*tile-4.matches.*\ntpkit-all: ground.points\n.*detect/image-2/block-1.detection: geometry/pair-1-2.geometry\n\t[^\n]*--detect 2 --region 0 0 256 256 [^\n]*\n.*tiles/pair-1-2/tile-1.matches: geometry/pair-1-2.geometry [$][(]detect-image-1[)] [$][(]detect-image-2[)]\n\t.*'[^']*/my imgs/[$][$]x 2.tif'\n.*tracks.tracks: pairs/pair-1-2.matches\n\ttp-chain -q --images [^\n]*\nadjusted/rpc.bias: tracks.tracks\n\trpc-adjust '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/my imgs/[$][$]x 2.tif' --tracks ")
 tpkit_tool_test(tp-plan.make-dry-run
   COMMAND "${_imgs} && tp-plan -q -o w --tile 256 --overlap 16 --threads 2 s/view1.tif s/view2.tif s/view3.tif && make -n -C w -f plan.mk > n && grep -c '^tp-match .*--region' n && grep -c '^tp-match .*--detect' n"
   STDOUT_MATCH "^15\n3\n$")
@@ -52,3 +52,41 @@ tpkit_tool_test(tp-plan.runner-name-is-a-folder
 tpkit_tool_test(tp-plan.size-grows-with-pairs
   COMMAND "${_imgs} && mkdir many && for i in $(seq 40) @SEMI@ do cp s/view1.tif many/v$i.tif @SEMI@ cp s/view1_rpc.txt many/v$i\\_rpc.txt @SEMI@ done && tp-plan -q -o w many/v*.tif && pairs=$(wc -l < w/jobs/geometry.jobs) && bytes=$(wc -c < w/plan.mk) && echo \"$pairs pairs, $((bytes / pairs)) bytes per pair\" && test $bytes -lt $((pairs * 1500))"
   STDOUT_MATCH "^780 pairs, [0-9]+ bytes per pair\n$")
+# issue 24: the plan ends in the adjustment. After the chain, rpc-adjust (the chain's images, its tracks,
+# the options given) into WORK/adjusted, then tp-ground through the adjusted models into
+# WORK/ground.points; make runs them in that order, last. An image without a model ends the plan at the
+# chain (warned), or refuses it when the adjustment is asked for; the options tp-plan sets are refused in
+# --adjust-options / --ground-options; --no-adjust ends at the chain.
+tpkit_tool_test(tp-plan.adjust-stages
+  COMMAND "${_imgs} && tp-plan -q -o w --fixed s/view1.tif --adjust-model shift --adjust-options '--loss 0.5 --dem s/truth.dem.tif' --ground-options '--crs utm' s/view1.tif \"my imgs/it's 1.tif\" s/view3.tif && cat w/jobs/adjust.jobs w/jobs/ground.jobs && grep '^tpkit-all' w/plan.mk && grep -A1 -e '^adjusted/rpc.bias:' -e '^ground.points:' w/plan.mk | grep -v '^\t' && make -n -C w -f plan.mk | grep -o -e '^tp-[a-z]*' -e '^rpc-adjust' | uniq | tail -3 && tail -3 w/submit-slurm.sh && grep '^for s' w/run-parallel.sh"
+  STDOUT_MATCH "^rpc-adjust '[^']*/s/view1.tif' '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/s/view3.tif' --tracks '[^']*/w/tracks.tracks' --model shift --fixed '[^']*/s/view1.tif' --threads 1 '--loss' '0.5' '--dem' '/[^']*/s/truth.dem.tif' -o '[^']*/w/adjusted'\ntp-ground '[^']*/s/view1.tif' '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/s/view3.tif' --tracks '[^']*/w/tracks.tracks' --rpc '[^']*/s/view1.tif=[^']*/w/adjusted/view1_rpc.txt' --rpc '[^']*/my imgs/it'\\\\''s 1.tif=[^']*/w/adjusted/it'\\\\''s 1_rpc.txt' --rpc '[^']*/s/view3.tif=[^']*/w/adjusted/view3_rpc.txt' --threads 1 '--crs' 'utm' -o '[^']*/w/ground.points'\ntpkit-all: ground.points\nadjusted/rpc.bias: tracks.tracks\nground.points: adjusted/rpc.bias tracks.tracks\ntp-chain\nrpc-adjust\ntp-ground\nsubmit chain 1\nsubmit adjust 1\nsubmit ground 1 \"[$][{]wait\\[@\\][}]\"\nfor s in geometry detect tiles merge chain adjust ground@SEMI@ do\n$")
+tpkit_tool_test(tp-plan.image-without-model
+  COMMAND "${_imgs} && oiiotool s/view1.tif -o plain.tif && tp-plan -o w s/view2.tif plain.tif 2> err && ls w/jobs && grep '^tpkit-all' w/plan.mk && cat err"
+  STDOUT_MATCH "^chain.jobs\ndetect.jobs\ngeometry.jobs\nmerge.jobs\ntiles.jobs\ntpkit-all: tracks.tracks\ntp-plan: warning: [^\n]*/plain.tif: no RPC model [^\n]*: the adjustment needs one for every image@SEMI@ the plan ends with the chain [(]tracks.tracks[)], without the adjust and ground stages\ntp-plan: 2 images, 1 pairs, [^\n]*, ending with the chain in tracks.tracks@SEMI@ ")
+tpkit_tool_test(tp-plan.image-without-model-adjust
+  COMMAND "${_imgs} && oiiotool s/view1.tif -o plain.tif && tp-plan -o w --adjust s/view2.tif plain.tif"
+  EXPECT_FAIL STDERR_MATCH "\ntp-plan: [^\n]*/plain.tif: no RPC model [^\n]*: the adjustment needs one for every image\n$" NO_FILE w)
+tpkit_tool_test(tp-plan.image-without-model-fixed
+  COMMAND "${_imgs} && oiiotool s/view1.tif -o plain.tif && tp-plan -o w --fixed s/view2.tif s/view2.tif plain.tif"
+  EXPECT_FAIL STDERR_MATCH "plain.tif: no RPC model" NO_FILE w)
+tpkit_tool_test(tp-plan.same-name-twice
+  COMMAND "${_imgs} && mkdir b && cp s/view1.tif b/view1.tif && tp-plan -o w --adjust s/view1.tif b/view1.tif"
+  EXPECT_FAIL STDERR_MATCH "b/view1.tif: another image of the plan is also named view1.[*]: rpc-adjust names the adjusted models by it" NO_FILE w)
+tpkit_tool_test(tp-plan.no-adjust
+  COMMAND "${_imgs} && tp-plan -q -o w --no-adjust s/view1.tif s/view2.tif && ls w/jobs && grep '^tpkit-all' w/plan.mk"
+  STDOUT_MATCH "^chain.jobs\ndetect.jobs\ngeometry.jobs\nmerge.jobs\ntiles.jobs\ntpkit-all: tracks.tracks\n$")
+tpkit_tool_test(tp-plan.no-adjust-with-fixed
+  COMMAND "${_imgs} && tp-plan -o w --no-adjust --fixed s/view1.tif s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "--no-adjust excludes" NO_FILE w)
+tpkit_tool_test(tp-plan.fixed-not-an-image
+  COMMAND "${_imgs} && tp-plan -o w --fixed s/view3.tif s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "\ntp-plan: --fixed [^\n]*/s/view3.tif: not one of the plan's images\n$" NO_FILE w)
+tpkit_tool_test(tp-plan.adjust-options-model
+  COMMAND "${_imgs} && tp-plan -o w --adjust-options '--loss 2 --model shift' s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "\ntp-plan: --adjust-options: --model is refused there: it is tp-plan's --adjust-model\n$" NO_FILE w)
+tpkit_tool_test(tp-plan.ground-options-rpc
+  COMMAND "${_imgs} && tp-plan -o w --ground-options '--rpc a=b' s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "\ntp-plan: --ground-options: --rpc is refused there" NO_FILE w)
+tpkit_tool_test(tp-plan.adjust-model-unknown
+  COMMAND "${_imgs} && tp-plan -o w --adjust-model projective s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "\ntp-plan: --adjust-model projective: expected shift, drift or affine\n$" NO_FILE w)
