@@ -6,7 +6,8 @@
 #   tp-synth --out s10k --size 10000 --seed 1 --supersample 1
 # Prints: the whole run's wall / CPU time and peak memory, with the plan's detection tile (tp-plan
 # --detect-tile, default 768: keypoint ids depend on it) and with tp-match's default (1024); per job
-# of the plan (geometry, detection, regions) peak memory and CPU time; total CPU of all jobs against
+# of the plan (geometry, detection, regions, and the merge, chain, rpc-adjust and tp-ground jobs) peak
+# memory and CPU time; total CPU of all jobs against
 # the whole run's; the array's wall time; the share of the whole run's matches found with the same ids
 # and positions (1e-6 px); and for regions of 2000 and 4000 pixels in each scene given, the memory and
 # time of a detection job on such a block, of a region job that detects its own tiles, and of the same
@@ -34,7 +35,7 @@ command -v /usr/bin/time >/dev/null || { echo "needs /usr/bin/time (Debian packa
 
 # wrappers that time every tool run of the plan: one line "tool wall user sys maxrss_kB" per run
 mkdir -p "$T/timed" "$T/times"
-for t in tp-match tp-merge tp-chain; do
+for t in tp-match tp-merge tp-chain rpc-adjust tp-ground; do
   cat > "$T/timed/$t" <<WRAP
 #!/bin/bash
 exec /usr/bin/time -f "$t %e %U %S %M %C" -o "$T/times/\$(date +%s%N).\$\$" "$BIN/$t" "\$@"
@@ -74,7 +75,7 @@ start_slurm
 t0=$(date +%s.%N)
 bash "$T/work/submit-slurm.sh" --wait >/dev/null
 t1=$(date +%s.%N)
-echo "slurm array wall (geometry, detection, 16 regions, merge, chain; 2 jobs at a time): $(awk -v a="$t0" -v b="$t1" "BEGIN { printf \"%.1f\", b - a }") s"
+echo "slurm array wall (geometry, detection, 16 regions, merge, chain, adjust, ground; 2 jobs at a time): $(awk -v a="$t0" -v b="$t1" "BEGIN { printf \"%.1f\", b - a }") s"
 cat "$T"/times/* > "$T/all.times"
 awk -v wu="$wu" -v ws="$wsys" '
   { cpu = $3 + $4; total += cpu

@@ -30,7 +30,7 @@ tpkit_tool_test(tp-plan.line-break
 foreach(engine slurm parallel make)
   tpkit_tool_test(tp-plan.engine-${engine}
     COMMAND "bash \"$SRC/tests/tools/scale_out_engine.sh\" ${engine} \"$(dirname \"$(command -v tp-plan)\")\""
-    STDOUT_MATCH "PASS: ${engine}" TIMEOUT 180 LABELS engine ${engine} slow)
+    STDOUT_MATCH "PASS: ${engine}" TIMEOUT 300 LABELS engine ${engine} slow)
 endforeach()
 # issue 23: a work folder is never reused for another plan (images in another order made make say
 # "Nothing to be done" while the old outputs stood for other pairs), nor one holding outputs without a
@@ -90,3 +90,6 @@ tpkit_tool_test(tp-plan.ground-options-rpc
 tpkit_tool_test(tp-plan.adjust-model-unknown
   COMMAND "${_imgs} && tp-plan -o w --adjust-model projective s/view1.tif s/view2.tif"
   EXPECT_FAIL STDERR_MATCH "\ntp-plan: --adjust-model projective: expected shift, drift or affine\n$" NO_FILE w)
+tpkit_tool_test(tp-plan.adjusted-without-plan
+  COMMAND "${_imgs} && mkdir -p w/adjusted && touch w/adjusted/rpc.bias && tp-plan -q -o w s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "w: holds outputs of a plan \\(adjusted\\) but no plan.mk" NO_FILE w/plan.mk)

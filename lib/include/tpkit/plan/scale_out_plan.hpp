@@ -63,7 +63,7 @@ struct PlanOptions {
   long tile = 2048;                       // region size, image-1 pixels
   long overlap = 0;                       // regions grown by this on every side (duplicates merged)
   long detect_tile = 768;                 // tp-match --tile of every job (0: tp-match's default)
-  int threads = 1;                        // tp-match --threads of a job (and Slurm --cpus-per-task)
+  int threads = 1;                        // --threads of a tp-match, rpc-adjust, tp-ground job (and Slurm --cpus-per-task)
   std::string work;                       // shared work folder, absolute
   std::string bin;                        // folder of the tpkit tools; empty = found on PATH
   std::vector<std::string> match_args;    // more tp-match arguments, for every tp-match job
