@@ -248,8 +248,11 @@ int run(const Opts& o) {
   long used = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
   std::cerr << "rpc-adjust: " << used << " tracks, " << r.obs_image.size() << " observations, model " << o.model
             << ": rms " << format_figure(residual_rms(r, false)) << " px before, " << format_figure(residual_rms(r, true)) << " px after";
+  if (flagged > 0) std::cerr << " (" << format_figure(inlier_rms(r)) << " px without the " << flagged << " flagged tracks)";
   if (check_n > 0) std::cerr << ", held-out " << format_figure(check_rms) << " px (" << check_n << " observations)";
   std::cerr << "; " << r.iterations << " iterations\n";
+  if (!r.converged)
+    warn("the solver stopped before it converged (" + r.solver_report + "); a larger --iterations may change the models");
   std::cerr << "rpc-adjust: tracks by length " << format_lengths(tracks_by_length(tracks, r)) << "; ";
   if (r.obs_with_sigma == 0)
     std::cerr << "unit weights (" << (o.unweighted ? "--unweighted" : "no sigma given") << ")\n";

@@ -291,6 +291,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   ceres::Solve(so, &problem, &summary);
   if (progress) progress->done();
   r.iterations = static_cast<int>(summary.iterations.size());
+  r.converged = summary.termination_type == ceres::CONVERGENCE;
   r.solver_report = summary.BriefReport();
   if (!summary.IsSolutionUsable()) throw NumericalError("the adjustment failed: " + summary.BriefReport());
   if (!std::isfinite(summary.initial_cost) || !std::isfinite(summary.final_cost))
@@ -360,6 +361,17 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   return r;
 }
 
+double inlier_rms(const AdjustResult& r) {
+  double s = 0;
+  long n = 0;
+  for (size_t k = 0; k < r.obs_track.size(); ++k) {
+    if (r.flagged[static_cast<size_t>(r.obs_track[k])]) continue;
+    s += r.res_after[k].squaredNorm();
+    ++n;
+  }
+  return n ? std::sqrt(s / static_cast<double>(n)) : std::numeric_limits<double>::quiet_NaN();
+}
+
 double residual_rms(const AdjustResult& r, bool after, int image) {
   double s = 0;
   long n = 0;
@@ -416,10 +428,27 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
   free_options.height = HeightPrior{};
   free_options.progress = false;
   const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
-  c.rms_with = residual_rms(with_prior, true);
-  c.rms_without = residual_rms(free_fit, true);
+  // the RMS of both fits over the same observations: those of the tracks that neither fit flags, so
+  // that a few blunders (whose residuals grow when a prior holds their heights) do not pass for a
+  // contradiction; the blunders are compared by their count
   c.flagged_with = std::count(with_prior.flagged.begin(), with_prior.flagged.end(), 1);
   c.flagged_without = std::count(free_fit.flagged.begin(), free_fit.flagged.end(), 1);
+  auto common_rms = [&](const AdjustResult& r) {
+    double s = 0;
+    long n = 0;
+    for (size_t k = 0; k < r.obs_track.size(); ++k) {
+      const size_t t = static_cast<size_t>(r.obs_track[k]);
+      if (with_prior.flagged[t] || free_fit.flagged[t]) continue;
+      s += r.res_after[k].squaredNorm();
+      ++n;
+    }
+    c.common_tracks = 0;
+    for (size_t t = 0; t < r.flagged.size(); ++t) c.common_tracks += !with_prior.flagged[t] && !free_fit.flagged[t];
+    return n ? std::sqrt(s / static_cast<double>(n)) : std::numeric_limits<double>::quiet_NaN();
+  };
+  c.rms_with = common_rms(with_prior);
+  c.rms_without = common_rms(free_fit);
+  const long more_flagged = static_cast<long>(c.flagged_with) - static_cast<long>(c.flagged_without);
   std::vector<double> dh, adh;
   for (size_t t = 0; t < free_fit.ground.size(); ++t) {
     if (!free_fit.initial_ok[t]) continue;
@@ -437,8 +466,10 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
   };
   c.median_dh = median(dh);
   c.median_abs_dh = median(adh);
-  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.02 || (c.covered > 0 && c.median_abs_dh > 3 * c.sigma);
-  c.figures = "rms after " + format_figure(c.rms_with) + " px with it, " + format_figure(c.rms_without) + " px without; flagged tracks " +
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.02 || (c.covered > 0 && c.median_abs_dh > 3 * c.sigma) ||
+                  more_flagged > std::max<long>(10, static_cast<long>(free_fit.flagged.size() / 100));
+  c.figures = "rms after " + format_figure(c.rms_with) + " px with it, " + format_figure(c.rms_without) + " px without (over the " +
+              std::to_string(c.common_tracks) + " tracks neither flags); flagged tracks " +
               std::to_string(c.flagged_with) + " with, " + std::to_string(c.flagged_without) + " without; prior minus free height: median " +
               format_figure(c.median_dh) + " m, median |.| " + format_figure(c.median_abs_dh) + " m = " +
               format_figure(c.median_abs_dh / c.sigma) + " sigma (sigma " + format_figure(c.sigma) + " m, " + std::to_string(c.covered) + " tracks)";

@@ -108,6 +108,7 @@ struct AdjustResult {
   double sigma0 = 0;              // per-coordinate RMS after (pixels)
   double sigma0_weighted = 0;     // per-coordinate RMS of the weighted residuals after (px at s_ref)
   int iterations = 0;
+  bool converged = true;          // false: the solver stopped at max_iterations (or another limit) first
   std::string solver_report;
 };
 
@@ -126,13 +127,16 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
 
 // Does a height prior (options.height: --height-prior or --dem) contradict the tie points? The adjustment
 // is solved again without it and the two compared: the prior contradicts them when, with it, the RMS
-// after the fit exceeds the free fit's by more than 20% and 0.02 px, or when the median of
-// |prior - free height| over the tracks the prior covers exceeds 3 prior sigmas. The free fit is as
+// after the fit (over the tracks neither fit flags: a few blunders held to the prior's heights are no
+// contradiction) exceeds the free fit's by more than 20% and 0.02 px, when it flags more than
+// max(10, 1% of the tracks) tracks more, or when the median of |prior - free height| over the tracks the
+// prior covers exceeds 3 prior sigmas. The free fit is as
 // well posed as the problem is without a prior (--fixed images; else the bias priors hold the datum).
 struct HeightPriorCheck {
   bool contradicts = false;
-  double rms_with = 0, rms_without = 0;  // px, after the fit
-  long flagged_with = 0, flagged_without = 0;
+  double rms_with = 0, rms_without = 0;  // px, after the fit, over the tracks neither fit flags
+  long common_tracks = 0;                // those tracks
+  long flagged_with = 0, flagged_without = 0;  // contradiction too when the prior flags more than max(10, 1%) more
   long covered = 0;                      // tracks whose free ground point the prior gives a height for
   double median_dh = 0, median_abs_dh = 0;  // prior minus free height, m
   double sigma = 0;                      // the prior's sigma, m
@@ -143,6 +147,8 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
 
 // RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0), pixels.
 double residual_rms(const AdjustResult& r, bool after, int image = -1);
+// The same after the fit, over the observations of the tracks not flagged (AdjustResult::flagged).
+double inlier_rms(const AdjustResult& r);
 
 // Per image, over the tracks that were intersected (AdjustResult::initial_ok): its observations, the
 // tracks that view it by their number of views (length -> count), the RMS of its residuals before and
