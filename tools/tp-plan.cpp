@@ -8,6 +8,7 @@
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/plan/scale_out_plan.hpp"
+#include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
@@ -32,6 +33,8 @@ int main(int argc, char** argv) {
         app.add_option("--list", o->list, "file of image paths, one a line");
         app.add_option("-o,--work", o->p.work, "work folder shared by every machine: plan, cache, outputs")->required();
         app.add_option("--tile", o->p.tile, "region size, image-1 pixels")->check(CLI::Range(256L, 1L << 30));
+        app.add_option("--min-overlap", o->p.min_overlap, "pair two images when their footprints overlap by this fraction of the smaller, 0 to 1")
+            ->check(CLI::Range(0.0, 1.0));
         app.add_option("--overlap", o->p.overlap, "regions grown by this on every side, pixels")->check(tpkit::NonNegative);
         app.add_option("--detect-tile", o->p.detect_tile, "tp-match --tile (detection tile, pixels) of every job; 0 = tp-match's default")
             ->check(tpkit::NonNegative);
@@ -73,7 +76,9 @@ int main(int argc, char** argv) {
           const tpkit::Plan plan = tpkit::make_plan(images, o->p);
           tpkit::write_plan(plan, o->p);
           if (!o->quiet)
-            tpkit::summary(std::to_string(images.size()) + " images, " + std::to_string(plan.pairs.size()) + " pairs, " +
+            tpkit::summary(std::to_string(images.size()) + " images, " + std::to_string(plan.pairs.size()) + " pairs" +
+                           (plan.pairs_below_overlap ? " (" + std::to_string(plan.pairs_below_overlap) + " more whose footprints overlap by less than --min-overlap " +
+                                                           tpkit::format_figure(o->p.min_overlap) + " left out)" : std::string()) + ", " +
                            std::to_string(plan.detect.size()) + " detection jobs, " + std::to_string(plan.tiles.size()) +
                            " region jobs, " + (plan.adjust.empty() ? "ending with the chain" : "ending with the adjustment (" + o->p.adjust_model + ")") +
                            " in " + tpkit::plan_result(plan) + "; make -C " + tpkit::shell_quote(o->p.work) + " -f plan.mk -j N, or bash " +

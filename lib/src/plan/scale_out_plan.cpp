@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -26,6 +27,14 @@ std::optional<Footprint> footprint_of(const std::string& path, const RpcSource& 
   // the outline of every ground point the image can see
   Footprint f;
   try {
+    for (int k = 0; k < 16; ++k) {
+      const int side = k / 4, t = k % 4;
+      const double u = t / 4.0, X = width - 0.5, Y = height - 0.5;
+      const double x = side == 0 ? -0.5 + u * width : side == 1 ? X : side == 2 ? X - u * width : -0.5;
+      const double y = side == 0 ? -0.5 : side == 1 ? -0.5 + u * height : side == 2 ? Y : Y - u * height;
+      const Eigen::Vector2d ll = rpc.model.localize(x, y, 0.5 * (rpc.model.height_min() + rpc.model.height_max()));
+      f.middle.push_back({ll.x(), ll.y()});
+    }
     for (double h : {rpc.model.height_min(), rpc.model.height_max()})
       for (int k = 0; k < 16; ++k) {
         const int side = k / 4, t = k % 4;  // top, right, bottom, left; t = 0..3 along it
@@ -59,6 +68,54 @@ bool footprints_may_overlap(const PlanImage& a, const PlanImage& b) {
   };
   const auto p = box(*a.footprint), q = box(*b.footprint);
   return p[0] <= q[2] && q[0] <= p[2] && p[1] <= q[3] && q[1] <= p[3];
+}
+
+namespace {
+using Polygon = std::vector<Eigen::Vector2d>;
+double signed_area(const Polygon& p) {
+  double a = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector2d &u = p[i], &v = p[(i + 1) % p.size()];
+    a += u.x() * v.y() - v.x() * u.y();
+  }
+  return 0.5 * a;
+}
+// Sutherland-Hodgman: the part of `subject` inside the convex polygon `clip` (both counter-clockwise).
+// A footprint at one height is the image border through the model: convex up to the model's
+// distortion, which is far below what a ratio of areas needs.
+Polygon clip_polygon(Polygon subject, const Polygon& clip) {
+  for (size_t e = 0; e < clip.size() && !subject.empty(); ++e) {
+    const Eigen::Vector2d a = clip[e], b = clip[(e + 1) % clip.size()], d = b - a;
+    auto side = [&](const Eigen::Vector2d& p) { return d.x() * (p.y() - a.y()) - d.y() * (p.x() - a.x()); };
+    Polygon out;
+    for (size_t i = 0; i < subject.size(); ++i) {
+      const Eigen::Vector2d p = subject[i], q = subject[(i + 1) % subject.size()];
+      const double sp = side(p), sq = side(q);
+      if (sp >= 0) out.push_back(p);
+      if ((sp >= 0) != (sq >= 0)) out.push_back(p + (q - p) * (sp / (sp - sq)));
+    }
+    subject.swap(out);
+  }
+  return subject;
+}
+}  // namespace
+
+double footprint_overlap(const PlanImage& a, const PlanImage& b) {
+  if (!a.footprint || !b.footprint || a.footprint->middle.size() < 3 || b.footprint->middle.size() < 3) return 1;
+  // a local frame: longitudes scaled by the cosine of the mean latitude (a ratio of areas needs no more)
+  const double lat0 = 0.5 * (a.footprint->middle[0][1] + b.footprint->middle[0][1]) * M_PI / 180;
+  auto local = [&](const Footprint& f) {
+    Polygon p;
+    for (const auto& ll : f.middle) p.emplace_back(ll[0] * std::cos(lat0), ll[1]);
+    if (signed_area(p) < 0) std::reverse(p.begin(), p.end());
+    return p;
+  };
+  const Polygon pa = local(*a.footprint), pb = local(*b.footprint);
+  const double aa = signed_area(pa), ab = signed_area(pb);
+  if (!(aa > 0) || !(ab > 0)) return 1;
+  const Polygon both = clip_polygon(pa, pb);
+  const double inter = both.size() < 3 ? 0 : std::max(0.0, signed_area(both));
+  return std::min(1.0, inter / std::min(aa, ab));
 }
 
 std::vector<PlanImage> plan_images(const std::vector<std::string>& paths) {
@@ -201,12 +258,18 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
 
 Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
   if (o.tile < 256) throw UsageError("--tile must be at least 256 pixels");
+  if (!(o.min_overlap >= 0 && o.min_overlap <= 1)) throw UsageError("--min-overlap must be between 0 and 1");
   if (o.overlap < 0) throw UsageError("--overlap must be >= 0");
   if (o.detect_tile != 0 && o.detect_tile < 256) throw UsageError("--detect-tile must be 0 or at least 256 pixels");
   Plan p;
   for (size_t i = 0; i < images.size(); ++i)
     for (size_t j = i + 1; j < images.size(); ++j)
-      if (footprints_may_overlap(images[i], images[j])) p.pairs.push_back({i, j});
+      if (footprints_may_overlap(images[i], images[j])) {
+        if (footprint_overlap(images[i], images[j]) >= o.min_overlap)
+          p.pairs.push_back({i, j});
+        else
+          ++p.pairs_below_overlap;
+      }
   if (p.pairs.empty()) throw UsageError("no two images of the list overlap");
   std::vector<char> paired(images.size(), 0);
   for (const auto& pr : p.pairs) paired[pr[0]] = paired[pr[1]] = 1;

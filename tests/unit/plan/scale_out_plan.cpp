@@ -235,3 +235,36 @@ TEST(ScaleOutPlan, AdjustAndGroundOptions) {
     EXPECT_NE(std::string(e.what()).find("--adjust-options: --fixed is refused there: it is tp-plan's --fixed"), std::string::npos) << e.what();
   }
 }
+
+// Issue 24: a block's strips two orbits apart meet along slivers; the plan pairs only footprints that
+// overlap by --min-overlap of the smaller one (outlines at the middle height, in either orientation).
+TEST(ScaleOutPlan, PairsNeedTheirFootprintsToOverlap) {
+  auto square = [](double x0, double y0, double side, bool clockwise) {
+    Footprint f;
+    f.lonlat = {{{x0, y0}}, {{x0 + side, y0 + side}}};
+    std::vector<std::array<double, 2>> m = {{{x0, y0}}, {{x0 + side, y0}}, {{x0 + side, y0 + side}}, {{x0, y0 + side}}};
+    if (clockwise) std::reverse(m.begin(), m.end());
+    f.middle = m;
+    return f;
+  };
+  // near the equator: longitude and latitude degrees of equal length
+  PlanImage a{"/a", 10, 10, square(0, 0, 0.01, false)}, b{"/b", 10, 10, square(0.007, 0.005, 0.01, true)},
+      c{"/c", 10, 10, square(0.0095, 0.0, 0.01, false)}, small{"/s", 10, 10, square(0.002, 0.002, 0.004, true)},
+      unknown{"/u", 10, 10, std::nullopt};
+  EXPECT_NEAR(footprint_overlap(a, b), 0.3 * 0.5, 1e-3);
+  EXPECT_NEAR(footprint_overlap(b, a), 0.3 * 0.5, 1e-3);
+  EXPECT_NEAR(footprint_overlap(a, c), 0.05, 1e-3);
+  EXPECT_NEAR(footprint_overlap(a, small), 1.0, 1e-9);  // of the smaller one
+  EXPECT_EQ(footprint_overlap(a, unknown), 1.0);
+  PlanOptions o;
+  o.work = "/w";
+  const Plan p = make_plan({a, b, c}, o);
+  ASSERT_EQ(p.pairs.size(), 2u);  // a-b 0.15, b-c 0.375; a-c 0.05, below 0.1
+  EXPECT_EQ(p.pairs[0], (std::array<size_t, 2>{0, 1}));
+  EXPECT_EQ(p.pairs[1], (std::array<size_t, 2>{1, 2}));
+  EXPECT_EQ(p.pairs_below_overlap, 1);
+  o.min_overlap = 0;
+  EXPECT_EQ(make_plan({a, b, c}, o).pairs.size(), 3u);
+  o.min_overlap = 1.5;
+  EXPECT_THROW(make_plan({a, b, c}, o), UsageError);
+}

@@ -28,9 +28,12 @@
 // Every tp-match job gets --tile detect_tile: the memory of a job is bounded by one detection tile's
 // SIFT pyramid (about 480 MB at tp-match's default of 1024 pixels, 340 MB at 768, 250 MB at 512).
 //
-// Pairs: two images are paired when their footprints overlap. A footprint is the image's ground
-// outline (longitude, latitude in degrees) from its RPC model (image_footprint); an image without a
-// model is paired with every image of the list, and an image paired with none is left out (warned).
+// Pairs: two images are paired when their footprints overlap by min_overlap of the smaller one at least
+// (the area of the intersection of their outlines at the models' middle height). A footprint is the
+// image's ground outline (longitude, latitude in degrees) from its RPC model (image_footprint); an image
+// without a model is paired with every image of the list, and an image paired with none is left out
+// (warned). In a block of several dates, footprints two strips apart may meet along a sliver that
+// tp-match cannot match (its coarse stage needs a real overlap): such pairs are left out and counted.
 #pragma once
 #include <array>
 #include <optional>
@@ -40,7 +43,8 @@
 namespace tpkit {
 
 struct Footprint {
-  std::vector<std::array<double, 2>> lonlat;  // outline, degrees
+  std::vector<std::array<double, 2>> lonlat;  // outline at both ends of the model's heights, degrees
+  std::vector<std::array<double, 2>> middle;  // the border at the model's middle height (its height offset), in order
 };
 
 struct PlanImage {
@@ -58,11 +62,15 @@ std::optional<Footprint> image_footprint(const std::string& path, long width, lo
 // True when the footprints' longitude/latitude boxes meet, or when either is unknown. (Boxes do not
 // wrap: footprints across the antimeridian are not handled.)
 bool footprints_may_overlap(const PlanImage& a, const PlanImage& b);
+// The area of the intersection of the footprints' middle outlines over the area of the smaller one
+// (0..1; areas in a local equirectangular frame, metres enough for a ratio); 1 when either is unknown.
+double footprint_overlap(const PlanImage& a, const PlanImage& b);
 
 struct PlanOptions {
   long tile = 2048;                       // region size, image-1 pixels
   long overlap = 0;                       // regions grown by this on every side (duplicates merged)
   long detect_tile = 768;                 // tp-match --tile of every job (0: tp-match's default)
+  double min_overlap = 0.1;               // pairs overlapping less (footprint_overlap) are left out
   int threads = 1;                        // --threads of a tp-match, rpc-adjust, tp-ground job (and Slurm --cpus-per-task)
   std::string work;                       // shared work folder, absolute
   std::string bin;                        // folder of the tpkit tools; empty = found on PATH
@@ -85,6 +93,7 @@ struct PlanJob {
 
 struct Plan {
   std::vector<std::array<size_t, 2>> pairs;  // 0-based image indices
+  long pairs_below_overlap = 0;              // pairs whose footprints meet, by less than min_overlap
   std::vector<PlanJob> geometry, detect, tiles, merge, chain, adjust, ground;  // adjust, ground: empty without the adjustment
   std::vector<std::vector<std::string>> image_detections;  // per image: the targets of its detection jobs
 };
