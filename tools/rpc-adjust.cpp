@@ -290,7 +290,8 @@ int main(int argc, char** argv) {
         app.add_option("--tracks", o->tracks, "tracks or matches files (tracks of any length >= 2; a match is a 2-view track)");
         app.add_option("--check", o->check, "held-out tracks files: evaluated, not used in the fit");
         app.add_option("--model", o->model, "bias model: shift, drift or affine");
-        app.add_option("--fixed", o->fixed, "an image whose model is kept (repeatable)");
+        app.add_option("--fixed", o->fixed, "an image whose model is kept (repeatable)")
+            ->allow_extra_args(false);  // one image each: `--fixed A B C` leaves B and C to the images
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--height-prior", o->height_prior, "H+-S: height prior of every ground point (m)");
         app.add_option("--dem", o->dem, "GeoTIFF DEM (EPSG:4326, m above the ellipsoid): height prior");
