@@ -79,8 +79,8 @@ tpkit_tool_test(rpc-adjust.track-of-one-view
 tpkit_tool_test(rpc-adjust.nan-in-x-only
   COMMAND "${synth_biased} && ${blank} | awk '!/^#/ && ++n == 1 { $2 = \"nan\" } { print }' > syn/half.tracks && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/half.tracks -o adj"
   EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/half.tracks:[0-9]+: .*x1 nan" NO_FILE adj)
-# --fixed takes one image per occurrence: 'rpc-adjust --fixed A B C' fixed B and C too (CLI11 gave the
+# --fixed takes one image per occurrence: 'rpc-adjust A --fixed A B C' fixed B and C too (CLI11 gave the
 # option every value after it), leaving no image to adjust
 tpkit_tool_test(rpc-adjust.fixed-takes-one-image
-  COMMAND "${synth_biased} && rpc-adjust --fixed syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --model shift -o adj"
+  COMMAND "${synth_biased} && rpc-adjust syn/view1.tif --fixed syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --model shift -o adj"
   STDERR_MATCH "image1 syn/view1.tif \\(fixed\\): .*\nrpc-adjust: image2 syn/view2.tif: .*\nrpc-adjust: image3 syn/view3.tif: ")
