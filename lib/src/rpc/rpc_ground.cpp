@@ -194,6 +194,15 @@ std::vector<std::string> GroundConverter::columns() const {
   return {};
 }
 
+int GroundConverter::epsg() const {
+  switch (crs_) {
+    case GroundCrs::geographic: return 4979;
+    case GroundCrs::utm: return (north_ ? 32600 : 32700) + zone_;
+    case GroundCrs::ecef: return 4978;
+  }
+  return 0;
+}
+
 std::string GroundConverter::description() const {
   switch (crs_) {
     case GroundCrs::geographic:

@@ -61,6 +61,12 @@ class GroundConverter {
   std::vector<std::string> columns() const;
   // The "# crs:" value, e.g. "EPSG:4979 (WGS 84 geographic 3D: lon lat degrees, h metres above the ellipsoid)".
   std::string description() const;
+  GroundCrs crs() const { return crs_; }
+  // UTM: the zone (1..60) and hemisphere of every point of the file; 0 and true otherwise.
+  int zone() const { return zone_; }
+  bool north() const { return north_; }
+  // The EPSG code of the output system: 4979, 32600 + zone (north) or 32700 + zone (south), 4978.
+  int epsg() const;
 
  private:
   GroundCrs crs_;
