@@ -11,6 +11,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/core/parallel_for.hpp"
+#include "tpkit/rpc/ground_export.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
@@ -61,30 +62,26 @@ std::string models_line(const std::vector<RpcSource>& s, size_t i) {
   return s[i].path + " (" + rpc_form_name(s[i].form) + ")";
 }
 
-void write_points(const std::string& path, const Opts& o, const std::vector<AdjustImage>& images,
+// ground.points, ground.geojson and ground.csv (+ .csvt, .prj): one table, three forms (ground_export.hpp).
+void write_points(const fs::path& dir, const Opts& o, const std::vector<AdjustImage>& images,
                   const std::vector<RpcSource>& sources, const std::vector<AdjustTrack>& tracks, const AdjustResult& r) {
   const RpcModel& m0 = images[0].model;
   GroundConverter conv(parse_ground_crs(o.crs), m0.lon_off, m0.lat_off);
-  std::vector<ImageRef> refs;
-  for (const auto& im : images) refs.push_back({im.path, im.width, im.height});
-  Meta meta;
-  meta_set(meta, "crs", conv.description());
+  GroundTable table;
+  for (const auto& im : images) table.images.push_back({im.path, im.width, im.height});
+  Meta& meta = table.meta;
   for (size_t i = 0; i < images.size(); ++i) meta_set(meta, "model" + std::to_string(i + 1), models_line(sources, i) + " + bias");
   meta_set(meta, "sigma_h", "standard deviation of h (m) for the a posteriori image noise sigma0 = " + format_number(r.sigma0) + " px");
   meta_set(meta, "rms_px", "RMS over the track's views of the residual after the adjustment (pixels)");
   meta_set(meta, "flagged", "1: rms_px above --flag " + format_number(o.flag) + " px");
-  std::vector<std::string> cols = {"track"};
-  for (const auto& c : conv.columns()) cols.push_back(c);
-  cols.insert(cols.end(), {"sigma_h", "views", "rms_px", "flagged"});
-  std::ostringstream os;
-  write_header(os, "ground", 1, refs, meta, cols);
+  table.columns = {{"sigma_h", false}, {"views", true}, {"rms_px", false}, {"flagged", true}};
   for (size_t t = 0; t < tracks.size(); ++t) {
     if (!r.initial_ok[t]) continue;
-    Eigen::Vector3d c = conv(r.ground[t], tracks[t].id);
-    write_record(os, {static_cast<double>(tracks[t].id), c[0], c[1], c[2], r.sigma_h[t],
-                      static_cast<double>(tracks[t].views.size()), r.rms_after[t], static_cast<double>(r.flagged[t])});
+    table.points.push_back({tracks[t].id, r.ground[t],
+                            {r.sigma_h[t], static_cast<double>(tracks[t].views.size()), r.rms_after[t],
+                             static_cast<double>(r.flagged[t])}});
   }
-  write_file_atomic(path, os.str());
+  for (const char* name : {"ground.points", "ground.geojson", "ground.csv"}) write_ground((dir / name).string(), table, conv);
 }
 
 void write_residuals(const std::string& path, const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
@@ -219,6 +216,10 @@ int run(const Opts& o) {
   const fs::path dir(o.out);
   check_outputs({{"-o", (dir / "rpc.bias").string()},
                  {"-o", (dir / "ground.points").string()},
+                 {"-o", (dir / "ground.geojson").string()},
+                 {"-o", (dir / "ground.csv").string()},
+                 {"-o", (dir / "ground.csvt").string()},
+                 {"-o", (dir / "ground.prj").string()},
                  {"-o", (dir / "rpc.residuals").string()},
                  {"-o", (dir / "residuals.svg").string()}},
                 inputs);
@@ -239,7 +240,7 @@ int run(const Opts& o) {
   double check_rms = check.empty() ? NAN : held_out_rms(images, r.bias, check, &check_n);
   auto fits = write_models(o, images, r);
   write_bias((dir / "rpc.bias").string(), o, images, sources, r, fits);
-  write_points((dir / "ground.points").string(), o, images, sources, tracks, r);
+  write_points(dir, o, images, sources, tracks, r);
   write_residuals((dir / "rpc.residuals").string(), images, tracks, r, check_rms, check_n);
   plot_rpc_residuals((dir / "residuals.svg").string(), images, r,
                      "rpc-adjust --model " + o.model + ": residual vectors before (red) and after (blue)");

@@ -8,6 +8,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/core/parallel_for.hpp"
+#include "tpkit/rpc/ground_export.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
@@ -33,7 +34,9 @@ int run(const Opts& o) {
   const GroundCrs crs = parse_ground_crs(o.crs);
   std::vector<std::string> inputs = o.images;
   inputs.insert(inputs.end(), o.tracks.begin(), o.tracks.end());
-  check_outputs({{"-o", o.output}}, inputs);
+  std::vector<std::pair<std::string, std::string>> outputs;
+  for (const auto& f : ground_output_files(o.output)) outputs.push_back({"-o", f});
+  check_outputs(outputs, inputs);
   auto overrides = parse_rpc_overrides(o.rpc);
   check_rpc_overrides(overrides, o.images);
   std::vector<RpcSource> src;
@@ -51,8 +54,9 @@ int run(const Opts& o) {
   const GroundSolution g = ground_points(images, tracks, {o.flag, o.threads});
   const double sigma0 = g.sigma0;
   GroundConverter conv(crs, src[0].model.lon_off, src[0].model.lat_off);
-  Meta meta;
-  meta_set(meta, "crs", conv.description());
+  GroundTable table;
+  table.images = refs;
+  Meta& meta = table.meta;
   for (size_t i = 0; i < src.size(); ++i)
     meta_set(meta, "model" + std::to_string(i + 1), src[i].path + " (" + rpc_form_name(src[i].form) + ")");
   meta_set(meta, "method", "least squares over all views of each track (Gauss-Newton on the RPC projections)");
@@ -61,23 +65,19 @@ int run(const Opts& o) {
                                 " px (per coordinate, from all residuals)");
   meta_set(meta, "flagged", "bits: 1 rms_px above --flag " + format_number(o.flag) +
                                 " px, 2 outside a model's validity box (normalized coordinate beyond 1.1)");
-  std::vector<std::string> cols = {"track"};
-  for (const auto& c : conv.columns()) cols.push_back(c);
-  cols.insert(cols.end(), {"sigma_h", "views", "rms_px", "flagged"});
-  std::ostringstream os;
-  write_header(os, "ground", 1, refs, meta, cols);
+  table.columns = {{"sigma_h", false}, {"views", true}, {"rms_px", false}, {"flagged", true}};
   for (size_t t = 0; t < tracks.size(); ++t) {
     const RpcIntersection& x = g.points[t];
     if (!x.ok) continue;
-    Eigen::Vector3d c = conv(x.llh, tracks[t].id);
-    write_record(os, {static_cast<double>(tracks[t].id), c[0], c[1], c[2], x.sigma_h1 * sigma0,
-                      static_cast<double>(tracks[t].views.size()), x.rms_px, static_cast<double>(g.flags[t])});
+    table.points.push_back({tracks[t].id, x.llh,
+                            {x.sigma_h1 * sigma0, static_cast<double>(tracks[t].views.size()), x.rms_px,
+                             static_cast<double>(g.flags[t])}});
   }
-  os << "# points: " << g.intersected << '\n';
-  os << "# rms_px: " << format_number(g.rms_px) << '\n';
-  os << "# flagged_residual: " << g.residual_flagged << '\n';
-  os << "# flagged_outside_box: " << g.outside_box << '\n';
-  write_file_atomic(o.output, os.str());
+  table.summary = {{"points", std::to_string(g.intersected)},
+                   {"rms_px", format_number(g.rms_px)},
+                   {"flagged_residual", std::to_string(g.residual_flagged)},
+                   {"flagged_outside_box", std::to_string(g.outside_box)}};
+  write_ground(o.output, table, conv);
   std::cerr << "tp-ground: " << g.intersected << " ground points, residual rms " << g.rms_px << " px\n";
   const long failed = static_cast<long>(tracks.size()) - g.intersected;
   if (failed) warn(std::to_string(failed) + " tracks could not be intersected (left out)");
@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
         app.add_option("--threads", o->threads, "threads");
         app.add_option("--flag", o->flag, "flag tracks whose RMS residual exceeds this (px); most above it: refused")
             ->check(Positive);
-        app.add_option("-o,--output", o->output, "ground file, - for stdout");
+        app.add_option("-o,--output", o->output, "ground file, - for stdout; .geojson/.json: GeoJSON, .csv: CSV (+ .csvt, .prj)");
         return [o]() { return run(*o); };
       },
       tpkit_man_page);

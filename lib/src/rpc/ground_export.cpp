@@ -69,9 +69,10 @@ std::vector<std::string> csv_coordinate_names(const GroundConverter& conv) {
   return {};
 }
 
-// The CRS in WKT (OGC 01-009, the form GDAL writes in .prj files), EPSG authority included. EPSG:4979
-// (geographic 3D) has no WKT1 form: its horizontal part EPSG:4326 is written, the height's datum being
-// named in the column name (h_ellipsoid_m). UTM: EPSG:326ZZ/327ZZ; ECEF: EPSG:4978.
+// The CRS in WKT with its EPSG code, as GDAL reads a .prj (checked with ogrinfo 3.6). Geographic: WKT2
+// (ISO 19162:2019) of EPSG:4979, the 3-D CRS with the ellipsoidal height, which WKT1 cannot express (GDAL
+// reports the layer as EPSG:4979, 3D Point). UTM (EPSG:326ZZ/327ZZ) and ECEF (EPSG:4978): WKT1 (OGC
+// 01-009, the form GDAL writes in .prj files); UTM's h is named in its column (h_ellipsoid_m).
 std::string crs_wkt(const GroundConverter& conv) {
   const std::string datum =
       "DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563,AUTHORITY[\"EPSG\",\"7030\"]],AUTHORITY[\"EPSG\",\"6326\"]],"
@@ -81,7 +82,12 @@ std::string crs_wkt(const GroundConverter& conv) {
       ",UNIT[\"degree\",0.0174532925199433,AUTHORITY[\"EPSG\",\"9122\"]],AXIS[\"Latitude\",NORTH],AXIS[\"Longitude\",EAST],"
       "AUTHORITY[\"EPSG\",\"4326\"]]";
   switch (conv.crs()) {
-    case GroundCrs::geographic: return geogcs;
+    case GroundCrs::geographic:
+      return "GEOGCRS[\"WGS 84\",DATUM[\"World Geodetic System 1984\",ELLIPSOID[\"WGS 84\",6378137,298.257223563,"
+             "LENGTHUNIT[\"metre\",1]]],PRIMEM[\"Greenwich\",0,ANGLEUNIT[\"degree\",0.0174532925199433]],CS[ellipsoidal,3],"
+             "AXIS[\"geodetic latitude (Lat)\",north,ORDER[1],ANGLEUNIT[\"degree\",0.0174532925199433]],"
+             "AXIS[\"geodetic longitude (Lon)\",east,ORDER[2],ANGLEUNIT[\"degree\",0.0174532925199433]],"
+             "AXIS[\"ellipsoidal height (h)\",up,ORDER[3],LENGTHUNIT[\"metre\",1]],ID[\"EPSG\",4979]]";
     case GroundCrs::utm: {
       const int zone = conv.zone();
       return "PROJCS[\"WGS 84 / UTM zone " + std::to_string(zone) + (conv.north() ? "N" : "S") + "\"," + geogcs +

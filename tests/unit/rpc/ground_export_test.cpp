@@ -148,7 +148,8 @@ TEST(GroundExport, CsvHasAHeaderTheValuesAndGdalSidecars) {
     }
   }
   EXPECT_EQ(c.csvt, "Integer,CoordX,CoordY,CoordZ,Real,Integer,Real,Integer\n");
-  EXPECT_NE(c.prj.find("AUTHORITY[\"EPSG\",\"4326\"]"), std::string::npos);
+  EXPECT_NE(c.prj.find("ID[\"EPSG\",4979]"), std::string::npos);
+  EXPECT_NE(c.prj.find("CS[ellipsoidal,3]"), std::string::npos);
 
   const GroundConverter utm(GroundCrs::utm, 5.37, 43.3);
   const GroundCsv u = ground_csv_text(t, utm);

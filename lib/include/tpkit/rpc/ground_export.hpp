@@ -10,7 +10,7 @@
 //                     h_ellipsoid_m | X_epsg4978_m Y_epsg4978_m Z_epsg4978_m), then the extra columns; a NaN
 //                     is an empty field. Beside it, as GDAL's CSV driver reads them (GeoCSV): NAME.csvt, the
 //                     column types (Integer, Real; CoordX CoordY CoordZ mark the point's coordinates), and
-//                     NAME.prj, the CRS in WKT (EPSG:4979, 326ZZ/327ZZ or 4978).
+//                     NAME.prj, the CRS in WKT (EPSG:4979 in WKT2, 326ZZ/327ZZ or 4978 in WKT1).
 //   anything else, -  the tpkit ground file (tpkit-formats(5)): header, metadata ("# crs:" first), columns
 //                     track, the three coordinates, the extra columns; summary lines after the records.
 // Numbers are written in the shortest form that reads back to the same double (lon/lat far below 1e-9
