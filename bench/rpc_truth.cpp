@@ -75,17 +75,22 @@ int main(int argc, char** argv) {
     tpkit::ReadOptions ro;
     ro.kind = "ground";
     const auto g = tpkit::read_table_file(ground, ro);
-    const int lo = g.require("lon"), la = g.require("lat"), h = g.require("h");
+    // the points a tool flags (its residual above --flag: blunders) apart: their heights are not the terrain's
+    const int lo = g.require("lon"), la = g.require("lat"), h = g.require("h"), fl = g.find("flagged");
     double s = 0;
-    long n = 0;
+    long n = 0, flagged = 0;
     for (const auto& r : g.rows) {
       double z;
-      if (dem.at(r[lo], r[la], z, nullptr)) {
-        s += (r[h] - z) * (r[h] - z);
-        ++n;
+      if (!dem.at(r[lo], r[la], z, nullptr)) continue;
+      if (fl >= 0 && r[fl] != 0) {
+        ++flagged;
+        continue;
       }
+      s += (r[h] - z) * (r[h] - z);
+      ++n;
     }
-    std::printf("%s: %ld points on the DEM, height rms %.4f m\n", ground.c_str(), n, n ? std::sqrt(s / n) : NAN);
+    std::printf("%s: %ld points on the DEM, height rms %.4f m (%ld flagged points left out)\n", ground.c_str(), n,
+                n ? std::sqrt(s / n) : NAN, flagged);
   }
   return 0;
 }

@@ -113,6 +113,7 @@ void write_residuals(const std::string& path, const std::vector<AdjustImage>& im
   os << "# reference_sigma_px: " << format_number(r.reference_sigma_px) << '\n';
   os << "# rms_before_px: " << format_number(residual_rms(r, false)) << '\n';
   os << "# rms_after_px: " << format_number(residual_rms(r, true)) << '\n';
+  os << "# rms_after_unflagged_px: " << format_number(inlier_rms(r)) << '\n';
   os << "# sigma0_weighted: " << format_number(r.sigma0_weighted) << '\n';
   const std::vector<ImageReport> per = image_reports(images.size(), tracks, r);
   for (size_t i = 0; i < images.size(); ++i) {
@@ -122,6 +123,7 @@ void write_residuals(const std::string& path, const std::vector<AdjustImage>& im
     os << k << "_median_sigma_px: " << format_number(per[i].median_sigma) << '\n';
     os << k << "_rms_before_px: " << format_number(per[i].rms_before) << '\n';
     os << k << "_rms_after_px: " << format_number(per[i].rms_after) << '\n';
+    os << k << "_rms_after_unflagged_px: " << format_number(per[i].rms_after_unflagged) << '\n';
   }
   os << "# flagged_tracks: " << flagged << '\n';
   if (check_n > 0) {
@@ -266,7 +268,8 @@ int run(const Opts& o) {
     std::cerr << "rpc-adjust: image" << i + 1 << " " << images[i].path << (images[i].fixed ? " (fixed)" : "") << ": "
               << per[i].observations << " observations, tracks by length " << format_lengths(per[i].tracks_by_length)
               << ", median sigma " << format_figure(per[i].median_sigma) << " px, rms " << format_figure(per[i].rms_before)
-              << " px before, " << format_figure(per[i].rms_after) << " px after\n";
+              << " px before, " << format_figure(per[i].rms_after) << " px after"
+              << (flagged > 0 ? " (" + format_figure(per[i].rms_after_unflagged) + " px without flagged tracks)" : std::string()) << "\n";
   if (r.obs_with_sigma > 0 && r.obs_with_sigma < static_cast<long>(r.obs_image.size()) && std::isnan(o.default_sigma))
     warn(std::to_string(r.obs_image.size() - r.obs_with_sigma) + " observations have no sigma: weighted as the median of the others, " +
          format_figure(r.default_sigma_px) + " px (--default-sigma sets it, --unweighted ignores every sigma)");

@@ -361,11 +361,11 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   return r;
 }
 
-double inlier_rms(const AdjustResult& r) {
+double inlier_rms(const AdjustResult& r, int image) {
   double s = 0;
   long n = 0;
   for (size_t k = 0; k < r.obs_track.size(); ++k) {
-    if (r.flagged[static_cast<size_t>(r.obs_track[k])]) continue;
+    if (r.flagged[static_cast<size_t>(r.obs_track[k])] || (image >= 0 && r.obs_image[k] != image)) continue;
     s += r.res_after[k].squaredNorm();
     ++n;
   }
@@ -409,6 +409,7 @@ std::vector<ImageReport> image_reports(size_t images, const std::vector<AdjustTr
   for (size_t i = 0; i < images; ++i) {
     out[i].rms_before = residual_rms(r, false, static_cast<int>(i));
     out[i].rms_after = residual_rms(r, true, static_cast<int>(i));
+    out[i].rms_after_unflagged = inlier_rms(r, static_cast<int>(i));
     auto& v = sigmas[i];
     if (v.empty()) {
       out[i].median_sigma = std::numeric_limits<double>::quiet_NaN();

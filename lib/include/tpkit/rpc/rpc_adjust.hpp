@@ -148,7 +148,7 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
 // RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0), pixels.
 double residual_rms(const AdjustResult& r, bool after, int image = -1);
 // The same after the fit, over the observations of the tracks not flagged (AdjustResult::flagged).
-double inlier_rms(const AdjustResult& r);
+double inlier_rms(const AdjustResult& r, int image = -1);
 
 // Per image, over the tracks that were intersected (AdjustResult::initial_ok): its observations, the
 // tracks that view it by their number of views (length -> count), the RMS of its residuals before and
@@ -157,6 +157,7 @@ struct ImageReport {
   long observations = 0;
   std::map<int, long> tracks_by_length;
   double rms_before = 0, rms_after = 0;
+  double rms_after_unflagged = 0;  // over the observations of the tracks not flagged
   double median_sigma = 0;
 };
 std::vector<ImageReport> image_reports(size_t images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r);
