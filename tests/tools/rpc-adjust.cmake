@@ -9,7 +9,7 @@ tpkit_tool_test(rpc-adjust.recovers-affine-biases
   FILE_MATCH "# rms_before_px: [1-9][0-9.]*\n# rms_after_px: (0\\.00[0-9]*|[0-9.]+e-[0-9]+)\n.*# flagged_tracks: 0\n")
 tpkit_tool_test(rpc-adjust.outputs
   COMMAND "${synth_biased} && ${adjust} --model shift --crs utm -o adj && ls adj | tr '\\n' ' '"
-  STDOUT_MATCH "ground.points residuals.svg rpc.bias rpc.residuals view1.RPB view1_rpc.txt view2.RPB view2_rpc.txt view3.RPB view3_rpc.txt"
+  STDOUT_MATCH "ground.csv ground.csvt ground.geojson ground.points ground.prj residuals.svg rpc.bias rpc.residuals view1.RPB view1_rpc.txt view2.RPB view2_rpc.txt view3.RPB view3_rpc.txt"
   CHECK_FILE adj/ground.points
   FILE_MATCH "^# tpkit ground 1\n.*# crs: EPSG:32631 .*# columns: track easting northing h sigma_h views rms_px flagged\n")
 tpkit_tool_test(rpc-adjust.image-without-rpc
@@ -84,3 +84,9 @@ tpkit_tool_test(rpc-adjust.nan-in-x-only
 tpkit_tool_test(rpc-adjust.fixed-takes-one-image
   COMMAND "${synth_biased} && rpc-adjust syn/view1.tif --fixed syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --model shift -o adj"
   STDERR_MATCH "image1 syn/view1.tif \\(fixed\\): .*\nrpc-adjust: image2 syn/view2.tif: .*\nrpc-adjust: image3 syn/view3.tif: ")
+# Ground points in GIS forms beside ground.points (issue 25): same points, same values, the CSV's sidecars.
+tpkit_tool_test(rpc-adjust.ground-gis-forms
+  COMMAND "${synth_biased} && ${adjust} --crs utm -o adj && paste <(grep -v '^#' adj/ground.points) <(tail -n +2 adj/ground.csv | tr ',' ' ') | awk '{ for (k = 1 @SEMI@ k <= 8 @SEMI@ k++) if ($k != $(k + 8)) bad++ } END { print NR, bad + 0 }' && test $(grep -c '\"type\": \"Feature\"' adj/ground.geojson) = $(grep -vc '^#' adj/ground.points) && cat adj/ground.csvt && grep -o 'EPSG\",\"326[0-9][0-9]' adj/ground.prj"
+  STDOUT_MATCH "^[1-9][0-9]* 0\nInteger,CoordX,CoordY,CoordZ,Real,Integer,Real,Integer\nEPSG\",\"32631\n$"
+  CHECK_FILE adj/ground.geojson
+  FILE_MATCH "\"type\": \"FeatureCollection\".*\"projected_crs\": \"EPSG:32631 ")

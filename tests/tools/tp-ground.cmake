@@ -38,3 +38,27 @@ tpkit_tool_test(tp-ground.view-off-the-image
 tpkit_tool_test(tp-ground.rpc-for-no-image
   COMMAND "${synth_plain} && ${ground3} --rpc syn/view02.tif=syn/view2_rpc.txt -o g.points"
   EXPECT_FAIL STDERR_MATCH "tp-ground: --rpc syn/view02.tif=syn/view2_rpc.txt: syn/view02.tif is not one of the images" NO_FILE g.points)
+# GIS-ready forms (issue 25), chosen by the output name's extension: the GeoJSON's coordinates and the CSV's
+# values are the tpkit form's, to 1e-9 degree and 1e-6 m; the CSV comes with GDAL's .csvt and .prj.
+set(synth_gis "tp-synth -o syn --size 256 --relief 20 --points 40")
+tpkit_tool_test(tp-ground.geojson
+  COMMAND "${synth_gis} && ${ground3} -o g.points && ${ground3} -o g.geojson && test $(grep -c '\"type\": \"Feature\"' g.geojson) = 40 && grep -A3 --no-group-separator '\"coordinates\"' g.geojson | grep -v coordinates | tr -d ', ' | paste - - - | paste - <(grep -v '^#' g.points) | awk '{ if (($1 - $5)^2 > 1e-18 || ($2 - $6)^2 > 1e-18 || ($3 - $7)^2 > 1e-12) bad++ @SEMI@ n++ } END { print n, bad + 0 }'"
+  STDOUT_MATCH "^40 0\n"
+  CHECK_FILE g.geojson
+  FILE_MATCH "^{\n \"type\": \"FeatureCollection\",\n \"name\": \"tpkit ground points\",\n \"description\": \"[^\"]*ellipsoid[^\"]*\",.*\"geometry\": {\n    \"type\": \"Point\",.*\"properties\": {\n    \"track\": 1,\n    \"h\": [-0-9.e+]+,\n    \"sigma_h\": [-0-9.e+]+,\n    \"views\": 3,\n    \"rms_px\": [-0-9.e+]+,\n    \"flagged\": 0\n")
+tpkit_tool_test(tp-ground.csv
+  COMMAND "${synth_gis} && ${ground3} -o g.points && ${ground3} -o G.CSV && paste <(grep -v '^#' g.points) <(tail -n +2 G.CSV | tr ',' ' ') | awk '{ for (k = 1 @SEMI@ k <= 8 @SEMI@ k++) if ($k != $(k + 8)) bad++ @SEMI@ n++ } END { print n, bad + 0 }' && cat G.csvt G.prj"
+  STDOUT_MATCH "^40 0\nInteger,CoordX,CoordY,CoordZ,Real,Integer,Real,Integer\nGEOGCRS\\[\"WGS 84\".*CS\\[ellipsoidal,3\\].*ID\\[\"EPSG\",4979\\]\\]\n$"
+  CHECK_FILE G.CSV
+  FILE_MATCH "^track,lon_wgs84_deg,lat_wgs84_deg,h_ellipsoid_m,sigma_h,views,rms_px,flagged\n1,5\\.[0-9]+,43\\.[0-9]+,")
+tpkit_tool_test(tp-ground.csv-utm
+  COMMAND "${synth_gis} && ${ground3} --crs utm -o g.points && ${ground3} --crs utm -o u.csv && ${ground3} --crs utm -o u.json && paste <(grep -v '^#' g.points) <(tail -n +2 u.csv | tr ',' ' ') | awk '$2 != $10 || $3 != $11 { bad++ } END { print NR, bad + 0 }' && grep -c '\"easting\": 69' u.json && cat u.prj"
+  STDOUT_MATCH "^40 0\n40\nPROJCS\\[\"WGS 84 / UTM zone 31N\".*AUTHORITY\\[\"EPSG\",\"32631\"\\]\\]\n$"
+  CHECK_FILE u.csv
+  FILE_MATCH "^track,easting_epsg32631_m,northing_epsg32631_m,h_ellipsoid_m,sigma_h,views,rms_px,flagged\n")
+tpkit_tool_test(tp-ground.csv-failed-run-leaves-nothing
+  COMMAND "${synth_plain} && ${ground3} --rpc syn/view2.tif=syn/view3_rpc.txt -o g.csv @SEMI@ rc=$? @SEMI@ ls g.csv g.csvt g.prj 2>/dev/null @SEMI@ exit $rc"
+  EXPECT_FAIL STDERR_MATCH "do not fit" STDOUT_MATCH "^$" NO_FILE g.csv)
+tpkit_tool_test(tp-ground.csv-sidecar-is-an-input
+  COMMAND "${synth_gis} && cp syn/truth.tracks g.prj && ${ground3} --tracks g.prj -o g.csv"
+  EXPECT_FAIL STDERR_MATCH "g.prj" NO_FILE g.csv)
