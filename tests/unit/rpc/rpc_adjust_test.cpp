@@ -15,27 +15,15 @@
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
+#include "pleiades_models.hpp"
 
 using namespace tpkit;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path scratch(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("tpkit-rpc-adjust-test-" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d / name;
-}
-const std::string kData = std::string(TPKIT_SHARED_DIR) + "/data/pleiades-marseille";
-std::string image(int i) { return kData + "/img_0" + std::to_string(i) + ".tif"; }
-
+fs::path scratch(const std::string& name) { return tpkit_test::scratch("rpc-adjust-test", name); }
 std::vector<AdjustImage> pleiades() {
-  std::vector<AdjustImage> out;
-  for (int i = 1; i <= 3; ++i) {
-    auto m = read_rpc_tiff(image(i));
-    if (!m) throw std::runtime_error("no RPC tag in the Pléiades crop");
-    ImageInfo info = image_info(image(i));
-    out.push_back({image(i), info.width, info.height, *m, false});
-  }
+  auto out = tpkit_test::pleiades_images();
   out[0].fixed = true;
   return out;
 }

@@ -16,29 +16,15 @@
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
+#include "pleiades_models.hpp"
 
 using namespace tpkit;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path scratch(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("tpkit-rpc-trust-test-" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d / name;
-}
-const std::string kData = std::string(TPKIT_SHARED_DIR) + "/data/pleiades-marseille";
-std::string image(int i) { return kData + "/img_0" + std::to_string(i) + ".tif"; }
-
-std::vector<AdjustImage> pleiades() {
-  std::vector<AdjustImage> out;
-  for (int i = 1; i <= 3; ++i) {
-    auto m = read_rpc_tiff(image(i));
-    if (!m) throw std::runtime_error("no RPC tag in the Pléiades crop");
-    ImageInfo info = image_info(image(i));
-    out.push_back({image(i), info.width, info.height, *m, false});
-  }
-  return out;
-}
+fs::path scratch(const std::string& name) { return tpkit_test::scratch("rpc-trust-test", name); }
+std::string image(int i) { return tpkit_test::pleiades_image(i); }
+std::vector<AdjustImage> pleiades() { return tpkit_test::pleiades_images(); }
 
 // Tracks of ground points on a 12 x 12 grid over the first image, at heights h +- relief (a rough
 // terrain: on a plane another image's model differs from the right one by an affine map the bias
