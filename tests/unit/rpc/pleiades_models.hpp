@@ -1,9 +1,10 @@
 // The real Pléiades crops' models for the RPC tests (not a test itself: no .cpp): their paths, their
-// tag-50844 models as adjustment images, and a scratch folder per test program.
+// tag-50844 models as adjustment images, a scratch folder per test program, and the message of a throw.
 #pragma once
 #include <unistd.h>
 
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -35,6 +36,16 @@ inline std::vector<tpkit::AdjustImage> pleiades_images() {
     out.push_back({pleiades_image(i), info.width, info.height, *m, false});
   }
   return out;
+}
+
+// What f throws (its what()), or "" when it throws nothing.
+inline std::string message(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
 }
 
 }  // namespace tpkit_test

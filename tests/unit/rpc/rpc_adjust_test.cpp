@@ -111,14 +111,7 @@ std::vector<int> subset(size_t p) {
   }
 }
 
-std::string message(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
+using tpkit_test::message;
 }  // namespace
 
 // A tracks file of three images where 3 points in 5 miss a view (nan nan): the missing views are not

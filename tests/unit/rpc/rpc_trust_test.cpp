@@ -50,14 +50,7 @@ std::vector<AdjustTrack> grid_tracks(const std::vector<AdjustImage>& im, double 
   return out;
 }
 
-std::string message(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
+using tpkit_test::message;
 
 void write(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
