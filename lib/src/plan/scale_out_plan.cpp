@@ -24,26 +24,21 @@ namespace {
 std::optional<Footprint> footprint_of(const std::string& path, const RpcSource& rpc, long width, long height) {
   if (width <= 0 || height <= 0) return std::nullopt;
   // the image's border, 4 points a side (corners included), at both ends of the model's height range:
-  // the outline of every ground point the image can see
+  // the outline of every ground point the image can see; and at its middle height, for the overlap
   Footprint f;
-  try {
+  auto border = [&](double h, std::vector<std::array<double, 2>>& out) {
     for (int k = 0; k < 16; ++k) {
-      const int side = k / 4, t = k % 4;
+      const int side = k / 4, t = k % 4;  // top, right, bottom, left; t = 0..3 along it
       const double u = t / 4.0, X = width - 0.5, Y = height - 0.5;
       const double x = side == 0 ? -0.5 + u * width : side == 1 ? X : side == 2 ? X - u * width : -0.5;
       const double y = side == 0 ? -0.5 : side == 1 ? -0.5 + u * height : side == 2 ? Y : Y - u * height;
-      const Eigen::Vector2d ll = rpc.model.localize(x, y, 0.5 * (rpc.model.height_min() + rpc.model.height_max()));
-      f.middle.push_back({ll.x(), ll.y()});
+      const Eigen::Vector2d ll = rpc.model.localize(x, y, h);
+      out.push_back({ll.x(), ll.y()});
     }
-    for (double h : {rpc.model.height_min(), rpc.model.height_max()})
-      for (int k = 0; k < 16; ++k) {
-        const int side = k / 4, t = k % 4;  // top, right, bottom, left; t = 0..3 along it
-        const double u = t / 4.0, X = width - 0.5, Y = height - 0.5;
-        const double x = side == 0 ? -0.5 + u * width : side == 1 ? X : side == 2 ? X - u * width : -0.5;
-        const double y = side == 0 ? -0.5 : side == 1 ? -0.5 + u * height : side == 2 ? Y : Y - u * height;
-        const Eigen::Vector2d ll = rpc.model.localize(x, y, h);
-        f.lonlat.push_back({ll.x(), ll.y()});
-      }
+  };
+  try {
+    border(0.5 * (rpc.model.height_min() + rpc.model.height_max()), f.middle);
+    for (double h : {rpc.model.height_min(), rpc.model.height_max()}) border(h, f.lonlat);
   } catch (const NumericalError&) {
     warn(path + ": its RPC model (" + rpc.path + ") does not localize the image's border: paired with every image");
     return std::nullopt;
