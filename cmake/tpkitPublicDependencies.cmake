@@ -39,3 +39,14 @@ if(NOT TARGET tpkit_openjp2)
   set_target_properties(tpkit_openjp2 PROPERTIES
     IMPORTED_LOCATION ${OPENJP2_LIBRARY} INTERFACE_INCLUDE_DIRECTORIES ${OPENJP2_INCLUDE_DIR})
 endif()
+# Coordinate reference systems and vertical datums of reference DEMs and GCPs (the ground component):
+# PROJ (libproj-dev; geoid grids such as EGM96 from proj-data) and the GeoTIFF keys that name a DEM's CRS
+# (libgeotiff-dev, found by header and library: Debian ships no CMake config for it).
+find_package(PROJ CONFIG REQUIRED)
+if(NOT TARGET tpkit_geotiff)
+  find_path(GEOTIFF_INCLUDE_DIR geotiff.h PATH_SUFFIXES geotiff REQUIRED)
+  find_library(GEOTIFF_LIBRARY NAMES geotiff REQUIRED)
+  add_library(tpkit_geotiff UNKNOWN IMPORTED)
+  set_target_properties(tpkit_geotiff PROPERTIES
+    IMPORTED_LOCATION ${GEOTIFF_LIBRARY} INTERFACE_INCLUDE_DIRECTORIES ${GEOTIFF_INCLUDE_DIR})
+endif()

@@ -12,6 +12,7 @@ packages=(
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libtiff-dev libgeographiclib-dev
   libcli11-dev libceres-dev libnanoflann-dev libsqlite3-dev
   libopenjp2-7-dev  # NITF images compressed with JPEG 2000 (IC=C8/M8) are decoded and written with OpenJPEG
+  libproj-dev proj-data libgeotiff-dev  # reference DEMs and GCPs in any CRS and vertical datum (PROJ; EGM96 grid in proj-data; GeoTIFF keys)
   nlohmann-json3-dev  # tp-convert reads OpenMVG's sfm_data.json with a JSON parser (a regex scan crashed on long objects)
   libgtest-dev libgmock-dev libbenchmark-dev
   dpkg-dev file  # dpkg-shlibdeps and file (CPack calls it to find the binaries): the Debian package's runtime dependencies (scripts/package.sh)
@@ -24,6 +25,9 @@ if [ "${1:-}" = "--test" ]; then
   # real consumers and engines the tests drive: COLMAP's importer (tp-convert), a single-node Slurm
   # and GNU parallel (tp-plan's job files)
   packages+=(colmap slurm-wlm munge parallel)
+  # pictures checked as users see them: SVG figures rendered by librsvg, report pages opened in a
+  # headless Chromium
+  packages+=(librsvg2-bin chromium)
 fi
 missing=()
 for p in "${packages[@]}"; do
