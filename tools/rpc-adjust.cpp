@@ -11,6 +11,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/core/parallel_for.hpp"
+#include "tpkit/rpc/adjust_plot.hpp"
 #include "tpkit/rpc/ground_export.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"

@@ -226,11 +226,6 @@ struct GeoBounds;
 GeoBounds models_bounds(const std::vector<AdjustImage>& images);
 GeoBounds model_bounds(const RpcModel& m);  // one model's box
 
-// Figure: per image, the residual vectors at the observed points before (zero bias) and after the
-// adjustment, exaggerated by one common factor (scale bar), over the image extent.
-void plot_rpc_residuals(const std::string& path, const std::vector<AdjustImage>& images, const AdjustResult& r,
-                        const std::string& title);
-
 // The adjusted RPC00B of an image: its model with the bias folded in, refitted (fit_rpc) over the image's
 // footprint (the image corners localized at heights h_lo .. h_hi, m).
 RpcFit fold_bias(const RpcModel& model, const ImageBias& bias, long width, long height, double h_lo, double h_hi);
