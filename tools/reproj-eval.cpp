@@ -123,7 +123,8 @@ int main(int argc, char** argv) {
           if (!o->plot.empty())
             plot_reprojection(o->plot, tracks.xy, fit.residual, o->check.empty() ? Eigen::MatrixXd(0, 6) : check.xy,
                               o->check.empty() ? Eigen::MatrixXd(0, 6) : held.residual,
-                              "reprojection residuals: " + tf.source + " on " + tracks.source);
+                              "reprojection residuals (reprojected minus observed): " + tf.source + " on " + tracks.source,
+                              tracks.images);
           write_file_atomic(o->output, os.str());
           tpkit::summary("fit: " + brief(fit.stats));
           if (!o->check.empty()) tpkit::summary("check: " + brief(held.stats));

@@ -56,6 +56,18 @@ void save_scan(const std::string& path, const std::vector<ScanRow>& rows, const 
   out.commit();
 }
 
+namespace {
+// The scanned parameter with its unit (physical_homography.hpp; h11..h33 are H's entries, h33 = 1).
+std::string param_axis_label(const std::string& param) {
+  const std::string base = param.substr(0, param.find_first_of("0123456789"));
+  if (base == "px" || base == "py" || base == "rho") return param + " (m)";
+  if (base == "alpha" || base == "beta" || base == "gamma" || base == "theta") return param + " (rad)";
+  if (base == "res") return param + " (m per pixel)";
+  if (base == "cx" || base == "cy") return param + " (pixels)";
+  return param + " (homography entry, h33 = 1)";
+}
+}  // namespace
+
 void plot_scan(const std::string& path, const std::vector<ScanRow>& rows, const std::string& param,
                const std::string& title) {
   if (rows.empty()) throw NumericalError("nothing to plot: every scanned value gave a singular homography");
@@ -63,7 +75,8 @@ void plot_scan(const std::string& path, const std::vector<ScanRow>& rows, const 
   for (const auto& r : rows) ymax = std::max(ymax, r.cost);
   if (!(ymax > 0)) ymax = 1;
   SvgPlot plot(720, 460, title);
-  int p = plot.panel({70, 50, 620, 350, xmin, xmax, 0, ymax * 1.05, false, false, "", param, "cost (pixels)"});
+  int p = plot.panel(SvgPlot::spec(70, 50, 620, 350, xmin, xmax, 0, ymax * 1.05, "", param_axis_label(param),
+                                   "cost (pixels)"));
   std::vector<double> x, y;
   for (const auto& r : rows) x.push_back(r.value), y.push_back(r.cost);
   plot.polyline(p, x, y, "#1f5fa8", 1.5);
@@ -98,21 +111,22 @@ void plot_clusters(const std::string& path, const Eigen::MatrixX2d& A, const Eig
   double xmin = *std::min_element(bx.begin(), bx.end()), xmax = *std::max_element(bx.begin(), bx.end());
   double ymin = *std::min_element(by.begin(), by.end()), ymax = *std::max_element(by.begin(), by.end());
   double mx = 0.25 * (xmax - xmin) + 1, my = 0.25 * (ymax - ymin) + 1;
-  SvgPlot svg(1000, 540, "point clusters before and after (Navy et al. figure 6), image-2 pixels");
+  SvgPlot svg(1000, 560, "point clusters before and after (Navy et al. figure 6), image-2 pixels");
   auto fmt = [](double c) {
     char b[64];
     std::snprintf(b, sizeof b, "%.3g px", c);
     return std::string(b);
   };
   for (int k = 0; k < 2; ++k) {
-    SvgPlot::PanelSpec ps{70.0 + k * 480, 60, 400, 400, xmin - mx, xmax + mx, ymin - my, ymax + my, /*y_down=*/true, /*equal_aspect=*/true, "", "", ""};
+    SvgPlot::PanelSpec ps = SvgPlot::spec(70.0 + k * 480, 60, 400, 400, xmin - mx, xmax + mx, ymin - my, ymax + my, "", "", "");
+    ps.y_down = ps.equal_aspect = true;
     ps.title = (k == 0 ? "start, cost " + fmt(cost_before) : "result, cost " + fmt(cost_after));
     ps.xlabel = "x (px)";
     ps.ylabel = "y (px)";
     int p = svg.panel(ps);
     svg.points(p, bx, by, "#1f77b4", 3.0, "circle");
     svg.points(p, k == 0 ? x0 : x1, k == 0 ? y0 : y1, "#d62728", 3.5, "cross");
-    svg.legend(p, {{"cluster B", "#1f77b4"}, {"h(cluster A)", "#d62728"}});
+    svg.legend(p, {{"cluster B", "#1f77b4", SvgPlot::Mark::dot}, {"h(cluster A)", "#d62728", SvgPlot::Mark::cross}});
   }
   svg.save(path);
 }

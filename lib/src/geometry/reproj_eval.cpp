@@ -2,11 +2,13 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
 #include "tpkit/geometry/camera_recovery.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/residual_field.hpp"
 #include "tpkit/core/svg_plot.hpp"
 #include "tpkit/geometry/triangulate.hpp"
 
@@ -79,79 +81,67 @@ ReprojectionStats reprojection_stats(const Eigen::MatrixXd& R) {
 }
 
 void plot_reprojection(const std::string& path, const Eigen::MatrixXd& xy, const Eigen::MatrixXd& R,
-                       const Eigen::MatrixXd& cxy, const Eigen::MatrixXd& cR, const std::string& title) {
-  const double pw = 330, ph = 330, gap = 60;
-  SvgPlot plot(4 * pw + 5 * gap, ph + 2 * gap + 40, title);
-  // exaggeration: the 95th percentile residual drawn as 4% of the image extent
-  std::vector<double> len;
-  for (const auto* M : {&R, &cR})
-    for (Eigen::Index r = 0; r < M->rows(); ++r)
-      for (int v = 0; v < 3; ++v) len.push_back(std::hypot((*M)(r, 2 * v), (*M)(r, 2 * v + 1)));
-  std::vector<double> sorted = len;
-  std::sort(sorted.begin(), sorted.end());
-  double p95 = sorted.empty() ? 1.0 : sorted[std::min(sorted.size() - 1, static_cast<size_t>(0.95 * sorted.size()))];
-  if (!(p95 > 0)) p95 = 1.0;
-  for (int v = 0; v < 3; ++v) {
-    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (const auto* M : {&xy, &cxy})
-      for (Eigen::Index r = 0; r < M->rows(); ++r) {
-        xmin = std::min(xmin, (*M)(r, 2 * v));
-        xmax = std::max(xmax, (*M)(r, 2 * v));
-        ymin = std::min(ymin, (*M)(r, 2 * v + 1));
-        ymax = std::max(ymax, (*M)(r, 2 * v + 1));
+                       const Eigen::MatrixXd& cxy, const Eigen::MatrixXd& cR, const std::string& title,
+                       const std::vector<ImageRef>& images) {
+  // rows: the fit set, then the check set (if any); columns: views 1-3, a colour bar, the histogram
+  const bool check = cR.rows() > 0;
+  const int rows = check ? 2 : 1;
+  const double pw = 330, top = 78, left = 75, hgap = 75, vgap = 85;
+  const double cbar_x = left + 3 * pw + 2 * hgap + 20, hist_x = cbar_x + 130;
+  std::vector<ResidualView> views;
+  for (int set = 0; set < rows; ++set) {
+    const Eigen::MatrixXd& P = set == 0 ? xy : cxy;
+    const Eigen::MatrixXd& D = set == 0 ? R : cR;
+    for (int v = 0; v < 3; ++v) {
+      ResidualView rv;
+      rv.title = std::string(set == 0 ? (check ? "fit tracks" : "tracks") : "check tracks") + ", view " + std::to_string(v + 1);
+      if (v < static_cast<int>(images.size())) rv.width = images[v].width, rv.height = images[v].height;
+      for (Eigen::Index r = 0; r < P.rows(); ++r) {
+        rv.x.push_back(P(r, 2 * v)), rv.y.push_back(P(r, 2 * v + 1));
+        rv.dx.push_back(D(r, 2 * v)), rv.dy.push_back(D(r, 2 * v + 1));
       }
-    if (!(xmax > xmin)) xmax = xmin + 1;
-    if (!(ymax > ymin)) ymax = ymin + 1;
-    double ext = std::max(xmax - xmin, ymax - ymin);
-    double m = 0.06 * ext;
-    double ex = 0.04 * ext / p95;  // exaggeration factor
-    SvgPlot::PanelSpec spec{gap + v * (pw + gap), gap, pw, ph, xmin - m, xmax + m, ymin - m, ymax + m, true, true,
-                            "view " + std::to_string(v + 1), "x (px)", "y (px)"};
-    int p = plot.panel(spec);
-    for (Eigen::Index r = 0; r < xy.rows(); ++r)
-      plot.arrow(p, xy(r, 2 * v), xy(r, 2 * v + 1), ex * R(r, 2 * v), ex * R(r, 2 * v + 1), "#1f77b4", 0.8);
-    for (Eigen::Index r = 0; r < cxy.rows(); ++r)
-      plot.arrow(p, cxy(r, 2 * v), cxy(r, 2 * v + 1), ex * cR(r, 2 * v), ex * cR(r, 2 * v + 1), "#d62728", 0.8);
-    // scale bar: p95 pixels
-    double bx = xmin, by = ymax + 0.5 * m;
-    plot.segment(p, bx, by, bx + ex * p95, by, "black", 2.0);
-    std::ostringstream lab;
-    lab.precision(3);
-    lab << p95 << " px (x" << ex << ")";
-    plot.text(p, bx + ex * p95 + 0.01 * ext, by, lab.str(), 10);
-  }
-  // histogram of 2-D residual lengths
-  double top = sorted.empty() ? 1.0 : sorted.back();
-  if (!(top > 0)) top = 1.0;
-  const int bins = 30;
-  std::vector<double> edges(bins + 1), counts(bins, 0.0), ccounts(bins, 0.0);
-  for (int b = 0; b <= bins; ++b) edges[b] = top * b / bins;
-  auto fill = [&](const Eigen::MatrixXd& M, std::vector<double>& c) {
-    for (Eigen::Index r = 0; r < M.rows(); ++r)
-      for (int v = 0; v < 3; ++v) {
-        int b = static_cast<int>(std::hypot(M(r, 2 * v), M(r, 2 * v + 1)) / top * bins);
-        c[std::min(b, bins - 1)] += 1;
-      }
-  };
-  fill(R, counts);
-  fill(cR, ccounts);
-  double cmax = 1;
-  for (int b = 0; b < bins; ++b) cmax = std::max(cmax, std::max(counts[b], ccounts[b]));
-  SvgPlot::PanelSpec hs{gap + 3 * (pw + gap), gap, pw, ph, 0, top, 0, cmax * 1.05, false, false,
-                        "residual length", "|r| (px)", "count"};
-  int h = plot.panel(hs);
-  plot.bars(h, edges, counts, "#1f77b4");
-  std::vector<std::pair<std::string, std::string>> leg = {{"fit tracks", "#1f77b4"}};
-  if (cR.rows() > 0) {
-    std::vector<double> cx, cy;
-    for (int b = 0; b < bins; ++b) {
-      cx.push_back(0.5 * (edges[b] + edges[b + 1]));
-      cy.push_back(ccounts[b]);
+      views.push_back(std::move(rv));
     }
-    plot.polyline(h, cx, cy, "#d62728", 1.5);
-    leg.push_back({"check tracks", "#d62728"});
   }
-  plot.legend(h, leg);
+  // the panels of both sets share one extent per view (the check points may reach further)
+  std::vector<std::array<double, 4>> ext(3, {1e300, 1e300, -1e300, -1e300});
+  for (size_t k = 0; k < views.size(); ++k) {
+    double x0, y0, x1, y1;
+    view_extent(views[k], x0, y0, x1, y1);
+    auto& e = ext[k % 3];
+    e = {std::min(e[0], x0), std::min(e[1], y0), std::max(e[2], x1), std::max(e[3], y1)};
+  }
+  for (size_t k = 0; k < views.size(); ++k)
+    if (!(views[k].width > 0)) {  // no image size: the union of the points' extents as the frame
+      views[k].width = ext[k % 3][2] + 0.5;
+      views[k].height = ext[k % 3][3] + 0.5;
+    }
+  const FieldScale fs = field_scale(views);
+  const double height = top + rows * pw + (rows - 1) * vgap + 95;
+  SvgPlot plot(hist_x + pw + 30, height, title);
+  for (size_t k = 0; k < views.size(); ++k) {
+    const int set = static_cast<int>(k / 3), v = static_cast<int>(k % 3);
+    double x0, y0, x1, y1;
+    view_extent(views[k], x0, y0, x1, y1);
+    SvgPlot::PanelSpec spec = SvgPlot::spec(left + v * (pw + hgap), top + set * (pw + vgap), pw, pw, x0, x1, y0, y1,
+                                            views[k].title, "x (px)", "y (px)");
+    spec.y_down = spec.equal_aspect = true;
+    spec.note = residual_summary_text(summarize_residuals(views[k].dx, views[k].dy));
+    int p = plot.panel(spec);
+    draw_residual_field(plot, p, views[k], fs);
+  }
+  plot.colorbar(cbar_x, top, 16, pw, 0, fs.vmax, "|cell mean residual| (px)");
+  field_legend(plot, left, height - 18, fs);
+  std::vector<HistogramSet> hist(1);
+  hist[0] = {check ? "fit" : "tracks", "#4c78a8", {}};
+  for (size_t k = 0; k < 3; ++k)
+    for (size_t i = 0; i < views[k].dx.size(); ++i) hist[0].length.push_back(std::hypot(views[k].dx[i], views[k].dy[i]));
+  if (check) {
+    hist.push_back({"check", "#e45756", {}});
+    for (size_t k = 3; k < 6; ++k)
+      for (size_t i = 0; i < views[k].dx.size(); ++i) hist[1].length.push_back(std::hypot(views[k].dx[i], views[k].dy[i]));
+  }
+  draw_length_histogram(plot, hist_x, top, pw, pw, hist, "residual length, all views");
   plot.save(path);
 }
 

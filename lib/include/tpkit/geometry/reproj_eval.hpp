@@ -6,6 +6,7 @@
 // reprojected minus observed, pixels. RMSE = sqrt( (1 / 3n) sum_tracks sum_views (dx^2 + dy^2) ), the root
 // mean squared 2-D residual over all tracks and views (per-coordinate RMSE = RMSE / sqrt 2).
 #pragma once
+#include "tpkit/core/text_table.hpp"
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -44,10 +45,13 @@ struct ReprojectionResult {
 ReprojectionResult evaluate_reprojection(const ReprojectionFrame& frame, const Eigen::MatrixXd& xy);
 ReprojectionStats reprojection_stats(const Eigen::MatrixXd& residual);
 
-// The error distribution figure (like Yang, Pan, Huang figs. 3-8): for each view, the residual vectors
-// drawn at the observed points over the image extent, exaggerated, with a scale bar; and a histogram of
-// the 2-D residual lengths. `check` (may be empty) is drawn in a second colour.
+// The error distribution figure (after Yang, Pan, Huang figs. 3-8), drawn by core/residual_field.hpp:
+// per view a residual field (16 x 16 cells over the image, one exaggeration for every panel, RMSE, median
+// and p90 above each panel), the fit set in one row and `check` (may be empty) in a second; and a
+// histogram of the 2-D residual lengths of both sets, each normalised, on a log axis. `images` (may be
+// empty) gives the views' sizes, else the points' extent is the frame.
 void plot_reprojection(const std::string& path, const Eigen::MatrixXd& xy, const Eigen::MatrixXd& residual,
-                       const Eigen::MatrixXd& check_xy, const Eigen::MatrixXd& check_residual, const std::string& title);
+                       const Eigen::MatrixXd& check_xy, const Eigen::MatrixXd& check_residual, const std::string& title,
+                       const std::vector<ImageRef>& images = {});
 
 }  // namespace tpkit

@@ -8,8 +8,9 @@
 
 namespace tpkit {
 
-// Figure: per image, the residual vectors at the observed points before (zero bias) and after the
-// adjustment, exaggerated by one common factor (scale bar), over the image extent.
+// Figure: per image, the residual field (core/residual_field.hpp) before (zero bias) and after the
+// adjustment, one above the other, one exaggeration and colour scale for every panel, RMSE, median and
+// p90 above each panel; the bias model's field drawn over the "before" panels.
 void plot_rpc_residuals(const std::string& path, const std::vector<AdjustImage>& images, const AdjustResult& r,
                         const std::string& title);
 
