@@ -119,3 +119,8 @@ tpkit_tool_test(cluster-homog.model-needs-default-optimizer
 tpkit_tool_test(cluster-homog.four-points-auto-rejected
   COMMAND "${_six_a} && ${_six_b} && head -4 a6.points > a4.points && sed -n '1p@SEMI@2p@SEMI@4p@SEMI@6p' b6.points > b4.points && cluster-homog a4.points b4.points -o h.homography @SEMI@ echo exit $?"
   STDOUT_MATCH "exit 3" STDERR_MATCH "verdict: rejected" NO_FILE h.homography)
+# issue 27: both figures render (rsvg-convert) with every mark inside its panel; the clusters' legend
+# draws a dot and a cross (the marks drawn), the scan's axis names its unit
+tpkit_tool_test(cluster-homog.figures-render
+  COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points -o ab.homography --plot fig6.svg && bash $SRC/tests/tools/figure_check.sh fig6.svg && sed -n '/<g class=\"legend\"/,/<\\/g>/p' fig6.svg | grep -c -e '<circle' -e 'L[0-9.]* [0-9.]*M[0-9.]*' && printf 'px1=0\\npy1=0\\nrho1=800000\\nalpha1=1.57\\nbeta1=0.55\\nres1=20\\ntheta1=0.1\\ncx1=1\\ncy1=1\\npx2=100\\npy2=100\\nrho2=800000\\nalpha2=0.8\\nbeta2=1\\ngamma2=1.57\\nres2=20\\ntheta2=0.1\\ncx2=1\\ncy2=1\\n' > truth.txt && cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init truth.txt --optimizer none --scan alpha1 --range 1.4 1.75 --steps 31 --plot a.svg -o a.scan && bash $SRC/tests/tools/figure_check.sh a.svg && grep -o 'alpha1 (rad)' a.svg"
+  STDOUT_MATCH "figure ok: 1000x560\n4\n.*figure ok: 720x460\nalpha1 \\(rad\\)\n")

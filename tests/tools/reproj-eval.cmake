@@ -36,3 +36,11 @@ tpkit_tool_test(reproj-eval.transfer-empty-stdin
 tpkit_tool_test(reproj-eval.partial-tracks-left-out
   COMMAND "${_rsynth} && awk '/^#/{print;next} {n++} n<=25{$2=\"nan\"; $3=\"nan\"} {print}' syn/truth.tracks > part.tracks && reproj-eval syn/truth.trifocal part.tracks -o r.txt && grep '^# n:' r.txt"
   STDOUT_MATCH "# n: 275" STDERR_MATCH "warning: part.tracks: 25 tracks not seen in all three views left out; evaluating the 275 that are")
+# issue 27: the figure renders (rsvg-convert), every mark inside its panel, one exaggeration, and each
+# panel's RMSE equal to the file's summary lines (fit row, then check row)
+tpkit_tool_test(reproj-eval.figure-renders-check
+  COMMAND "${_rsynth} && ${_split} && trifocal-fit -m affine-dlt fit.tracks -o t.trifocal && reproj-eval t.trifocal fit.tracks --check held.tracks --plot e.svg -o r.txt && bash $SRC/tests/tools/figure_check.sh e.svg --field --rmse r.txt rmse_view1_px rmse_view2_px rmse_view3_px check_rmse_view1_px check_rmse_view2_px check_rmse_view3_px && grep -c '<polyline' e.svg"
+  STDOUT_MATCH "exaggeration: vectors ×[0-9.e+]+\nrmse: [^\n]+\nfigure ok: [0-9]+x[0-9]+\n")
+tpkit_tool_test(reproj-eval.figure-renders
+  COMMAND "tp-synth --out syn --size 256 --points 3000 --seed 5 --supersample 1 >/dev/null 2>&1 && trifocal-fit syn/truth.tracks -o t.trifocal && reproj-eval t.trifocal syn/truth.tracks --plot e.svg -o r.txt && bash $SRC/tests/tools/figure_check.sh e.svg --field --rmse r.txt rmse_view1_px rmse_view2_px rmse_view3_px && grep -c 'class=\"legend\"' e.svg"
+  STDOUT_MATCH "figure ok: [0-9]+x[0-9]+\n2\n")

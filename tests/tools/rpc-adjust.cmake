@@ -90,3 +90,45 @@ tpkit_tool_test(rpc-adjust.ground-gis-forms
   STDOUT_MATCH "^[1-9][0-9]* 0\nInteger,CoordX,CoordY,CoordZ,Real,Integer,Real,Integer\nEPSG\",\"32631\n$"
   CHECK_FILE adj/ground.geojson
   FILE_MATCH "\"type\": \"FeatureCollection\".*\"projected_crs\": \"EPSG:32631 ")
+# Ground control (issue 25): a triplet with a bias on EVERY view, no view fixed; 5 control points (ground
+# sigma 0.3 m, image sigma 0.2 px, noise of those sigmas added) and 20 check points from the truth
+# (bench/gcp_from_truth.awk), left out of the tie tracks. The check points, intersected on the adjusted
+# models, are within 0.5 m of the truth horizontally and vertically (metres before: the biased models).
+set(synth_gcp "tp-synth -o syn --size 256 --points 300 --rpc-bias 1:4,-3,0.002,-0.001 --rpc-bias 2:-5,2,0.001,0.002 --rpc-bias 3:3,5,-0.002,0.001 > /dev/null")
+set(make_gcp "awk -v TIES=syn/ties.tracks -f $SRC/bench/gcp_from_truth.awk syn/truth.tracks")
+set(adjust_gcp "rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/ties.tracks")
+set(read_accuracy "awk '/^# check_(before|after)_rmse_[hv]_m:/ { sub(/^# /, \"\") @SEMI@ sub(/:/, \"\") @SEMI@ v[$1] = $2 } END { ok = v[\"check_after_rmse_h_m\"] < 0.5 && v[\"check_after_rmse_v_m\"] < 0.5 && v[\"check_before_rmse_v_m\"] > 2 @SEMI@ print (ok ? \"accuracy ok\" : \"accuracy off\"), v[\"check_after_rmse_h_m\"], v[\"check_after_rmse_v_m\"] }' adj/accuracy")
+tpkit_tool_test(rpc-adjust.gcp-check-points
+  COMMAND "${synth_gcp} && ${make_gcp} > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj && ${read_accuracy}"
+  STDOUT_MATCH "^accuracy ok "
+  STDERR_MATCH "rpc-adjust: --gcp: the control points agree with the tie points: rms after [0-9.e-]+ px with the GCPs, [0-9.e-]+ px without .*\nrpc-adjust: control points \\(5 of 5 intersected\\): before RMSE horizontal [0-9.]+ m, vertical [0-9.]+ m, CE90 [0-9.]+ m, LE90 [0-9.]+ m@SEMI@ after .*\nrpc-adjust: check points \\(20 of 20 intersected\\): before RMSE horizontal "
+  CHECK_FILE adj/accuracy
+  FILE_MATCH "^# tpkit accuracy 1\n.*# columns: id role image x y sigma_px dx_before dy_before dx_after dy_after e_before n_before u_before e_after n_after u_after\n.*# check_after_n: 20\n")
+# ASP's .gcp form (id lat lon height sigmas, then image col row sigmas): 5 truth points, every one a control
+# point, the images named by file name alone; the adjustment agrees with them.
+set(asp_gcp "awk '/^# columns:/ { for (i = 3@SEMI@ i <= NF@SEMI@ ++i) c[$i] = i - 2 } /^#/ { next } NR % 60 == 0 { printf \"%d %.10f %.10f %.3f 0.3 0.3 0.3\", $1, $c[\"lat\"], $c[\"lon\"], $c[\"h\"] @SEMI@ for (v = 1@SEMI@ v <= 3@SEMI@ ++v) printf \" view%d.tif %.3f %.3f 0.2 0.2\", v, $c[\"x\" v], $c[\"y\" v] @SEMI@ print \"\" }' syn/truth.tracks")
+tpkit_tool_test(rpc-adjust.gcp-asp-form
+  COMMAND "${synth_gcp} && ${asp_gcp} > syn/asp.gcp && test $(wc -l < syn/asp.gcp) -ge 4 && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --gcp syn/asp.gcp --strict -o adj"
+  STDERR_MATCH "the control points agree with the tie points: .*\nrpc-adjust: control points \\([0-9]+ of [0-9]+ intersected\\): before RMSE horizontal [0-9.]+ m, vertical [1-9][0-9.]* m, CE90 [0-9.]+ m, LE90 [0-9.]+ m@SEMI@ after RMSE horizontal 0\\.0[0-9]* m, vertical 0\\.0[0-9]* m"
+  CHECK_FILE adj/accuracy FILE_MATCH "# control_after_n: [4-9]\n")
+# A control point 20 m off in the east: a warning with the figures (the point, its normalized residual,
+# metres); --strict refuses the run and writes nothing.
+tpkit_tool_test(rpc-adjust.gcp-contradicting
+  COMMAND "${synth_gcp} && ${make_gcp} -v BLUNDER=20 > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj 2> log && grep -c 'warning: --gcp: the control points contradict the tie points: rms after [0-9.e-]* px with the GCPs, [0-9.e-]* px without (over the [0-9]* tracks neither flags)@SEMI@ largest normalized GCP residual [0-9.]* sigma at point [0-9]* (adjusted minus given: e -*[1-9][0-9.]* m' log && ${adjust_gcp} --gcp syn/points.gcp --strict -o adj2"
+  EXPECT_FAIL STDOUT_MATCH "^1\n$" STDERR_MATCH "rpc-adjust: --gcp: the control points contradict the tie points \\(--strict\\): rms after" NO_FILE adj2)
+# Bad GCP files: an image that is none of the images, a measurement off its image, a malformed ASP line:
+# file:line, exit 1, nothing written.
+tpkit_tool_test(rpc-adjust.gcp-unknown-image
+  COMMAND "${synth_gcp} && ${make_gcp} | sed '2s/view1.tif/other.tif/' > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/points.gcp:[0-9]+: control point [0-9]+: image 'other.tif' is not one of the images given" NO_FILE adj)
+tpkit_tool_test(rpc-adjust.gcp-off-image
+  COMMAND "${synth_gcp} && printf '1 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2 0.2\\n2 43.3 5.4 100 1 1 1 view2.tif 300 20 0.2 0.2\\n' > syn/bad.gcp && ${adjust_gcp} --gcp syn/bad.gcp -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/bad.gcp:2: control point 2: \\(300, 20\\) is off syn/view2.tif \\(256 x 256 pixels\\)" NO_FILE adj)
+tpkit_tool_test(rpc-adjust.gcp-malformed-asp
+  COMMAND "${synth_gcp} && printf '# ASP\\n1 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2\\n' > syn/bad.gcp && ${adjust_gcp} --gcp syn/bad.gcp -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/bad.gcp:2: 10 fields: an ASP GCP line is" NO_FILE adj)
+# issue 27: residuals.svg renders (rsvg-convert), every mark inside its panel, one exaggeration for
+# every panel, each panel's RMSE (before, after per image) equal to rpc.residuals' summary lines
+tpkit_tool_test(rpc-adjust.figure-renders
+  COMMAND "${synth_biased} && ${adjust} --model affine -o adj && bash $SRC/tests/tools/figure_check.sh adj/residuals.svg --field --rmse adj/rpc.residuals image1_rms_before_px image1_rms_after_px image2_rms_before_px image2_rms_after_px image3_rms_before_px image3_rms_after_px && grep -c 'stroke=\"#e4002b\"' adj/residuals.svg"
+  STDOUT_MATCH "exaggeration: vectors ×[0-9.e+]+\nrmse: [^\n]+\nfigure ok: [0-9]+x[0-9]+\n[1-9][0-9]*\n")

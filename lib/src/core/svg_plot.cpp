@@ -107,8 +107,8 @@ int SvgPlot::panel(PanelSpec s) {
   std::ostringstream o;
   o << "<clipPath id=\"panel" << idx << "\"><rect x=\"" << num(q.left) << "\" y=\"" << num(q.top) << "\" width=\""
     << num(q.width) << "\" height=\"" << num(q.height) << "\"/></clipPath>\n";
-  o << "<rect x=\"" << num(q.left) << "\" y=\"" << num(q.top) << "\" width=\"" << num(q.width) << "\" height=\""
-    << num(q.height) << "\" fill=\"white\" stroke=\"#333\"/>\n";
+  o << "<rect class=\"panel\" data-p=\"" << idx << "\" x=\"" << num(q.left) << "\" y=\"" << num(q.top) << "\" width=\""
+    << num(q.width) << "\" height=\"" << num(q.height) << "\" fill=\"white\" stroke=\"#333\"/>\n";
   auto xt = ticks(q.xmin, q.xmax), yt = q.log_y ? log_ticks(q.ymin, q.ymax) : ticks(q.ymin, q.ymax);
   double xs = xt.size() > 1 ? xt[1] - xt[0] : 1, ys = yt.size() > 1 ? yt[1] - yt[0] : 1;
   for (double v : xt) {
@@ -174,6 +174,11 @@ bool SvgPlot::marks_inside(double tol) const {
 }
 
 namespace {
+// Every mark of a panel sits in a group naming the panel and clipped to it (tests/tools/figure_check.sh
+// reads data-p to check the marks against the panel's box).
+std::string open_marks(int p) {
+  return "<g data-p=\"" + std::to_string(p) + "\" clip-path=\"url(#panel" + std::to_string(p) + ")\">\n";
+}
 // Page point clamped into a panel's box.
 double clampd(double v, double lo, double hi) { return std::min(std::max(v, lo), hi); }
 }  // namespace
@@ -183,7 +188,7 @@ void SvgPlot::polyline(int pi, const std::vector<double>& x, const std::vector<d
   const Panel& p = panels_.at(pi);
   Box b = panel_box(pi);
   std::ostringstream o;
-  o << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << width << "\" stroke-linejoin=\"round\" points=\"";
+  o << open_marks(pi) << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << width << "\" stroke-linejoin=\"round\" points=\"";
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (size_t i = 0; i < std::min(x.size(), y.size()); ++i)
     if (std::isfinite(x[i]) && std::isfinite(y[i])) {
@@ -191,7 +196,7 @@ void SvgPlot::polyline(int pi, const std::vector<double>& x, const std::vector<d
       o << num(X) << ',' << num(Y) << ' ';
       x0 = std::min(x0, X), y0 = std::min(y0, Y), x1 = std::max(x1, X), y1 = std::max(y1, Y);
     }
-  o << "\"/>\n";
+  o << "\"/>\n</g>\n";
   if (x1 >= x0) record(pi, x0, y0, x1, y1);
   body_ += o.str();
 }
@@ -201,7 +206,7 @@ void SvgPlot::points(int pi, const std::vector<double>& x, const std::vector<dou
   const Panel& p = panels_.at(pi);
   Box b = panel_box(pi);
   std::ostringstream o;
-  o << "<g fill=\"" << color << "\" stroke=\"" << color << "\">\n";
+  o << open_marks(pi) << "<g fill=\"" << color << "\" stroke=\"" << color << "\">\n";
   for (size_t i = 0; i < std::min(x.size(), y.size()); ++i) {
     if (!std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
     double X = px(p, x[i]), Y = py(p, y[i]);
@@ -221,7 +226,7 @@ void SvgPlot::points(int pi, const std::vector<double>& x, const std::vector<dou
     else
       o << "<circle cx=\"" << num(X) << "\" cy=\"" << num(Y) << "\" r=\"" << num(r) << "\"/>\n";
   }
-  o << "</g>\n";
+  o << "</g>\n</g>\n";
   body_ += o.str();
 }
 
@@ -244,8 +249,8 @@ bool SvgPlot::arrow(int pi, double x, double y, double dx, double dy, const std:
   Y1 = Y0 + t * (Y1 - Y0);
   double L = std::hypot(X1 - X0, Y1 - Y0);
   std::ostringstream o;
-  o << "<line x1=\"" << num(X0) << "\" y1=\"" << num(Y0) << "\" x2=\"" << num(X1) << "\" y2=\"" << num(Y1) << "\" stroke=\""
-    << color << "\" stroke-width=\"" << width << "\"/>\n";
+  o << open_marks(pi) << "<line x1=\"" << num(X0) << "\" y1=\"" << num(Y0) << "\" x2=\"" << num(X1) << "\" y2=\"" << num(Y1)
+    << "\" stroke=\"" << color << "\" stroke-width=\"" << width << "\"/>\n";
   record(pi, X0, Y0, X1, Y1);
   if (!whole) {
     o << "<circle class=\"cut\" cx=\"" << num(X1) << "\" cy=\"" << num(Y1) << "\" r=\"2.2\" fill=\"none\" stroke=\"" << color
@@ -257,6 +262,7 @@ bool SvgPlot::arrow(int pi, double x, double y, double dx, double dy, const std:
       << num(Y1 - h * uy + 0.5 * h * ux) << "L" << num(X1 - h * ux + 0.5 * h * uy) << ' ' << num(Y1 - h * uy - 0.5 * h * ux)
       << "Z\" fill=\"" << color << "\"/>\n";
   }
+  o << "</g>\n";
   body_ += o.str();
   return whole;
 }
@@ -269,10 +275,10 @@ void SvgPlot::cell(int pi, double x0, double y0, double x1, double y1, const std
   if (X0 > X1) std::swap(X0, X1);
   if (Y0 > Y1) std::swap(Y0, Y1);
   std::ostringstream o;
-  o << "<rect x=\"" << num(X0) << "\" y=\"" << num(Y0) << "\" width=\"" << num(X1 - X0) << "\" height=\"" << num(Y1 - Y0)
-    << "\" fill=\"" << fill << "\"";
+  o << open_marks(pi) << "<rect x=\"" << num(X0) << "\" y=\"" << num(Y0) << "\" width=\"" << num(X1 - X0) << "\" height=\""
+    << num(Y1 - Y0) << "\" fill=\"" << fill << "\"";
   if (opacity < 1) o << " fill-opacity=\"" << opacity << "\"";
-  o << "/>\n";
+  o << "/>\n</g>\n";
   record(pi, X0, Y0, X1, Y1);
   body_ += o.str();
 }
@@ -281,6 +287,7 @@ void SvgPlot::bars(int pi, const std::vector<double>& edges, const std::vector<d
   const Panel& p = panels_.at(pi);
   Box b = panel_box(pi);
   std::ostringstream o;
+  o << open_marks(pi);
   for (size_t i = 0; i + 1 < edges.size() && i < counts.size(); ++i) {
     if (!(counts[i] > (p.s.log_y ? p.s.ymin : 0))) continue;
     double X0 = clampd(px(p, edges[i]), b.x0, b.x1), X1 = clampd(px(p, edges[i + 1]), b.x0, b.x1);
@@ -289,6 +296,7 @@ void SvgPlot::bars(int pi, const std::vector<double>& edges, const std::vector<d
       << "\" height=\"" << num(std::fabs(Y1 - Y0)) << "\" fill=\"" << color << "\" stroke=\"white\" stroke-width=\"0.5\"/>\n";
     record(pi, X0, Y0, X1, Y1);
   }
+  o << "</g>\n";
   body_ += o.str();
 }
 
