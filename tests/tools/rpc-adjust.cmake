@@ -128,7 +128,7 @@ tpkit_tool_test(rpc-adjust.gcp-malformed-asp
   COMMAND "${synth_gcp} && printf '# ASP\\n1 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2\\n' > syn/bad.gcp && ${adjust_gcp} --gcp syn/bad.gcp -o adj"
   EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/bad.gcp:2: 10 fields: an ASP GCP line is" NO_FILE adj)
 # issue 27: residuals.svg renders (rsvg-convert), every mark inside its panel, one exaggeration for
-# every panel, each panel's RMSE (before, after per image) equal to rpc.residuals' summary lines
+# every panel, each panel's RMSE (the before row, then the after row) equal to rpc.residuals' summary lines
 tpkit_tool_test(rpc-adjust.figure-renders
-  COMMAND "${synth_biased} && ${adjust} --model affine -o adj && bash $SRC/tests/tools/figure_check.sh adj/residuals.svg --field --rmse adj/rpc.residuals image1_rms_before_px image1_rms_after_px image2_rms_before_px image2_rms_after_px image3_rms_before_px image3_rms_after_px && grep -c 'stroke=\"#e4002b\"' adj/residuals.svg"
+  COMMAND "${synth_biased} && ${adjust} --model affine -o adj && bash $SRC/tests/tools/figure_check.sh adj/residuals.svg --field --rmse adj/rpc.residuals image1_rms_before_px image2_rms_before_px image3_rms_before_px image1_rms_after_px image2_rms_after_px image3_rms_after_px && grep -c 'stroke=\"#e4002b\"' adj/residuals.svg"
   STDOUT_MATCH "exaggeration: vectors ×[0-9.e+]+\nrmse: [^\n]+\nfigure ok: [0-9]+x[0-9]+\n[1-9][0-9]*\n")

@@ -224,4 +224,36 @@ void draw_length_histogram(SvgPlot& plot, double left, double top, double width,
   plot.legend(h, leg);
 }
 
+SvgPlot residual_figure(const std::vector<ResidualView>& views, int cols, const std::vector<HistogramSet>& hist,
+                        const std::string& title,
+                        const std::function<void(SvgPlot&, int, size_t, const FieldScale&)>& extra,
+                        const std::vector<SvgPlot::LegendEntry>& more_legend) {
+  const int n = static_cast<int>(views.size());
+  cols = std::max(1, std::min(cols, std::max(1, n)));
+  const int rows = std::max(1, (n + cols - 1) / cols);
+  const double pw = 320, top = 78, left = 75, hgap = 75, vgap = 85;
+  const double cbar_x = left + cols * pw + (cols - 1) * hgap + 20, hist_x = cbar_x + 130;
+  const double height = top + rows * pw + (rows - 1) * vgap + (more_legend.empty() ? 95 : 115);
+  const FieldScale fs = field_scale(views);
+  SvgPlot plot(hist.empty() ? cbar_x + 110 : hist_x + pw + 30, height, title);
+  for (int k = 0; k < n; ++k) {
+    if (views[k].title.empty() && views[k].x.empty()) continue;  // a hole in the grid
+    double x0, y0, x1, y1;
+    view_extent(views[k], x0, y0, x1, y1);
+    SvgPlot::PanelSpec spec = SvgPlot::spec(left + (k % cols) * (pw + hgap), top + (k / cols) * (pw + vgap), pw, pw, x0,
+                                            x1, y0, y1, views[k].title, "x (px)", "y (px)");
+    spec.y_down = spec.equal_aspect = true;
+    spec.note = residual_summary_text(summarize_residuals(views[k].dx, views[k].dy));
+    const int p = plot.panel(spec);
+    draw_residual_field(plot, p, views[k], fs);
+    if (extra) extra(plot, p, static_cast<size_t>(k), fs);
+  }
+  plot.colorbar(cbar_x, top, 16, pw, 0, fs.vmax, "|cell mean residual| (px)");
+  const double legend_y = height - (more_legend.empty() ? 18 : 38);
+  field_legend(plot, left, legend_y, fs);
+  if (!more_legend.empty()) plot.legend_at(left, legend_y + 22, more_legend);
+  if (!hist.empty()) draw_length_histogram(plot, hist_x, top, pw, pw, hist, "residual length, all views");
+  return plot;
+}
+
 }  // namespace tpkit

@@ -86,8 +86,6 @@ void plot_reprojection(const std::string& path, const Eigen::MatrixXd& xy, const
   // rows: the fit set, then the check set (if any); columns: views 1-3, a colour bar, the histogram
   const bool check = cR.rows() > 0;
   const int rows = check ? 2 : 1;
-  const double pw = 330, top = 78, left = 75, hgap = 75, vgap = 85;
-  const double cbar_x = left + 3 * pw + 2 * hgap + 20, hist_x = cbar_x + 130;
   std::vector<ResidualView> views;
   for (int set = 0; set < rows; ++set) {
     const Eigen::MatrixXd& P = set == 0 ? xy : cxy;
@@ -116,22 +114,6 @@ void plot_reprojection(const std::string& path, const Eigen::MatrixXd& xy, const
       views[k].width = ext[k % 3][2] + 0.5;
       views[k].height = ext[k % 3][3] + 0.5;
     }
-  const FieldScale fs = field_scale(views);
-  const double height = top + rows * pw + (rows - 1) * vgap + 95;
-  SvgPlot plot(hist_x + pw + 30, height, title);
-  for (size_t k = 0; k < views.size(); ++k) {
-    const int set = static_cast<int>(k / 3), v = static_cast<int>(k % 3);
-    double x0, y0, x1, y1;
-    view_extent(views[k], x0, y0, x1, y1);
-    SvgPlot::PanelSpec spec = SvgPlot::spec(left + v * (pw + hgap), top + set * (pw + vgap), pw, pw, x0, x1, y0, y1,
-                                            views[k].title, "x (px)", "y (px)");
-    spec.y_down = spec.equal_aspect = true;
-    spec.note = residual_summary_text(summarize_residuals(views[k].dx, views[k].dy));
-    int p = plot.panel(spec);
-    draw_residual_field(plot, p, views[k], fs);
-  }
-  plot.colorbar(cbar_x, top, 16, pw, 0, fs.vmax, "|cell mean residual| (px)");
-  field_legend(plot, left, height - 18, fs);
   std::vector<HistogramSet> hist(1);
   hist[0] = {check ? "fit" : "tracks", "#4c78a8", {}};
   for (size_t k = 0; k < 3; ++k)
@@ -141,7 +123,7 @@ void plot_reprojection(const std::string& path, const Eigen::MatrixXd& xy, const
     for (size_t k = 3; k < 6; ++k)
       for (size_t i = 0; i < views[k].dx.size(); ++i) hist[1].length.push_back(std::hypot(views[k].dx[i], views[k].dy[i]));
   }
-  draw_length_histogram(plot, hist_x, top, pw, pw, hist, "residual length, all views");
+  SvgPlot plot = residual_figure(views, 3, hist, title);
   plot.save(path);
 }
 

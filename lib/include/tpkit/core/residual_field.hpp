@@ -6,6 +6,7 @@
 // Conventions: positions are pixels, x = column, y = row, (0, 0) the centre of the top-left pixel;
 // residuals are pixels (any sign convention: the caller's, stated in its legend).
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -64,5 +65,13 @@ struct HistogramSet {
 };
 void draw_length_histogram(SvgPlot& plot, double left, double top, double width, double height,
                            const std::vector<HistogramSet>& sets, const std::string& title);
+
+// A whole residual figure: the views' fields in a grid of `cols` columns (row-major, all square panels,
+// one FieldScale), a colour bar right of the grid, the histogram of `hist` (if any) right of it, the
+// legend at the bottom. `extra(plot, panel, k)` may draw more in view k's panel (same data units).
+SvgPlot residual_figure(const std::vector<ResidualView>& views, int cols, const std::vector<HistogramSet>& hist,
+                        const std::string& title,
+                        const std::function<void(SvgPlot&, int, size_t, const FieldScale&)>& extra = {},
+                        const std::vector<SvgPlot::LegendEntry>& more_legend = {});
 
 }  // namespace tpkit
