@@ -18,6 +18,8 @@
 #include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
+#include "tpkit/ground/gcp_file.hpp"
+#include "tpkit/ground/ground_accuracy.hpp"
 
 extern const char* const tpkit_man_page;
 
@@ -26,7 +28,7 @@ namespace fs = std::filesystem;
 using namespace tpkit;
 
 struct Opts {
-  std::vector<std::string> images, tracks, check, fixed, rpc;
+  std::vector<std::string> images, tracks, check, fixed, rpc, gcp;
   std::string model = "affine", height_prior, dem, crs = "geographic", out;
   double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01, default_sigma = NAN;
   int threads = 1, iterations = 100;
@@ -178,6 +180,91 @@ void write_bias(const std::string& path, const Opts& o, const std::vector<Adjust
   save_bias_table(path, bt);
 }
 
+// GCPs and check points evaluated on the delivered models (before) and the adjusted ones (after).
+struct PointSet {
+  const char* name;  // "control", "check"
+  GcpRole role;
+  const std::vector<AdjustControl>* points;
+  ControlEvaluation before, after;
+  AccuracyStats stats_before, stats_after;
+};
+
+// intersected minus known, ENU metres, per point (NaN where not intersected)
+std::vector<Eigen::Vector3d> point_errors(const std::vector<AdjustControl>& p, const ControlEvaluation& e) {
+  std::vector<Eigen::Vector3d> out;
+  for (size_t k = 0; k < p.size(); ++k)
+    out.push_back(e.intersection[k].ok ? enu_error(e.intersection[k].llh, p[k].llh) : Eigen::Vector3d::Constant(NAN));
+  return out;
+}
+
+AccuracyStats set_stats(const std::vector<Eigen::Vector3d>& err) {
+  std::vector<Eigen::Vector3d> ok;
+  for (const auto& e : err)
+    if (e.allFinite()) ok.push_back(e);
+  return accuracy_stats(ok);
+}
+
+std::vector<PointSet> evaluate_sets(const std::vector<AdjustImage>& images, const AdjustResult& r,
+                                    const std::vector<AdjustControl>& control, const std::vector<AdjustControl>& check) {
+  std::vector<PointSet> sets = {{"control", GcpRole::control, &control, {}, {}, {}, {}},
+                                {"check", GcpRole::check, &check, {}, {}, {}, {}}};
+  for (auto& s : sets) {
+    s.before = evaluate_controls(images, nullptr, *s.points);
+    s.after = evaluate_controls(images, &r.bias, *s.points);
+    s.stats_before = set_stats(point_errors(*s.points, s.before));
+    s.stats_after = set_stats(point_errors(*s.points, s.after));
+  }
+  return sets;
+}
+
+// The accuracy file (tpkit-formats(5) accuracy): one record per image measurement of a point.
+void write_accuracy(const std::string& path, const std::vector<AdjustImage>& images, const std::vector<PointSet>& sets) {
+  std::vector<ImageRef> refs;
+  for (const auto& im : images) refs.push_back({im.path, im.width, im.height});
+  Meta meta;
+  meta_set(meta, "role", "0: control point (in the fit), 1: check point (never in the fit)");
+  meta_set(meta, "dx_after", "projection of the known ground position by the adjusted model minus the measurement (pixels; _before: delivered model)");
+  meta_set(meta, "e_after", "the point intersected from its measurements on the adjusted models minus its known position, metres east, north, up "
+                            "at the known position (_before: on the delivered models; nan: not intersected)");
+  meta_set(meta, "ce90", "90th percentile of the horizontal error (nearest rank); ce90_normal = 1.5175 rmse_h, le90_normal = 1.6449 rmse_v");
+  std::ostringstream os;
+  write_header(os, "accuracy", 1, refs, meta,
+               {"id", "role", "image", "x", "y", "sigma_px", "dx_before", "dy_before", "dx_after", "dy_after", "e_before", "n_before",
+                "u_before", "e_after", "n_after", "u_after"});
+  for (const auto& s : sets) {
+    const auto eb = point_errors(*s.points, s.before), ea = point_errors(*s.points, s.after);
+    for (size_t p = 0; p < s.points->size(); ++p) {
+      const AdjustControl& c = (*s.points)[p];
+      for (size_t k = 0; k < c.views.size(); ++k) {
+        const Eigen::Vector2d db = s.before.known_residual_px[p][k], da = s.after.known_residual_px[p][k];
+        write_record(os, {static_cast<double>(c.id), static_cast<double>(s.role), static_cast<double>(c.views[k].first + 1),
+                          c.views[k].second[0], c.views[k].second[1], c.sigma_px[k], db[0], db[1], da[0], da[1], eb[p][0], eb[p][1],
+                          eb[p][2], ea[p][0], ea[p][1], ea[p][2]});
+      }
+    }
+  }
+  for (const auto& s : sets)
+    for (const auto& [phase, st] : {std::make_pair("before", &s.stats_before), std::make_pair("after", &s.stats_after)}) {
+      const std::string k = std::string("# ") + s.name + "_" + phase + "_";
+      os << k << "n: " << st->n << '\n';
+      os << k << "rmse_h_m: " << format_number(st->rmse_r) << '\n';
+      os << k << "rmse_v_m: " << format_number(st->rmse_u) << '\n';
+      os << k << "rmse_e_m: " << format_number(st->rmse_e) << '\n';
+      os << k << "rmse_n_m: " << format_number(st->rmse_n) << '\n';
+      os << k << "mean_enu_m: " << format_number(st->mean[0]) << ' ' << format_number(st->mean[1]) << ' ' << format_number(st->mean[2]) << '\n';
+      os << k << "ce90_m: " << format_number(st->ce90) << '\n';
+      os << k << "le90_m: " << format_number(st->le90) << '\n';
+      os << k << "ce90_normal_m: " << format_number(st->ce90_normal) << '\n';
+      os << k << "le90_normal_m: " << format_number(st->le90_normal) << '\n';
+    }
+  write_file_atomic(path, os.str());
+}
+
+std::string stats_line(const AccuracyStats& s) {
+  return "RMSE horizontal " + format_figure(s.rmse_r, 3) + " m, vertical " + format_figure(s.rmse_u, 3) + " m, CE90 " +
+         format_figure(s.ce90, 3) + " m, LE90 " + format_figure(s.le90, 3) + " m";
+}
+
 int run(const Opts& o) {
   if (o.images.empty()) throw UsageError("no images given");
   if (o.tracks.empty()) throw UsageError("--tracks: at least one tracks file is needed");
@@ -210,11 +297,20 @@ int run(const Opts& o) {
   }
   const std::vector<AdjustTrack> tracks = gather_tracks(o.tracks, o.images);
   const std::vector<AdjustTrack> check = gather_tracks(o.check, o.images);
+  std::vector<Gcp> gcps;
+  for (const auto& f : o.gcp) {
+    auto part = read_gcp_file(f);
+    gcps.insert(gcps.end(), part.begin(), part.end());
+  }
+  ao.control = gcps_to_adjust(gcps, GcpRole::control, images);
+  const std::vector<AdjustControl> check_points = gcps_to_adjust(gcps, GcpRole::check, images);
+  if (!o.gcp.empty() && ao.control.empty()) warn("--gcp: no control point (role 0) in the files: only check points, the fit is that without GCPs");
 
   create_output_dir(o.out);
   std::vector<std::string> inputs = o.images;
   inputs.insert(inputs.end(), o.tracks.begin(), o.tracks.end());
   inputs.insert(inputs.end(), o.check.begin(), o.check.end());
+  inputs.insert(inputs.end(), o.gcp.begin(), o.gcp.end());
   if (!o.dem.empty()) inputs.push_back(o.dem);
   const fs::path dir(o.out);
   check_outputs({{"-o", (dir / "rpc.bias").string()},
@@ -224,6 +320,7 @@ int run(const Opts& o) {
                  {"-o", (dir / "ground.csvt").string()},
                  {"-o", (dir / "ground.prj").string()},
                  {"-o", (dir / "rpc.residuals").string()},
+                 {"-o", (dir / "accuracy").string()},
                  {"-o", (dir / "residuals.svg").string()}},
                 inputs);
 
@@ -239,12 +336,24 @@ int run(const Opts& o) {
     else
       std::cerr << "rpc-adjust: " << what << " agrees with the tie points: " << pc.figures << "\n";
   }
+  if (!ao.control.empty()) {
+    // GCPs that contradict the tie points (or each other): solved again without them, compared
+    const GcpCheck gc = check_gcps(images, tracks, ao, r);
+    if (gc.contradicts && o.strict) throw NumericalError("--gcp: the control points contradict the tie points (--strict): " + gc.figures);
+    if (gc.contradicts)
+      warn("--gcp: the control points contradict the tie points: " + gc.figures + " (check that point's coordinates, datum and measurements; --strict makes this an error)");
+    else
+      std::cerr << "rpc-adjust: --gcp: the control points agree with the tie points: " << gc.figures << "\n";
+  }
+  std::vector<PointSet> sets;
+  if (!gcps.empty()) sets = evaluate_sets(images, r, ao.control, check_points);
   long check_n = 0;
   double check_rms = check.empty() ? NAN : held_out_rms(images, r.bias, check, &check_n);
   auto fits = write_models(o, images, r);
   write_bias((dir / "rpc.bias").string(), o, images, sources, r, fits);
   write_points(dir, o, images, sources, tracks, r);
   write_residuals((dir / "rpc.residuals").string(), images, tracks, r, check_rms, check_n);
+  if (!sets.empty()) write_accuracy((dir / "accuracy").string(), images, sets);
   plot_rpc_residuals((dir / "residuals.svg").string(), images, r,
                      "rpc-adjust --model " + o.model + ": residual vectors before (red) and after (blue)");
 
@@ -274,6 +383,11 @@ int run(const Opts& o) {
   if (r.obs_with_sigma > 0 && r.obs_with_sigma < static_cast<long>(r.obs_image.size()) && std::isnan(o.default_sigma))
     warn(std::to_string(r.obs_image.size() - r.obs_with_sigma) + " observations have no sigma: weighted as the median of the others, " +
          format_figure(r.default_sigma_px) + " px (--default-sigma sets it, --unweighted ignores every sigma)");
+  for (const auto& s : sets) {
+    if (s.points->empty()) continue;
+    std::cerr << "rpc-adjust: " << s.name << " points (" << s.stats_after.n << " of " << s.points->size() << " intersected): before "
+              << stats_line(s.stats_before) << "; after " << stats_line(s.stats_after) << "\n";
+  }
   double worst_refit = 0;
   for (const auto& f : fits) worst_refit = std::max(worst_refit, f.max_px);
   std::cerr << "rpc-adjust: adjusted models refitted to the biased ones within " << format_figure(worst_refit, 3) << " px\n";
@@ -297,6 +411,7 @@ int main(int argc, char** argv) {
         app.add_option("--model", o->model, "bias model: shift, drift or affine");
         app.add_option("--fixed", o->fixed, "an image whose model is kept (repeatable)")
             ->allow_extra_args(false);  // one image each: `--fixed A B C` leaves B and C to the images
+        app.add_option("--gcp", o->gcp, "ground control and check points: ASP .gcp or tpkit gcp files")->allow_extra_args(false);
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--height-prior", o->height_prior, "H+-S: height prior of every ground point (m)");
         app.add_option("--dem", o->dem, "GeoTIFF DEM (EPSG:4326, m above the ellipsoid): height prior");
@@ -310,7 +425,7 @@ int main(int argc, char** argv) {
         app.add_option("--prior-linear", o->prior_linear, "sigma of the linear terms' prior (px per px)")->check(Positive);
         app.add_option("--iterations", o->iterations, "largest number of solver iterations")->check(Positive);
         app.add_option("--threads", o->threads, "threads");
-        app.add_flag("--strict", o->strict, "a height prior (--height-prior, --dem) that contradicts the tie points is an error");
+        app.add_flag("--strict", o->strict, "a height prior (--height-prior, --dem) or GCPs (--gcp) that contradict the tie points are an error");
         app.add_flag("--write-tiff", o->write_tiff, "also write a copy of each image with the adjusted tag 50844");
         app.add_option("-o,--out", o->out, "output folder (created if needed)");
         return [o]() { return run(*o); };

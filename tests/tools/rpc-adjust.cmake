@@ -95,11 +95,11 @@ tpkit_tool_test(rpc-adjust.ground-gis-forms
 # (bench/gcp_from_truth.awk), left out of the tie tracks. The check points, intersected on the adjusted
 # models, are within 0.5 m of the truth horizontally and vertically (metres before: the biased models).
 set(synth_gcp "tp-synth -o syn --size 256 --points 300 --rpc-bias 1:4,-3,0.002,-0.001 --rpc-bias 2:-5,2,0.001,0.002 --rpc-bias 3:3,5,-0.002,0.001 > /dev/null")
-set(make_gcp "awk -v TIES=syn/ties.tracks -f $SRC/bench/gcp_from_truth.awk syn/truth.tracks")
+set(make_gcp "awk -v TIES=syn/ties.tracks -f $SRC/bench/gcp_from_truth.awk")
 set(adjust_gcp "rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/ties.tracks")
 set(read_accuracy "awk '/^# check_(before|after)_rmse_[hv]_m:/ { sub(/^# /, \"\") @SEMI@ sub(/:/, \"\") @SEMI@ v[$1] = $2 } END { ok = v[\"check_after_rmse_h_m\"] < 0.5 && v[\"check_after_rmse_v_m\"] < 0.5 && v[\"check_before_rmse_v_m\"] > 2 @SEMI@ print (ok ? \"accuracy ok\" : \"accuracy off\"), v[\"check_after_rmse_h_m\"], v[\"check_after_rmse_v_m\"] }' adj/accuracy")
 tpkit_tool_test(rpc-adjust.gcp-check-points
-  COMMAND "${synth_gcp} && ${make_gcp} > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj && ${read_accuracy}"
+  COMMAND "${synth_gcp} && ${make_gcp} syn/truth.tracks > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj && ${read_accuracy}"
   STDOUT_MATCH "^accuracy ok "
   STDERR_MATCH "rpc-adjust: --gcp: the control points agree with the tie points: rms after [0-9.e-]+ px with the GCPs, [0-9.e-]+ px without .*\nrpc-adjust: control points \\(5 of 5 intersected\\): before RMSE horizontal [0-9.]+ m, vertical [0-9.]+ m, CE90 [0-9.]+ m, LE90 [0-9.]+ m@SEMI@ after .*\nrpc-adjust: check points \\(20 of 20 intersected\\): before RMSE horizontal "
   CHECK_FILE adj/accuracy
@@ -114,19 +114,19 @@ tpkit_tool_test(rpc-adjust.gcp-asp-form
 # A control point 20 m off in the east: a warning with the figures (the point, its normalized residual,
 # metres); --strict refuses the run and writes nothing.
 tpkit_tool_test(rpc-adjust.gcp-contradicting
-  COMMAND "${synth_gcp} && ${make_gcp} -v BLUNDER=20 > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj 2> log && grep -c 'warning: --gcp: the control points contradict the tie points: rms after [0-9.e-]* px with the GCPs, [0-9.e-]* px without (over the [0-9]* tracks neither flags)@SEMI@ largest normalized GCP residual [0-9.]* sigma at point [0-9]* (adjusted minus given: e -*[1-9][0-9.]* m' log && ${adjust_gcp} --gcp syn/points.gcp --strict -o adj2"
+  COMMAND "${synth_gcp} && ${make_gcp} BLUNDER=20 syn/truth.tracks > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj 2> log && grep -c 'warning: --gcp: the control points contradict the tie points: rms after [0-9.e-]* px with the GCPs, [0-9.e-]* px without (over the [0-9]* tracks neither flags)@SEMI@ largest normalized GCP residual [0-9.]* sigma at point [0-9]* (adjusted minus given: e -*[1-9][0-9.]* m' log && ${adjust_gcp} --gcp syn/points.gcp --strict -o adj2"
   EXPECT_FAIL STDOUT_MATCH "^1\n$" STDERR_MATCH "rpc-adjust: --gcp: the control points contradict the tie points \\(--strict\\): rms after" NO_FILE adj2)
 # Bad GCP files: an image that is none of the images, a measurement off its image, a malformed ASP line:
 # file:line, exit 1, nothing written.
 tpkit_tool_test(rpc-adjust.gcp-unknown-image
-  COMMAND "${synth_gcp} && ${make_gcp} | sed '2s/view1.tif/other.tif/' > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj"
+  COMMAND "${synth_gcp} && ${make_gcp} syn/truth.tracks | sed '2s/view1.tif/other.tif/' > syn/points.gcp && ${adjust_gcp} --gcp syn/points.gcp -o adj"
   EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/points.gcp:[0-9]+: control point [0-9]+: image 'other.tif' is not one of the images given" NO_FILE adj)
 tpkit_tool_test(rpc-adjust.gcp-off-image
-  COMMAND "${synth_gcp} && printf '1 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2 0.2\\n2 43.3 5.4 100 1 1 1 view2.tif 300 20 0.2 0.2\\n' > syn/bad.gcp && ${adjust_gcp} --gcp syn/bad.gcp -o adj"
+  COMMAND "${synth_gcp} && printf '1 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2 0.2\\n2 43.3 5.4 100 1 1 1 view2.tif 300 20 0.2 0.2\\n' > syn/bad.gcp && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --gcp syn/bad.gcp -o adj"
   EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/bad.gcp:2: control point 2: \\(300, 20\\) is off syn/view2.tif \\(256 x 256 pixels\\)" NO_FILE adj)
 tpkit_tool_test(rpc-adjust.gcp-malformed-asp
-  COMMAND "${synth_gcp} && printf '# ASP\\n1 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2\\n' > syn/bad.gcp && ${adjust_gcp} --gcp syn/bad.gcp -o adj"
-  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/bad.gcp:2: 10 fields: an ASP GCP line is" NO_FILE adj)
+  COMMAND "${synth_gcp} && printf '# ASP\\n1 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2\\n' > syn/bad.gcp && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --gcp syn/bad.gcp -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: syn/bad.gcp:2: 11 fields: an ASP GCP line is" NO_FILE adj)
 # issue 27: residuals.svg renders (rsvg-convert), every mark inside its panel, one exaggeration for
 # every panel, each panel's RMSE (the before row, then the after row) equal to rpc.residuals' summary lines
 tpkit_tool_test(rpc-adjust.figure-renders

@@ -98,6 +98,27 @@ class HeightPriorCost : public ceres::SizedCostFunction<1, 3> {
   double h_start_;
 };
 
+// The image of `images` a file's reference names (defined with gather_tracks); -1 none, -2 ambiguous.
+int match_image(const std::string& file, const std::string& ref, const std::vector<std::string>& images);
+
+// A control point's ground prior: (g - known) in metres east, north, up (metres per degree of lon and lat
+// at the known latitude) times w_k = s_ref / sigma_k.
+struct ControlPriorCost {
+  Eigen::Vector3d known, w, metres_per_degree;
+  template <typename T>
+  bool operator()(const T* g, T* r) const {
+    for (int k = 0; k < 3; ++k) r[k] = (g[k] - known[k]) * metres_per_degree[k] * w[k];
+    return true;
+  }
+};
+
+// WGS 84 metres per degree of longitude and latitude at latitude lat (deg), and 1 for the height.
+Eigen::Vector3d metres_per_degree(double lat) {
+  const double a = 6378137.0, f = 1 / 298.257223563, e2 = f * (2 - f), rad = M_PI / 180;
+  const double s = std::sin(lat * rad), w = std::sqrt(1 - e2 * s * s);
+  return {a / w * std::cos(lat * rad) * rad, a * (1 - e2) / (w * w * w) * rad, 1.0};
+}
+
 class ProgressCallback : public ceres::IterationCallback {
  public:
   ProgressCallback(Progress* p) : p_(p) {}
@@ -256,6 +277,30 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
         problem.AddResidualBlock(new HeightPriorCost(&o.height, h), nullptr, g);
         ++with_height;
       }
+    }
+  }
+  // ground control points: an unknown ground point each, with its prior and its measurements (no loss)
+  r.control_ground.resize(o.control.size());
+  for (size_t c = 0; c < o.control.size(); ++c) {
+    const AdjustControl& gc = o.control[c];
+    r.control_ground[c] = gc.llh;
+    double* g = r.control_ground[c].data();
+    const Eigen::Vector3d w = Eigen::Vector3d::Constant(s_ref).cwiseQuotient(gc.sigma_enu);
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ControlPriorCost, 3, 3>(
+                                 new ControlPriorCost{gc.llh, w, metres_per_degree(gc.llh[1])}),
+                             nullptr, g);
+    for (size_t k = 0; k < gc.views.size(); ++k) {
+      const auto& [i, xy] = gc.views[k];
+      image_seen[i] = 1;
+      const double wk = s_ref / std::max(gc.sigma_px[k], kMinObservationSigma);
+      if (images[i].fixed)
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedObservationCost, 2, 3>(
+                                     new FixedObservationCost{&images[i].model, xy[0], xy[1], wk}),
+                                 nullptr, g);
+      else
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ObservationCost, 2, 6, 3>(
+                                     new ObservationCost{&images[i].model, xy[0], xy[1], wk}),
+                                 nullptr, block[i].data(), g);
     }
   }
   if (o.height.at && with_height == 0)
@@ -473,6 +518,98 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
               std::to_string(c.flagged_with) + " with, " + std::to_string(c.flagged_without) + " without; prior minus free height: median " +
               format_figure(c.median_dh) + " m, median |.| " + format_figure(c.median_abs_dh) + " m = " +
               format_figure(c.median_abs_dh / c.sigma) + " sigma (sigma " + format_figure(c.sigma) + " m, " + std::to_string(c.covered) + " tracks)";
+  return c;
+}
+
+std::vector<AdjustControl> gcps_to_adjust(const std::vector<Gcp>& gcps, GcpRole role, const std::vector<AdjustImage>& images) {
+  std::vector<std::string> paths;
+  for (const auto& im : images) paths.push_back(im.path);
+  std::vector<AdjustControl> out;
+  for (const Gcp& g : gcps) {
+    if (g.role != role) continue;
+    AdjustControl c;
+    c.source = g.source;
+    c.line = g.line;
+    c.id = g.id;
+    c.llh = g.llh;
+    c.sigma_enu = g.sigma_enu;
+    const std::string id = (role == GcpRole::control ? "control point " : "check point ") + std::to_string(g.id);
+    for (const GcpMeasurement& m : g.measurements) {
+      const int i = match_image(g.source, m.image, paths);
+      if (i < 0)
+        throw InputError(g.source, m.line, id + ": image '" + m.image + "' is " + (i == -2 ? "ambiguous among" : "not one of") + " the images given");
+      const AdjustImage& im = images[i];
+      if (im.width > 0 && !(m.xy[0] >= -0.5 && m.xy[0] <= im.width - 0.5 && m.xy[1] >= -0.5 && m.xy[1] <= im.height - 0.5))
+        throw InputError(g.source, m.line, id + ": (" + format_number(m.xy[0]) + ", " + format_number(m.xy[1]) + ") is off " +
+                                               im.path + " (" + std::to_string(im.width) + " x " + std::to_string(im.height) + " pixels)");
+      for (const auto& v : c.views)
+        if (v.first == i) throw InputError(g.source, m.line, id + " is measured twice in " + im.path);
+      c.views.emplace_back(i, m.xy);
+      c.sigma_px.push_back(m.sigma_px);
+      c.view_line.push_back(m.line);
+    }
+    if (role == GcpRole::control && c.views.empty())
+      throw InputError(g.source, g.line, id + " is measured in no image: it cannot hold the adjustment");
+    if (role == GcpRole::check && c.views.size() < 2)
+      throw InputError(g.source, g.line, id + " is measured in " + std::to_string(c.views.size()) +
+                                             " image(s): a check point is intersected from two or more");
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+ControlEvaluation evaluate_controls(const std::vector<AdjustImage>& images, const std::vector<ImageBias>* bias,
+                                    const std::vector<AdjustControl>& points) {
+  ControlEvaluation e;
+  for (const auto& p : points) {
+    std::vector<RpcObservation> v;
+    for (const auto& [i, xy] : p.views) v.push_back({&images[i].model, bias ? &(*bias)[i] : nullptr, xy});
+    RpcIntersection x;
+    if (v.size() >= 2) x = intersect_rpc(v, p.llh[2]);
+    e.intersection.push_back(x);
+    std::vector<Eigen::Vector2d> res;
+    for (const auto& o : v) res.push_back(rpc_observe(o, p.llh) - o.xy);
+    e.known_residual_px.push_back(res);
+  }
+  return e;
+}
+
+GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                    const AdjustOptions& options, const AdjustResult& with) {
+  GcpCheck c;
+  AdjustOptions free_options = options;
+  free_options.control.clear();
+  free_options.progress = false;
+  const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
+  double s[2] = {0, 0};
+  long n = 0;
+  for (size_t k = 0; k < with.obs_track.size(); ++k) {
+    const size_t t = static_cast<size_t>(with.obs_track[k]);
+    if (with.flagged[t] || free_fit.flagged[t]) continue;
+    s[0] += with.res_after[k].squaredNorm();
+    s[1] += free_fit.res_after[k].squaredNorm();
+    ++n;
+  }
+  for (size_t t = 0; t < with.flagged.size(); ++t) c.common_tracks += with.initial_ok[t] && !with.flagged[t] && !free_fit.flagged[t];
+  c.rms_with = n ? std::sqrt(s[0] / n) : NAN;
+  c.rms_without = n ? std::sqrt(s[1] / n) : NAN;
+  for (size_t p = 0; p < options.control.size(); ++p) {
+    const AdjustControl& gc = options.control[p];
+    const Eigen::Vector3d g = with.control_ground[p];
+    const Eigen::Vector3d enu = (g - gc.llh).cwiseProduct(metres_per_degree(gc.llh[1]));
+    double worst = enu.cwiseQuotient(gc.sigma_enu).cwiseAbs().maxCoeff();
+    for (size_t k = 0; k < gc.views.size(); ++k) {
+      const auto& [i, xy] = gc.views[k];
+      const RpcObservation o{&images[i].model, &with.bias[i], xy};
+      worst = std::max(worst, (rpc_observe(o, g) - xy).cwiseAbs().maxCoeff() / std::max(gc.sigma_px[k], kMinObservationSigma));
+    }
+    if (worst > c.worst_normalized) c.worst_normalized = worst, c.worst_id = gc.id, c.worst_enu = enu;
+  }
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with.reference_sigma_px || c.worst_normalized > 5;
+  c.figures = "rms after " + format_figure(c.rms_with) + " px with the GCPs, " + format_figure(c.rms_without) +
+              " px without (over the " + std::to_string(c.common_tracks) + " tracks neither flags); largest normalized GCP residual " +
+              format_figure(c.worst_normalized) + " sigma at point " + std::to_string(c.worst_id) + " (adjusted minus given: e " +
+              format_figure(c.worst_enu[0], 3) + " m, n " + format_figure(c.worst_enu[1], 3) + " m, u " + format_figure(c.worst_enu[2], 3) + " m)";
   return c;
 }
 

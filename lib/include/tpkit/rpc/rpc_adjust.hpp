@@ -29,6 +29,13 @@
 // in is simply absent (files: a "nan nan" pair, never read as a coordinate). A matches record is a track
 // of its two images.
 //
+// Ground control (AdjustOptions::control, rpc-adjust --gcp): each control point's ground position is an
+// unknown (lon, lat, h) with a Gaussian prior at its known position, residual (g - known) in metres east,
+// north, up (metres per degree at the known latitude, WGS 84) times s_ref / sigma_m; each of its image
+// measurements is an observation as a tie point's, weight s_ref / sigma_px, without the robust loss (a
+// control point is trusted; one that contradicts the tie points is found by check_gcps). With control
+// points no image needs to be fixed: they hold the common shift and the height level; the bias priors stay.
+//
 // Gauge: without ground control, tie points fix only the relative geometry: a common shift of every image
 // is a ground translation (and a common affine term a ground deformation) that the tie points cannot see.
 // With at least one --fixed image the others are adjusted to it; with none, the priors choose the
@@ -42,6 +49,7 @@
 #include <vector>
 
 #include "tpkit/core/formats.hpp"
+#include "tpkit/ground/gcp_file.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/rpc/rpc_model.hpp"
@@ -70,6 +78,18 @@ struct AdjustTrack {
 // this, so that no observation dominates the fit.
 constexpr double kMinObservationSigma = 0.02;
 
+// A ground control point in the adjustment (gcp_file.hpp Gcp, its images matched: gcps_to_adjust).
+struct AdjustControl {
+  std::string source;
+  long line = 0;
+  long long id = 0;
+  Eigen::Vector3d llh = Eigen::Vector3d::Zero();        // known: lon, lat (deg), h (m, ellipsoid)
+  Eigen::Vector3d sigma_enu = Eigen::Vector3d::Ones();  // m
+  std::vector<std::pair<int, Eigen::Vector2d>> views;   // image index, measured pixel
+  std::vector<double> sigma_px;                         // per view
+  std::vector<long> view_line;                          // per view: its line in source
+};
+
 struct HeightPrior {
   // Height (m above the ellipsoid) at (lon, lat) and, when grad is not null, its derivatives (m per degree of
   // lon, lat); false where unknown (off the DEM). Empty: no prior.
@@ -86,6 +106,7 @@ struct AdjustOptions {
   bool use_sigma = true;        // weigh observations by their sigma (false: every one at default_sigma_px)
   double default_sigma_px = NAN;  // sigma of observations without one; NaN: median of those given, else 1 px
   HeightPrior height;
+  std::vector<AdjustControl> control;  // ground control points (see the header comment)
   int threads = 1;
   int max_iterations = 100;
   bool progress = false;        // progress line on a terminal (tool_support Progress)
@@ -107,6 +128,7 @@ struct AdjustResult {
   double reference_sigma_px = 1;  // s_ref: the median sigma over the observations (weight 1)
   double sigma0 = 0;              // per-coordinate RMS after (pixels)
   double sigma0_weighted = 0;     // per-coordinate RMS of the weighted residuals after (px at s_ref)
+  std::vector<Eigen::Vector3d> control_ground;  // per control point: its adjusted position (lon, lat, h)
   int iterations = 0;
   bool converged = true;          // false: the solver stopped at max_iterations (or another limit) first
   std::string solver_report;
@@ -144,6 +166,43 @@ struct HeightPriorCheck {
 };
 HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                                     const AdjustOptions& options, const AdjustResult& with_prior);
+
+// The points of GCP files as the adjustment's: those of `role`, each measurement's image matched to one of
+// `images` as a tracks file's are (gather_tracks). InputError (file:line) for an image that is none of
+// them (or ambiguous), a measurement off its image (images with a size; 0.5 px of slack beyond the
+// edge pixels' edges), a control point measured in no image, a check point measured in fewer than two
+// (it could not be intersected).
+std::vector<AdjustControl> gcps_to_adjust(const std::vector<Gcp>& gcps, GcpRole role, const std::vector<AdjustImage>& images);
+
+// A point measured in the images intersected on the models (biases applied when `bias` is not null):
+// RpcIntersection per point (ok false: fewer than two views or no convergence), and per view the
+// projection of its KNOWN position minus the measurement (pixels).
+struct ControlEvaluation {
+  std::vector<RpcIntersection> intersection;
+  std::vector<std::vector<Eigen::Vector2d>> known_residual_px;
+};
+ControlEvaluation evaluate_controls(const std::vector<AdjustImage>& images, const std::vector<ImageBias>* bias,
+                                    const std::vector<AdjustControl>& points);
+
+// Do the control points contradict the tie points? The adjustment is solved again without them (the
+// gauge then held by --fixed images or the bias priors) and compared: they contradict when, with them,
+// the tie points' RMS after the fit (over the tracks neither fit flags) exceeds the free fit's by more
+// than 20% and a quarter of their reference sigma s_ref (noisy GCPs bend noise-free tie points a little:
+// 0.04 px at 1 px sigma on a tp-synth block; only a fit that the tie points' own sigma cannot explain
+// counts), or when a control point's normalized residual after the fit (the largest of its
+// ground residuals over their sigmas and its image residuals over their sigmas) exceeds 5: a GCP that the
+// other GCPs and the tie points cannot fit (a blunder in its coordinates or its measurements).
+struct GcpCheck {
+  bool contradicts = false;
+  double rms_with = 0, rms_without = 0;  // px, over the tracks neither fit flags
+  long common_tracks = 0;
+  long long worst_id = 0;                // the control point of the largest normalized residual
+  double worst_normalized = 0;           // that residual (sigmas)
+  Eigen::Vector3d worst_enu = Eigen::Vector3d::Zero();  // its ground residual (adjusted minus known, m)
+  std::string figures;                   // one line: the figures above
+};
+GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
+                    const AdjustOptions& options, const AdjustResult& with_gcps);
 
 // RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0), pixels.
 double residual_rms(const AdjustResult& r, bool after, int image = -1);
