@@ -339,6 +339,10 @@ void SvgPlot::legend_at(double x, double y, const std::vector<LegendEntry>& entr
         o << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(cy) << "\" r=\"2.2\" fill=\"none\" stroke=\"" << e.color
           << "\"/>\n";
         break;
+      case Mark::frame:
+        o << "<rect x=\"" << num(cx - 6) << "\" y=\"" << num(cy - 5) << "\" width=\"12\" height=\"10\" fill=\"none\" stroke=\""
+          << e.color << "\" stroke-width=\"1.2\"/>\n";
+        break;
       case Mark::box:
         o << "<rect x=\"" << num(cx - 6) << "\" y=\"" << num(cy - 5) << "\" width=\"12\" height=\"10\" fill=\"" << e.color
           << "\" stroke=\"#999\" stroke-width=\"0.5\"/>\n";
@@ -394,6 +398,11 @@ std::string SvgPlot::str() const {
     << "\" font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     << body_ << "</svg>\n";
   return o.str();
+}
+
+std::string SvgPlot::inline_svg() const {
+  const std::string s = str();
+  return s.substr(s.find("<svg "));
 }
 
 void SvgPlot::save(const std::string& path) const { write_file_atomic(path, str()); }

@@ -26,7 +26,7 @@ class SvgPlot {
     std::string note;                       // one line under the title, above the panel (e.g. RMSE)
   };
   // A legend's symbol: the mark it names, drawn as that mark.
-  enum class Mark { dot, cross, ring, line, arrow, box };
+  enum class Mark { dot, cross, ring, line, arrow, box, frame };  // box filled, frame outlined
   struct LegendEntry {
     std::string label, color;
     Mark mark = Mark::line;
@@ -80,6 +80,8 @@ class SvgPlot {
   bool marks_inside(double tol = 0.01) const;
 
   std::string str() const;
+  // The <svg> element alone (no XML declaration), for inlining in HTML.
+  std::string inline_svg() const;
   // Atomic write (atomic_output.hpp).
   void save(const std::string& path) const;
 

@@ -1,0 +1,248 @@
+#include "tpkit/report/run_report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "tpkit/core/coverage_plot.hpp"
+#include "tpkit/core/error.hpp"
+#include "tpkit/core/residual_field.hpp"
+#include "tpkit/core/svg_plot.hpp"
+#include "tpkit/core/text_table.hpp"
+#include "tpkit/core/version.hpp"
+
+namespace tpkit {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool is_tpkit_file(const fs::path& p) {
+  std::ifstream in(p);
+  std::string line;
+  return in && std::getline(in, line) && line.rfind("# tpkit ", 0) == 0;
+}
+
+// Any kind: records as numbers, nan allowed anywhere (tracks' views not seen), rows of any length.
+TextTable read_any(const std::string& path) {
+  ReadOptions o;
+  o.max_version = 99;
+  o.columnar = false;
+  o.may_be_missing = [](const std::string&) { return true; };
+  return read_table_file(path, o);
+}
+
+std::string esc(const std::string& s) { return svg_escape(s); }
+
+int col(const TextTable& t, const std::string& name) { return t.find(name); }
+
+// Views k = 1.. whose x{k}, y{k} columns exist.
+int view_count(const TextTable& t) {
+  int k = 0;
+  while (col(t, "x" + std::to_string(k + 1)) >= 0 && col(t, "y" + std::to_string(k + 1)) >= 0) ++k;
+  return k;
+}
+
+std::string image_name(const TextTable& t, int k) {
+  return k < static_cast<int>(t.images.size()) ? fs::path(t.images[k].path).filename().string() : "view " + std::to_string(k + 1);
+}
+
+std::string coverage_section(const TextTable& t) {
+  const int nv = view_count(t);
+  std::vector<CoverageView> views;
+  for (int k = 0; k < nv; ++k) {
+    CoverageView v;
+    v.title = image_name(t, k);
+    if (k < static_cast<int>(t.images.size())) {
+      v.image = t.images[k].path;
+      v.width = static_cast<double>(t.images[k].width), v.height = static_cast<double>(t.images[k].height);
+    }
+    const int cx = col(t, "x" + std::to_string(k + 1)), cy = col(t, "y" + std::to_string(k + 1));
+    for (const auto& r : t.rows)
+      if (cx < static_cast<int>(r.size()) && cy < static_cast<int>(r.size()) && std::isfinite(r[cx]) && std::isfinite(r[cy]))
+        v.x.push_back(r[cx]), v.y.push_back(r[cy]);
+    views.push_back(std::move(v));
+  }
+  if (views.empty()) return "";
+  return "<h3>Coverage</h3>\n" + coverage_figure(views, "tie points per cell: " + fs::path(t.source).filename().string()).inline_svg();
+}
+
+std::string track_lengths(const TextTable& t) {
+  const int nv = view_count(t);
+  std::map<int, long> by;
+  for (const auto& r : t.rows) {
+    int seen = 0;
+    for (int k = 0; k < nv; ++k) {
+      int cx = col(t, "x" + std::to_string(k + 1));
+      seen += cx < static_cast<int>(r.size()) && std::isfinite(r[cx]);
+    }
+    ++by[seen];
+  }
+  std::ostringstream o;
+  o << "<table><tr><th>views per track</th><th>tracks</th></tr>\n";
+  for (const auto& [len, n] : by) o << "<tr><td>" << len << "</td><td>" << n << "</td></tr>\n";
+  o << "</table>\n";
+  return o.str();
+}
+
+// reproj-eval's residuals: columns x1..y3, dx1..dy3, check (0 fit, 1 check).
+std::string eval_section(const TextTable& t) {
+  const int ck = col(t, "check");
+  std::vector<ResidualView> views;
+  std::vector<HistogramSet> hist = {{"fit", "#4c78a8", {}}, {"check", "#e45756", {}}};
+  bool any_check = false;
+  for (const auto& r : t.rows) any_check |= ck >= 0 && r[ck] == 1;
+  const int sets = any_check ? 2 : 1;
+  for (int set = 0; set < sets; ++set)
+    for (int k = 0; k < 3; ++k) {
+      ResidualView v;
+      v.title = std::string(set ? "check" : (any_check ? "fit" : "tracks")) + ", " + image_name(t, k);
+      if (k < static_cast<int>(t.images.size())) v.width = t.images[k].width, v.height = t.images[k].height;
+      const std::string s = std::to_string(k + 1);
+      const int x = t.require("x" + s), y = t.require("y" + s), dx = t.require("dx" + s), dy = t.require("dy" + s);
+      for (const auto& r : t.rows) {
+        if ((ck >= 0 && r[ck] == 1) != (set == 1)) continue;
+        v.x.push_back(r[x]), v.y.push_back(r[y]), v.dx.push_back(r[dx]), v.dy.push_back(r[dy]);
+        hist[set].length.push_back(std::hypot(r[dx], r[dy]));
+      }
+      views.push_back(std::move(v));
+    }
+  hist.resize(sets);
+  return "<h3>Residual fields (reprojected minus observed)</h3>\n" +
+         residual_figure(views, 3, hist, "residuals: " + fs::path(t.source).filename().string()).inline_svg();
+}
+
+// rpc-adjust's rpc.residuals: columns image x y dx_before dy_before dx_after dy_after.
+std::string rpc_residuals_section(const TextTable& t) {
+  const int im = t.require("image"), x = t.require("x"), y = t.require("y");
+  const int bx = t.require("dx_before"), by = t.require("dy_before"), ax = t.require("dx_after"), ay = t.require("dy_after");
+  int n = static_cast<int>(t.images.size());
+  for (const auto& r : t.rows) n = std::max(n, static_cast<int>(r[im]));
+  const int cols = std::min(std::max(n, 1), 4);
+  std::vector<ResidualView> grid;
+  std::vector<HistogramSet> hist = {{"before", "#bab0ac", {}}, {"after", "#4c78a8", {}}};
+  for (int block = 0; block * cols < n; ++block)
+    for (int after = 0; after < 2; ++after)
+      for (int c = 0; c < cols; ++c) {
+        const int i = block * cols + c;  // 0-based; the file's image column is 1-based
+        ResidualView v;
+        if (i < n) {
+          v.title = image_name(t, i) + (after ? ", after" : ", before");
+          if (i < static_cast<int>(t.images.size())) v.width = t.images[i].width, v.height = t.images[i].height;
+          for (const auto& r : t.rows)
+            if (static_cast<int>(r[im]) == i + 1) {
+              v.x.push_back(r[x]), v.y.push_back(r[y]);
+              v.dx.push_back(after ? r[ax] : r[bx]), v.dy.push_back(after ? r[ay] : r[by]);
+              hist[after].length.push_back(std::hypot(v.dx.back(), v.dy.back()));
+            }
+        }
+        grid.push_back(std::move(v));
+      }
+  return "<h3>Residual fields before and after the adjustment (projected minus observed)</h3>\n" +
+         residual_figure(grid, cols, hist, "rpc-adjust residuals: " + fs::path(t.source).filename().string()).inline_svg();
+}
+
+std::string table_html(const TextTable& t, size_t max_rows) {
+  std::ostringstream o;
+  o << "<table><tr>";
+  for (const auto& c : t.columns) o << "<th>" << esc(c) << "</th>";
+  o << "</tr>\n";
+  for (size_t i = 0; i < t.rows.size() && i < max_rows; ++i) {
+    o << "<tr>";
+    for (double v : t.rows[i]) o << "<td>" << esc(format_figure(v, 6)) << "</td>";
+    o << "</tr>\n";
+  }
+  o << "</table>\n";
+  if (t.rows.size() > max_rows) o << "<p>(first " << max_rows << " of " << t.rows.size() << " records)</p>\n";
+  return o.str();
+}
+
+std::string header_html(const TextTable& t) {
+  std::ostringstream o;
+  o << "<pre class=\"summary\">";
+  if (!t.written_by.empty()) o << "written-by: " << esc(t.written_by) << '\n';
+  for (size_t k = 0; k < t.images.size(); ++k)
+    o << "image" << k + 1 << ": " << esc(t.images[k].path) << ' ' << t.images[k].width << ' ' << t.images[k].height << '\n';
+  for (const auto& [k, v] : t.meta) o << esc(k) << ": " << esc(v) << '\n';
+  o << "records: " << t.rows.size() << "</pre>\n";
+  return o.str();
+}
+
+std::string file_section(const std::string& path, const ReportOptions& opt, std::vector<std::string>& contents) {
+  std::ostringstream o;
+  const std::string id = "f" + std::to_string(contents.size());
+  TextTable t;
+  try {
+    t = read_any(path);
+  } catch (const std::exception& e) {
+    contents.push_back("<li><a href=\"#" + id + "\">" + esc(path) + "</a> (unreadable)</li>");
+    return "<section id=\"" + id + "\"><h2>" + esc(path) + "</h2><p class=\"error\">not read: " + esc(e.what()) + "</p></section>\n";
+  }
+  contents.push_back("<li><a href=\"#" + id + "\">" + esc(path) + "</a> (" + esc(t.kind) + ", " + std::to_string(t.rows.size()) +
+                     " records)</li>");
+  o << "<section id=\"" << id << "\"><h2>" << esc(path) << " <small>" << esc(t.kind) << "</small></h2>\n" << header_html(t);
+  try {
+    if (t.kind == "matches") {
+      o << "<p>" << t.rows.size() << " matches between " << esc(image_name(t, 0)) << " and " << esc(image_name(t, 1)) << "</p>\n";
+      if (opt.coverage) o << coverage_section(t);
+    } else if (t.kind == "tracks") {
+      o << track_lengths(t);
+      if (opt.coverage) o << coverage_section(t);
+    } else if (t.kind == "residuals" && col(t, "dx3") >= 0) {
+      o << eval_section(t);
+    } else if (t.kind == "rpc-residuals") {
+      o << rpc_residuals_section(t);
+    } else if (t.kind == "rpc-bias") {
+      o << table_html(t, 200);
+    } else if (t.columns.size() > 0 && t.rows.size() <= 50) {
+      o << table_html(t, 50);
+    }
+  } catch (const std::exception& e) {
+    o << "<p class=\"error\">not drawn: " << esc(e.what()) << "</p>\n";
+  }
+  o << "</section>\n";
+  return o.str();
+}
+
+}  // namespace
+
+std::vector<std::string> report_inputs(const std::vector<std::string>& args) {
+  std::vector<std::string> out;
+  for (const auto& a : args) {
+    if (!fs::exists(a)) throw InputError(a + ": no such file or folder");
+    if (!fs::is_directory(a)) {
+      out.push_back(a);
+      continue;
+    }
+    std::vector<std::string> found;
+    for (auto it = fs::recursive_directory_iterator(a); it != fs::recursive_directory_iterator(); ++it) {
+      if (it.depth() >= 3) it.disable_recursion_pending();
+      if (it->is_regular_file() && is_tpkit_file(it->path())) found.push_back(it->path().string());
+    }
+    std::sort(found.begin(), found.end());
+    out.insert(out.end(), found.begin(), found.end());
+  }
+  if (out.empty()) throw InputError("no tpkit file found in " + (args.empty() ? std::string("(nothing)") : args.front()));
+  return out;
+}
+
+std::string run_report_html(const std::vector<std::string>& files, const ReportOptions& opt) {
+  std::vector<std::string> contents;
+  std::string body;
+  for (const auto& f : files) body += file_section(f, opt, contents);
+  std::ostringstream o;
+  o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << esc(opt.title) << "</title>\n"
+    << "<style>body{font-family:sans-serif;margin:1.5em;color:#222}h2{border-bottom:1px solid #aaa;margin-top:2em}"
+       "h2 small{color:#777;font-weight:normal}pre.summary{background:#f6f6f6;padding:.6em;overflow-x:auto;font-size:12px}"
+       "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
+       ".error{color:#b00}svg{max-width:100%;height:auto;display:block;margin:.5em 0}</style></head>\n<body>\n"
+    << "<h1>" << esc(opt.title) << "</h1>\n<p>written by " << esc(written_by()) << "; " << files.size() << " files</p>\n<ul>\n";
+  for (const auto& c : contents) o << c << '\n';
+  o << "</ul>\n" << body << "</body></html>\n";
+  return o.str();
+}
+
+}  // namespace tpkit
