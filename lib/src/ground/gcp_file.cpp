@@ -1,6 +1,8 @@
 #include "tpkit/ground/gcp_file.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <Eigen/Dense>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -42,6 +44,15 @@ void check_point(const Gcp& g) {
   }
 }
 
+Eigen::Vector3d ecef_sigma_to_enu(const Eigen::Vector3d& s, double lon, double lat) {
+  if (!(s.minCoeff() > 0) || !s.allFinite()) return s;  // refused by check_point with the values given
+  const double l = lon * M_PI / 180, p = lat * M_PI / 180;
+  Eigen::Matrix3d R;  // rows: east, north, up in ECEF
+  R << -std::sin(l), std::cos(l), 0, -std::sin(p) * std::cos(l), -std::sin(p) * std::sin(l), std::cos(p),
+      std::cos(p) * std::cos(l), std::cos(p) * std::sin(l), std::sin(p);
+  return (R.cwiseAbs2() * s.cwiseAbs2()).cwiseSqrt();
+}
+
 std::string read_text(const std::string& path) {
   std::ifstream f = open_input_file(path, InputKind::stream, true);
   std::ostringstream os;
@@ -61,7 +72,9 @@ std::vector<Gcp> parse_asp_gcp(const std::string& text, const std::string& sourc
     ++n;
     const size_t first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream ls(line);
+    std::string fields = line;
+    std::replace(fields.begin(), fields.end(), ',', ' ');  // ASP: spaces or commas
+    std::istringstream ls(fields);
     std::vector<std::string> f;
     for (std::string w; ls >> w;) f.push_back(w);
     if (f.size() < 7 || (f.size() - 7) % 5 != 0)
@@ -77,9 +90,11 @@ std::vector<Gcp> parse_asp_gcp(const std::string& text, const std::string& sourc
     seen[g.id] = n;
     const double lat = parse_double(f[1], source, n, "latitude"), lon = parse_double(f[2], source, n, "longitude");
     g.llh = {lon, lat, parse_double(f[3], source, n, "height")};
-    // sigma_x: latitude (north), sigma_y: longitude (east), sigma_z: height, metres
-    g.sigma_enu = {parse_double(f[5], source, n, "sigma_y"), parse_double(f[4], source, n, "sigma_x"),
-                   parse_double(f[6], source, n, "sigma_z")};
+    // sigma_x, sigma_y, sigma_z: ECEF metres (bundle_adjust's default); the diagonal of that covariance
+    // rotated to east, north, up at the point (exact for equal sigmas, the usual case)
+    const Eigen::Vector3d sxyz(parse_double(f[4], source, n, "sigma_x"), parse_double(f[5], source, n, "sigma_y"),
+                               parse_double(f[6], source, n, "sigma_z"));
+    g.sigma_enu = ecef_sigma_to_enu(sxyz, lon, lat);
     for (size_t k = 7; k < f.size(); k += 5) {
       GcpMeasurement m;
       m.image = f[k];

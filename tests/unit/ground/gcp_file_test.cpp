@@ -26,15 +26,17 @@ TEST(GcpFile, AspLinesBecomeLonLatAndEastNorthSigmas) {
   const std::string text =
       "# WKT: GEOGCS[\"WGS 84\"]\n"
       "\n"
-      "3 43.25 5.375 120.5 0.4 0.6 1.5 a.tif 10.5 20.25 0.2 0.3 dir/b.tif 30 40 0.1 0.1\n"
-      "4 -12.5 -70 10 1 1 1\n";
+      "3, 43.25, 5.375, 120.5, 0.5, 0.5, 0.5, a.tif, 10.5, 20.25, 0.2, 0.3 dir/b.tif 30 40 0.1 0.1\n"
+      "4 0 0 10 1 2 3\n";
   const auto g = parse_asp_gcp(text, "x.gcp");
   ASSERT_EQ(g.size(), 2u);
   EXPECT_EQ(g[0].id, 3);
   EXPECT_EQ(g[0].line, 3);
   EXPECT_EQ(g[0].role, GcpRole::control);
   EXPECT_EQ(g[0].llh, Eigen::Vector3d(5.375, 43.25, 120.5));  // lat lon swapped to lon lat
-  EXPECT_EQ(g[0].sigma_enu, Eigen::Vector3d(0.6, 0.4, 1.5));  // sigma_x (lat) is north, sigma_y (lon) east
+  EXPECT_TRUE(g[0].sigma_enu.isApprox(Eigen::Vector3d::Constant(0.5), 1e-12));  // equal ECEF sigmas: the same in ENU
+  // at lon 0, lat 0: east is ECEF y, north z, up x
+  EXPECT_TRUE(g[1].sigma_enu.isApprox(Eigen::Vector3d(2, 3, 1), 1e-12));
   ASSERT_EQ(g[0].measurements.size(), 2u);
   EXPECT_EQ(g[0].measurements[0].image, "a.tif");
   EXPECT_EQ(g[0].measurements[0].xy, Eigen::Vector2d(10.5, 20.25));  // ASP's pixel convention is tpkit's

@@ -1,10 +1,13 @@
 // Ground control points (GCPs) and check points: one ground position each, known with a sigma, and its
 // measurements in one or more images. Two file forms, told apart by the first line:
 //
-//  - ASP's .gcp (bundle_adjust): per line `id lat lon height sigma_lat sigma_lon sigma_height` and then,
-//    per image it is measured in, `image_name col row sigma_col sigma_row`. Degrees, metres above the
-//    WGS 84 ellipsoid (ASP's default datum; heights above another datum are not converted), ground sigmas
-//    in metres (latitude = north, longitude = east), pixel sigmas in pixels. ASP's pixel (col, row) is
+//  - ASP's .gcp (bundle_adjust): per line `id lat lon height sigma_x sigma_y sigma_z` and then, per
+//    image it is measured in, `image_name col row sigma_col sigma_row`, separated by spaces or commas.
+//    Degrees, metres above the WGS 84 ellipsoid (ASP's default datum; heights above another datum are not
+//    converted), pixel sigmas in pixels. The ground sigmas are ASP's default reading: metres along ECEF
+//    x, y, z; their diagonal covariance is rotated to east, north, up at the point and its diagonal kept
+//    (exact when the three are equal; files written for bundle_adjust --use-lon-lat-height-gcp-error
+//    are read the same way). ASP's pixel (col, row) is
 //    read as tpkit's (x, y) unchanged: both put (0, 0) at the centre of the top-left pixel (Vision
 //    Workbench pixel indices). Every point of an ASP file is a control point (ASP has no check points);
 //    `#` lines are comments (ASP's `# WKT:` line included: the WKT is not read, WGS 84 is assumed).
