@@ -107,7 +107,7 @@ SvgPlot coverage_figure(const std::vector<CoverageView>& views, const std::strin
           char c[8];
           int v = grey[yy * tx + xx];
           std::snprintf(c, sizeof c, "#%02x%02x%02x", v, v, v);
-          plot.cell(p, g.x0 + xx * bw, g.y0 + yy * bh, g.x0 + (xx + 1) * bw + 0.01, g.y0 + (yy + 1) * bh + 0.01, c);
+          plot.cell(p, g.x0 + xx * bw, g.y0 + yy * bh, g.x0 + (xx + 1.4) * bw, g.y0 + (yy + 1.4) * bh, c);  // overlap: no seams
         }
     }
     for (int cy = 0; cy < g.ny; ++cy)

@@ -1,6 +1,7 @@
 #include "tpkit/core/svg_plot.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -11,6 +12,10 @@
 namespace tpkit {
 
 namespace {
+// Each plot of a process numbers its clip paths apart: several SVGs inlined in one HTML page share one
+// id space (tp-report).
+std::atomic<int> plots_made{0};
+std::string clip_id(int plot, int p) { return "clip" + std::to_string(plot) + "-" + std::to_string(p); }
 std::string num(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.2f", v);
@@ -39,7 +44,8 @@ std::string svg_escape(const std::string& s) {
   return o;
 }
 
-SvgPlot::SvgPlot(double width, double height, std::string title) : width_(width), height_(height) {
+SvgPlot::SvgPlot(double width, double height, std::string title)
+    : width_(width), height_(height), id_(plots_made++) {
   if (!title.empty()) page_text(width / 2, 22, title, 15, "middle");
 }
 
@@ -105,7 +111,7 @@ int SvgPlot::panel(PanelSpec s) {
   int idx = static_cast<int>(panels_.size()) - 1;
   const auto& q = panels_.back().s;
   std::ostringstream o;
-  o << "<clipPath id=\"panel" << idx << "\"><rect x=\"" << num(q.left) << "\" y=\"" << num(q.top) << "\" width=\""
+  o << "<clipPath id=\"" << clip_id(id_, idx) << "\"><rect x=\"" << num(q.left) << "\" y=\"" << num(q.top) << "\" width=\""
     << num(q.width) << "\" height=\"" << num(q.height) << "\"/></clipPath>\n";
   o << "<rect class=\"panel\" data-p=\"" << idx << "\" x=\"" << num(q.left) << "\" y=\"" << num(q.top) << "\" width=\""
     << num(q.width) << "\" height=\"" << num(q.height) << "\" fill=\"white\" stroke=\"#333\"/>\n";
@@ -176,9 +182,10 @@ bool SvgPlot::marks_inside(double tol) const {
 namespace {
 // Every mark of a panel sits in a group naming the panel and clipped to it (tests/tools/figure_check.sh
 // reads data-p to check the marks against the panel's box).
-std::string open_marks(int p) {
-  return "<g data-p=\"" + std::to_string(p) + "\" clip-path=\"url(#panel" + std::to_string(p) + ")\">\n";
+std::string open_marks(int plot, int p) {
+  return "<g data-p=\"" + std::to_string(p) + "\" clip-path=\"url(#" + clip_id(plot, p) + ")\">\n";
 }
+
 // Page point clamped into a panel's box.
 double clampd(double v, double lo, double hi) { return std::min(std::max(v, lo), hi); }
 }  // namespace
@@ -188,7 +195,7 @@ void SvgPlot::polyline(int pi, const std::vector<double>& x, const std::vector<d
   const Panel& p = panels_.at(pi);
   Box b = panel_box(pi);
   std::ostringstream o;
-  o << open_marks(pi) << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << width << "\" stroke-linejoin=\"round\" points=\"";
+  o << open_marks(id_, pi) << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << width << "\" stroke-linejoin=\"round\" points=\"";
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (size_t i = 0; i < std::min(x.size(), y.size()); ++i)
     if (std::isfinite(x[i]) && std::isfinite(y[i])) {
@@ -206,7 +213,7 @@ void SvgPlot::points(int pi, const std::vector<double>& x, const std::vector<dou
   const Panel& p = panels_.at(pi);
   Box b = panel_box(pi);
   std::ostringstream o;
-  o << open_marks(pi) << "<g fill=\"" << color << "\" stroke=\"" << color << "\">\n";
+  o << open_marks(id_, pi) << "<g fill=\"" << color << "\" stroke=\"" << color << "\">\n";
   for (size_t i = 0; i < std::min(x.size(), y.size()); ++i) {
     if (!std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
     double X = px(p, x[i]), Y = py(p, y[i]);
@@ -249,7 +256,7 @@ bool SvgPlot::arrow(int pi, double x, double y, double dx, double dy, const std:
   Y1 = Y0 + t * (Y1 - Y0);
   double L = std::hypot(X1 - X0, Y1 - Y0);
   std::ostringstream o;
-  o << open_marks(pi) << "<line x1=\"" << num(X0) << "\" y1=\"" << num(Y0) << "\" x2=\"" << num(X1) << "\" y2=\"" << num(Y1)
+  o << open_marks(id_, pi) << "<line x1=\"" << num(X0) << "\" y1=\"" << num(Y0) << "\" x2=\"" << num(X1) << "\" y2=\"" << num(Y1)
     << "\" stroke=\"" << color << "\" stroke-width=\"" << width << "\"/>\n";
   record(pi, X0, Y0, X1, Y1);
   if (!whole) {
@@ -275,7 +282,7 @@ void SvgPlot::cell(int pi, double x0, double y0, double x1, double y1, const std
   if (X0 > X1) std::swap(X0, X1);
   if (Y0 > Y1) std::swap(Y0, Y1);
   std::ostringstream o;
-  o << open_marks(pi) << "<rect x=\"" << num(X0) << "\" y=\"" << num(Y0) << "\" width=\"" << num(X1 - X0) << "\" height=\""
+  o << open_marks(id_, pi) << "<rect x=\"" << num(X0) << "\" y=\"" << num(Y0) << "\" width=\"" << num(X1 - X0) << "\" height=\""
     << num(Y1 - Y0) << "\" fill=\"" << fill << "\"";
   if (opacity < 1) o << " fill-opacity=\"" << opacity << "\"";
   o << "/>\n</g>\n";
@@ -287,7 +294,7 @@ void SvgPlot::bars(int pi, const std::vector<double>& edges, const std::vector<d
   const Panel& p = panels_.at(pi);
   Box b = panel_box(pi);
   std::ostringstream o;
-  o << open_marks(pi);
+  o << open_marks(id_, pi);
   for (size_t i = 0; i + 1 < edges.size() && i < counts.size(); ++i) {
     if (!(counts[i] > (p.s.log_y ? p.s.ymin : 0))) continue;
     double X0 = clampd(px(p, edges[i]), b.x0, b.x1), X1 = clampd(px(p, edges[i + 1]), b.x0, b.x1);

@@ -35,7 +35,12 @@ TEST(SvgPlot, ArrowsCutAtThePanelEdgeAndMarksInside) {
   plot.polyline(p, {0, 50, 300}, {0, 50, -100}, "blue");
   EXPECT_TRUE(plot.marks_inside());
   EXPECT_NE(plot.str().find("class=\"cut\""), std::string::npos);
-  EXPECT_NE(plot.str().find("clip-path=\"url(#panel0)\""), std::string::npos);
+  EXPECT_NE(plot.str().find("clip-path=\"url(#clip"), std::string::npos);
+  SvgPlot other(10, 10);
+  other.panel(SvgPlot::spec(0, 0, 10, 10, 0, 1, 0, 1, "", "", ""));
+  const std::string a = plot.str(), b = other.str();
+  const auto id = [](const std::string& s) { auto i = s.find("<clipPath id=\""); return s.substr(i, s.find('"', i + 15) - i); };
+  EXPECT_NE(id(a), id(b));  // two plots inlined in one page do not share clip ids
 }
 
 TEST(SvgPlot, LogBarsInside) {

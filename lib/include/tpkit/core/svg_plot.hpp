@@ -100,6 +100,7 @@ class SvgPlot {
   double py(const Panel& p, double y) const;
   void record(int p, double x0, double y0, double x1, double y1);
   double width_, height_;
+  int id_;  // this plot's number in the process (unique clip-path ids)
   std::vector<Panel> panels_;
   std::vector<Box> marks_;
   long points_outside_ = 0;
