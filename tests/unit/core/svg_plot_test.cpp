@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "tpkit/core/coverage_plot.hpp"
 #include "tpkit/core/residual_field.hpp"
 #include "tpkit/core/svg_plot.hpp"
 
@@ -94,4 +95,17 @@ TEST(ResidualField, OneExaggerationForEveryViewAndMarksInside) {
   EXPECT_TRUE(plot.marks_inside());
   const std::string svg = plot.str();
   EXPECT_EQ(svg.find(exaggeration_text(fs)), svg.rfind(exaggeration_text(fs)));  // stated once
+}
+
+TEST(Coverage, EmptyCellsCountedAndMarksInside) {
+  // points on the left half of a 1000 x 500 image only: 16 x 8 cells, the right 8 columns empty
+  CoverageView v;
+  v.title = "left half";
+  v.width = 1000, v.height = 500;
+  for (int i = 0; i < 50; ++i)
+    for (int j = 0; j < 25; ++j) v.x.push_back(5 + 10 * i), v.y.push_back(5 + 20 * j);
+  SvgPlot plot = coverage_figure({v}, "t");
+  EXPECT_TRUE(plot.marks_inside());
+  const std::string svg = plot.str();
+  EXPECT_NE(svg.find("1250 points; 64 of 128 cells without any (50%); no thumbnail: image not found"), std::string::npos);
 }
