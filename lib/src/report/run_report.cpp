@@ -9,6 +9,7 @@
 
 #include "tpkit/core/coverage_plot.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/formats.hpp"
 #include "tpkit/core/residual_field.hpp"
 #include "tpkit/core/svg_plot.hpp"
 #include "tpkit/core/text_table.hpp"
@@ -20,18 +21,27 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool is_tpkit_file(const fs::path& p) {
+// The kind of a tpkit table file ("# tpkit KIND VERSION"), "" for anything else (a makefile's comment).
+std::string tpkit_kind(const fs::path& p) {
   std::ifstream in(p);
-  std::string line;
-  return in && std::getline(in, line) && line.rfind("# tpkit ", 0) == 0;
+  std::string line, hash, tpkit, kind;
+  int version = 0;
+  if (!in || !std::getline(in, line)) return "";
+  std::istringstream ls(line);
+  if (!(ls >> hash >> tpkit >> kind >> version) || hash != "#" || tpkit != "tpkit") return "";
+  std::string rest;
+  return ls >> rest ? "" : kind;
 }
 
-// Any kind: records as numbers, nan allowed anywhere (tracks' views not seen), rows of any length.
+// By kind: tracks and matches through their own readers (nan views allowed), any other kind with
+// records as numbers and rows of any length.
 TextTable read_any(const std::string& path) {
+  const std::string kind = tpkit_kind(path);
+  if (kind == "tracks") return read_table_file(path, tracks_read_options());
+  if (kind == "matches") return read_table_file(path, matches_read_options());
   ReadOptions o;
   o.max_version = 99;
   o.columnar = false;
-  o.may_be_missing = [](const std::string&) { return true; };
   return read_table_file(path, o);
 }
 
@@ -171,7 +181,8 @@ std::string header_html(const TextTable& t) {
   return o.str();
 }
 
-std::string file_section(const std::string& path, const ReportOptions& opt, std::vector<std::string>& contents) {
+std::string file_section(const std::string& path, const ReportOptions& opt, bool matches_coverage,
+                         std::vector<std::string>& contents) {
   std::ostringstream o;
   const std::string id = "f" + std::to_string(contents.size());
   TextTable t;
@@ -187,7 +198,7 @@ std::string file_section(const std::string& path, const ReportOptions& opt, std:
   try {
     if (t.kind == "matches") {
       o << "<p>" << t.rows.size() << " matches between " << esc(image_name(t, 0)) << " and " << esc(image_name(t, 1)) << "</p>\n";
-      if (opt.coverage) o << coverage_section(t);
+      if (opt.coverage && matches_coverage) o << coverage_section(t);
     } else if (t.kind == "tracks") {
       o << track_lengths(t);
       if (opt.coverage) o << coverage_section(t);
@@ -220,7 +231,15 @@ std::vector<std::string> report_inputs(const std::vector<std::string>& args) {
     std::vector<std::string> found;
     for (auto it = fs::recursive_directory_iterator(a); it != fs::recursive_directory_iterator(); ++it) {
       if (it.depth() >= 3) it.disable_recursion_pending();
-      if (it->is_regular_file() && is_tpkit_file(it->path())) found.push_back(it->path().string());
+      // a tp-plan work folder: its results, not its intermediates (region matches, detection, geometry)
+      if (it->is_directory() && fs::exists(it->path().parent_path() / "plan.mk")) {
+        const std::string name = it->path().filename().string();
+        if (name == "tiles" || name == "detect" || name == "geometry" || name == "cache" || name == "logs") {
+          it.disable_recursion_pending();
+          continue;
+        }
+      }
+      if (it->is_regular_file() && !tpkit_kind(it->path()).empty()) found.push_back(it->path().string());
     }
     std::sort(found.begin(), found.end());
     out.insert(out.end(), found.begin(), found.end());
@@ -231,8 +250,27 @@ std::vector<std::string> report_inputs(const std::vector<std::string>& args) {
 
 std::string run_report_html(const std::vector<std::string>& files, const ReportOptions& opt) {
   std::vector<std::string> contents;
-  std::string body;
-  for (const auto& f : files) body += file_section(f, opt, contents);
+  // counts per pair first; the tracks' coverage covers every image, so a run with tracks draws no
+  // coverage per pair
+  bool tracks = false;
+  std::ostringstream pairs;
+  long pair_count = 0;
+  for (const auto& f : files) {
+    const std::string kind = tpkit_kind(f);
+    tracks |= kind == "tracks";
+    if (kind != "matches") continue;
+    try {
+      const TextTable t = read_any(f);
+      if (pair_count++ == 0) pairs << "<h2>Matches per pair</h2>\n<table><tr><th>file</th><th>image 1</th><th>image 2</th><th>matches</th></tr>\n";
+      pairs << "<tr><td>" << esc(f) << "</td><td>" << esc(image_name(t, 0)) << "</td><td>" << esc(image_name(t, 1))
+            << "</td><td>" << t.rows.size() << "</td></tr>\n";
+    } catch (const std::exception&) {
+      // listed with its error in its own section
+    }
+  }
+  if (pair_count) pairs << "</table>\n";
+  std::string body = pairs.str();
+  for (const auto& f : files) body += file_section(f, opt, !tracks, contents);
   std::ostringstream o;
   o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << esc(opt.title) << "</title>\n"
     << "<style>body{font-family:sans-serif;margin:1.5em;color:#222}h2{border-bottom:1px solid #aaa;margin-top:2em}"
