@@ -101,6 +101,7 @@ FieldScale field_scale(const std::vector<ResidualView>& views, int cells, long m
   std::vector<double> mags, lens;
   double cell = 1e300;
   for (const auto& v : views) {
+    if (v.x.empty()) continue;  // a hole in a figure's grid, or a view without points: no cell size
     ResidualGrid g = residual_grid(v, cells);
     cell = std::min(cell, std::min(g.cw, g.ch));
     for (size_t k = 0; k < g.count.size(); ++k)
