@@ -8,6 +8,7 @@
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/ground/reference_dem.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/core/input_file.hpp"
 #include "tpkit/core/tool_support.hpp"
@@ -21,7 +22,7 @@ extern const char* const tpkit_man_page;
 
 namespace {
 struct Opts {
-  std::string action, model, input = "-", output = "-", dem;
+  std::string action, model, input = "-", output = "-", dem, dem_datum = "ellipsoid";
   std::vector<long> window;
   int band = 1;
   std::string compression = "none", crs = "geographic";
@@ -41,7 +42,8 @@ int main(int argc, char** argv) {
         ->required();
     app.add_option("-i,--input", o->input, "points to transform; - for stdin (default)");
     app.add_option("-o,--output", o->output, "the transformed points; - for stdout (default)");
-    app.add_option("--dem", o->dem, "localize onto this GeoTIFF DEM (EPSG:4326, heights above the ellipsoid, m): input x y");
+    app.add_option("--dem", o->dem, "localize onto this GeoTIFF DEM (any CRS; heights above --dem-datum, m): input x y");
+    app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid (default) | egm96 | egm2008 | a PROJ vertical grid file");
     app.add_option("--crs", o->crs, "project / localize: ground coordinates lon lat h (geographic, default) | utm (easting northing h, m, the model centre's zone) | ecef (X Y Z, m)")
         ->check(CLI::IsMember({"geographic", "utm", "ecef"}));
     app.add_option("--window", o->window, "crop: X0 Y0 W H, pixels (the window's top-left pixel, its width and height; default the whole image)")->expected(4);
@@ -52,6 +54,7 @@ int main(int argc, char** argv) {
     app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
     return [o]() {
       if (!o->dem.empty() && o->action != "localize") throw UsageError("--dem goes with localize");
+      if (o->dem_datum != "ellipsoid" && o->dem.empty()) throw UsageError("--dem-datum goes with --dem");
       if (o->action == "crop") {
         if (o->crs != "geographic") throw UsageError("--crs goes with project and localize");
         if (o->output == "-") throw UsageError("crop needs -o OUT.tif (a GeoTIFF) or -o OUT.ntf (a NITF image), not stdout");
@@ -83,21 +86,18 @@ int main(int argc, char** argv) {
       if (o->compression != "none" || o->block != 1024) throw UsageError("--compression and --block go with crop");
       check_outputs({{"-o", o->output}}, {o->model, o->input, o->dem});
       const RpcSource src = load_rpc_model(o->model);
-      GeoGrid dem;
-      if (!o->dem.empty()) {
-        const GeoBounds box = model_bounds(src.model);
-        dem = read_geotiff_grid(o->dem, &box);
-      }
+      std::unique_ptr<ReferenceDem> dem;
+      if (!o->dem.empty()) dem = std::make_unique<ReferenceDem>(o->dem, ReferenceDemOptions{o->dem_datum});
       const RpcPointDirection dir = o->action == "project" ? RpcPointDirection::Project : RpcPointDirection::Localize;
       const GroundConverter crs(parse_ground_crs(o->crs), src.model.lon_off, src.model.lat_off);
       const GroundConverter* ground = o->crs == "geographic" ? nullptr : &crs;
       RpcPointStats st;
       std::string text;
       if (o->input == "-") {
-        text = transform_rpc_points(std::cin, "stdin", src.model, dir, o->dem.empty() ? nullptr : &dem, &st, ground);
+        text = transform_rpc_points(std::cin, "stdin", src.model, dir, dem.get(), &st, ground);
       } else {
         std::ifstream in = open_input_file(o->input);
-        text = transform_rpc_points(in, o->input, src.model, dir, o->dem.empty() ? nullptr : &dem, &st, ground);
+        text = transform_rpc_points(in, o->input, src.model, dir, dem.get(), &st, ground);
       }
       AtomicOutput out(o->output);
       out.stream() << text;

@@ -62,3 +62,28 @@ tpkit_tool_test(tp-ground.csv-failed-run-leaves-nothing
 tpkit_tool_test(tp-ground.csv-sidecar-is-an-input
   COMMAND "${synth_gis} && cp syn/truth.tracks g.prj && ${ground3} --tracks g.prj -o g.csv"
   EXPECT_FAIL STDERR_MATCH "g.prj" NO_FILE g.csv)
+# A reference DEM (issue 25): the truth terrain resampled at 30 m in UTM with heights above EGM96
+# (bench_dem_reference). --compare with --dem-datum egm96 finds the truth points on it (|median dz| < 0.1 m);
+# without it they are the EGM96 undulation (~49.4 m) above. --align on the terrain moved by (8, -5, 3) m in
+# UTM recovers that shift (1.65 deg of UTM grid convergence at lon 5.4 turn it by 0.25 m), the models it
+# writes put the tracks on the moved points, and the dem-dz file holds before and after.
+set(synth_dem "tp-synth -o syn --size 192 --gsd 20 --relief 300 --points 300 > /dev/null")
+tpkit_tool_test(tp-ground.compare-egm96
+  COMMAND "${synth_dem} && bench_dem_reference syn/truth.dem.tif ref.tif 30 0 egm96 && ${ground3} --compare ref.tif --dem-datum egm96 --dz dz.txt -o /dev/null 2>&1 | grep 'dz all' && ${ground3} --compare ref.tif -o /dev/null 2>&1 | grep 'dz all'"
+  STDOUT_MATCH "dz all: [0-9]+ points, dz median -?0\\.0[0-9]* m.*\n.*dz all: [0-9]+ points, dz median 49\\.4[0-9]* m"
+  CHECK_FILE dz.txt
+  FILE_MATCH "^# tpkit dem-dz 1\n.*# dem: ref.tif \\(EPSG:32631, posting 30 m, heights above egm96\\)\n.*# columns: stage class slope_min slope_max count median nmad rmse mean\n0 0 0 90 ")
+tpkit_tool_test(tp-ground.align-known-shift
+  COMMAND "${synth_dem} && bench_dem_reference syn/truth.dem.tif refs.tif 30 0 egm96 1 8 -5 3 && ${ground3} --align refs.tif --dem-datum egm96 --models m --dz dz.txt -o a.points 2>&1 | grep 'shift east' && ${ground3} --rpc syn/view1.tif=m/view1_rpc.txt --rpc syn/view2.tif=m/view2_rpc.txt --rpc syn/view3.tif=m/view3_rpc.txt -o b.points && paste <(grep -v '^#' a.points) <(grep -v '^#' b.points) | awk '{ d = ($2 - $10) * 81000 @SEMI@ if (d < 0) d = -d @SEMI@ if (d > m) m = d @SEMI@ u = $4 - $12 @SEMI@ if (u < 0) u = -u @SEMI@ if (u > m) m = u } END { print (m < 0.01 ? \"models agree\" : \"models off\"), m }'"
+  STDOUT_MATCH "shift east north up 7\\.[89][0-9]* -5\\.[123][0-9]* 3\\.?[0-9]* m .*\nmodels agree "
+  CHECK_FILE dz.txt
+  FILE_MATCH "# shift_enu_m: 7\\.[89][0-9]* -5\\.[123][0-9]* 3.*\n1 0 0 90 [0-9]+ (-?0|-?0\\.0[0-9]*|-?[0-9.]+e-[0-9]+) ")
+tpkit_tool_test(tp-ground.dem-missing-grid
+  COMMAND "${synth_dem} && bench_dem_reference syn/truth.dem.tif ref.tif 30 0 egm96 && ${ground3} --compare ref.tif --dem-datum nogrid.gtx --dz dz.txt -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: --dem-datum \\(for ref.tif\\) nogrid.gtx: geoid grid nogrid.gtx not found" NO_FILE g.points)
+tpkit_tool_test(tp-ground.dem-not-georeferenced
+  COMMAND "${synth_dem} && ${ground3} --align syn/view1.tif -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: syn/view1.tif: no georeferencing" NO_FILE g.points)
+tpkit_tool_test(tp-ground.datum-without-dem
+  COMMAND "tp-ground a.tif b.tif --tracks t --dem-datum egm96"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: --dem-datum and --dz go with --compare or --align")

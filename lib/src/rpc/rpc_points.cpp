@@ -12,6 +12,7 @@
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/core/input_file.hpp"
 #include "tpkit/core/text_table.hpp"
+#include "tpkit/rpc/dem_prior.hpp"
 #include "tpkit/rpc/rpc_adjust.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
 
@@ -92,12 +93,12 @@ double line_of_sight_on_dem(const RpcModel& m, const HeightPrior& ground, double
 }  // namespace
 
 std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
-                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats,
+                                 RpcPointDirection direction, const ReferenceDem* dem, RpcPointStats* stats,
                                  const GroundConverter* crs) {
   RpcPointStats st;
   std::string out, line;
   HeightPrior ground;
-  if (dem) ground = dem_height_prior(*dem, 1);
+  if (dem) ground = reference_dem_prior(std::shared_ptr<const ReferenceDem>(dem, [](const ReferenceDem*) {}), 1);  // not owned
   const int columns = direction == RpcPointDirection::Localize && dem ? 2 : 3;
   for (long lineno = 1; read_text_line(in, line, source, lineno); ++lineno) {
     size_t first = 0;

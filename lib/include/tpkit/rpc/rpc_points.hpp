@@ -25,7 +25,7 @@
 
 namespace tpkit {
 
-struct GeoGrid;
+class ReferenceDem;
 class GroundConverter;
 
 enum class RpcPointDirection { Project, Localize };
@@ -38,9 +38,10 @@ struct RpcPointStats {
   std::string first_unsolved;  // "source:line: reason" of the first of them
 };
 
-// The transformed text of `in` (named `source` in messages). `dem` (localize only, may be null).
+// The transformed text of `in` (named `source` in messages). `dem` (localize only, may be null): the ground
+// (reference_dem.hpp, any CRS and vertical datum) where each line of sight meets it.
 std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
-                                 RpcPointDirection direction, const GeoGrid* dem, RpcPointStats* stats = nullptr,
+                                 RpcPointDirection direction, const ReferenceDem* dem, RpcPointStats* stats = nullptr,
                                  const GroundConverter* crs = nullptr);
 
 }  // namespace tpkit
