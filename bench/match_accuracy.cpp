@@ -9,6 +9,8 @@
 //       consistency with the true cameras (residuals of views 2 and 3 at the best 3-D point).
 //       --check: exit status 1 when the triplets' median or 90th percentile (views 2 and 3 together)
 //       is above MED / P90.
+//       --min-corr R, --max-sigma PX: the LSM acceptance (tp-match's options); --nodata V: grey level of
+//       invalid pixels (tp-synth --nodata-band writes 0).
 //       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
 //       the true local map's Jacobian and Hessians (central differences, 1 px) for error analysis.
 //   bench_match_accuracy --tracks FILE [--check-rmse R]
@@ -97,7 +99,8 @@ int main(int argc, char** argv) {
     int quad = -1;
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
     int adaptive = -1, sit = -1, epic = -1;
-    double stol = -1;
+    double stol = -1, min_corr = -2, max_sigma = -1;
+    std::optional<double> nodata;
     const char* usage =
         "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
     for (int i = 1; i < argc; ++i) {
@@ -139,6 +142,9 @@ int main(int argc, char** argv) {
       else if (a == "--stage-tolerance") need(1), stol = num();
       else if (a == "--stage-iterations") need(1), sit = whole();
       else if (a == "--render8") need(2), r_in = argv[++i], r_out = argv[++i];
+      else if (a == "--min-corr") need(1), min_corr = num();
+      else if (a == "--max-sigma") need(1), max_sigma = num();
+      else if (a == "--nodata") need(1), nodata = num();
       else {
         std::fputs(usage, a == "--help" || a == "-h" ? stdout : stderr);
         return a == "--help" || a == "-h" ? 0 : 2;
@@ -172,7 +178,7 @@ int main(int argc, char** argv) {
       tpkit::SynthScene scene = tpkit::SynthScene::load(synth);
       std::string v[3] = {synth + "/view1.tif", synth + "/view2.tif", synth + "/view3.tif"};
       tpkit::ImageSource src[3];
-      for (int k = 0; k < 3; ++k) src[k] = tpkit::open_image_source(v[k], 0, {}, "");
+      for (int k = 0; k < 3; ++k) src[k] = tpkit::open_image_source(v[k], 0, nodata, "");
       tpkit::PairMatchOptions po;
       po.threads = threads;
       po.lsm.window = window;
@@ -189,6 +195,8 @@ int main(int argc, char** argv) {
       if (tol > 0) po.lsm.tolerance = tol;
       if (stol > 0) po.lsm.stage_tolerance = stol;
       if (sit > 0) po.lsm.stage_iterations = sit;
+      if (min_corr >= -1) po.lsm.min_corr = min_corr;
+      if (max_sigma > 0) po.lsm.max_sigma = max_sigma;
       const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
       FILE* df = dump.empty() ? nullptr : std::fopen(dump.c_str(), "w");
       if (df)
@@ -199,14 +207,15 @@ int main(int argc, char** argv) {
         tpkit::PairMatchStats st;
         tpkit::Matches m = tpkit::match_pair(src[p[0]], src[p[1]], po, &st);
         double dt = secs(t0);
-        std::vector<double> eraw, eref;
-        int ckx = m.extra.find("kx2"), cky = m.extra.find("ky2");
+        std::vector<double> eraw, eref, eunref;
+        int ckx = m.extra.find("kx2"), cky = m.extra.find("ky2"), crf = m.extra.find("refined");
         for (size_t r = 0; r < m.size(); ++r) {
           auto X = ground_of(scene, p[0], m.xy(r, 0), m.xy(r, 1));
           if (!X || !scene.visible(p[1], *X)) continue;
           Eigen::Vector2d tr = scene.project(p[1], *X);
           eraw.push_back((Eigen::Vector2d(m.extra.values(r, ckx), m.extra.values(r, cky)) - tr).norm());
-          eref.push_back((Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3)) - tr).norm());
+          const bool unrefined = crf >= 0 && m.extra.values(r, crf) == 0;
+          (unrefined ? eunref : eref).push_back((Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3)) - tr).norm());
           if (df) {
             // true local map f(d) = project(view 2, ground_point(view 1, p1 + d)): Jacobian and Hessians
             // by central differences (step 1 px)
@@ -233,6 +242,7 @@ int main(int argc, char** argv) {
         Dist dr = dist(eraw), df = dist(eref);
         print("raw SIFT (kx2, ky2)", dr);
         print("refined LSM (x2, y2)", df);
+        print("kept unrefined (refined 0)", dist(eunref));
         ms.push_back(std::move(m));
       }
       if (df) std::fclose(df);

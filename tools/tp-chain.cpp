@@ -20,6 +20,7 @@ struct Opts {
   int min_views = 0;  // 0: not given (the option takes 2 or more); default 3 with three images, else 2
   double same = 0.01;
   bool quiet = false;
+  bool unrefined = false;
 };
 }  // namespace
 
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
                 "INT >= 2"));
         app.add_option("--same-position", o->same, "keypoints of one image closer than this are one point, pixels")
             ->check(tpkit::NonNegative);
+        app.add_flag("--unrefined", o->unrefined, "chain matches whose LSM refinement was rejected (refined 0) too");
         app.add_option("-o,--output", o->out, "output tracks file (- = stdout)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
@@ -55,6 +57,7 @@ int main(int argc, char** argv) {
           tpkit::ChainOptions co;
           co.images = o->images;
           co.same_position = o->same;
+          co.unrefined = o->unrefined;
           co.min_views = 2;
           tpkit::TrackChainer chainer(co);
           std::vector<std::string> seen;
@@ -83,6 +86,7 @@ int main(int argc, char** argv) {
               for (const auto& kv : st.written_by_length) line << " " << kv.first << ":" << kv.second;
               line << ")";
             }
+            if (st.unrefined_left_out > 0) line << "; unrefined matches left out " << st.unrefined_left_out << " (--unrefined chains them)";
             tpkit::summary(line.str());
           }
           return 0;

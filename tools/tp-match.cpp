@@ -31,7 +31,7 @@ struct Opts {
   int band = 1;
   std::optional<double> nodata;
   int threads = 0;
-  bool no_refine = false, no_mutual = false, global = false, l2 = false, quiet = false;
+  bool no_refine = false, drop_unrefined = false, no_mutual = false, global = false, l2 = false, quiet = false;
   tpkit::PairMatchOptions p;
   std::vector<long> region;  // --region X0 Y0 W H
   double region_margin = 256;
@@ -174,8 +174,11 @@ int main(int argc, char** argv) {
         app.add_option("--per-cell", o->p.per_cell, "matches kept per grid cell")->check(tpkit::Positive);
         app.add_flag("--no-refine", o->no_refine, "keep raw SIFT positions");
         app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd)")->check(CLI::Range(5, 101));
-        app.add_option("--max-shift", o->p.lsm.max_shift, "drop points refined farther from SIFT, pixels")->check(tpkit::Positive);
-        app.add_option("--min-corr", o->p.lsm.min_corr, "drop points with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
+        app.add_option("--max-shift", o->p.lsm.max_shift, "reject refinements farther from SIFT, pixels")->check(tpkit::Positive);
+        app.add_option("--max-sigma", o->p.lsm.max_sigma, "reject refinements whose sigma is larger, pixels")->check(tpkit::Positive);
+        app.add_option("--min-corr", o->p.lsm.min_corr, "reject refinements with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
+        app.add_option("--unrefined-sigma", o->p.unrefined_sigma, "least sigma of a match kept unrefined, pixels")->check(tpkit::Positive);
+        app.add_flag("--drop-unrefined", o->drop_unrefined, "drop verified matches whose refinement is rejected (counted by reason)");
         app.add_option("--taper", o->p.lsm.taper, "Gaussian weight of the LSM window, sigma in pixels (0 = flat)")
             ->check(tpkit::NonNegative);
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
@@ -217,6 +220,7 @@ int main(int argc, char** argv) {
           o->p.desc.mutual = !o->no_mutual;
           o->p.guided = !o->global;
           o->p.refine = !o->no_refine;
+          o->p.keep_unrefined = !o->drop_unrefined;
           o->p.lsm.l1 = !o->l2;
           o->p.threads = o->threads > 0 ? o->threads : std::max(1u, std::thread::hardware_concurrency());
           o->p.threads = std::min(o->p.threads, tpkit::kMaxThreads);
@@ -267,13 +271,16 @@ int main(int argc, char** argv) {
             if (o->p.grid > 0) line << ", after grid " << st.gridded;
             if (o->p.refine) {
               line << ", refined " << st.refined;
-              const char* sep = " (dropped:";
-              for (int k = 1; k < 8; ++k)
-                if (st.dropped[k]) {
-                  line << sep << " " << tpkit::to_string(static_cast<tpkit::LsmStatus>(k)) << " " << st.dropped[k];
-                  sep = ",";
-                }
-              if (std::string(sep) == ",") line << ")";
+              for (const auto& [what, count] : {std::pair<const char*, const long*>{" (kept unrefined:", st.unrefined},
+                                                std::pair<const char*, const long*>{" (dropped:", st.dropped}}) {
+                const char* sep = what;
+                for (int k = 1; k < tpkit::kLsmStatusCount; ++k)
+                  if (count[k]) {
+                    line << sep << " " << tpkit::to_string(static_cast<tpkit::LsmStatus>(k)) << " " << count[k];
+                    sep = ",";
+                  }
+                if (std::string(sep) == ",") line << ")";
+              }
             }
             line << "; seconds: detect " << st.seconds[0] << ", match " << st.seconds[1] << ", verify " << st.seconds[2]
                  << ", refine " << st.seconds[3];

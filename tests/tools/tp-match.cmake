@@ -39,6 +39,14 @@ tpkit_tool_test(tp-match.no-refine
   COMMAND "tp-synth --out s --size 256 --seed 5 && tp-match s/view1.tif s/view2.tif --no-refine -o raw.m && awk '!/^#/ && ($5 != $7 || $6 != $8) {bad++} END {exit bad > 0}' raw.m"
   CHECK_FILE raw.m FILE_MATCH "refinement: none.*# columns: id1 x1 y1 id2 x2 y2 kx2 ky2\n[0-9]")
 
+# A verified match whose refinement is rejected is kept at its keypoint position, marked refined 0 with
+# sigma >= --unrefined-sigma, and counted by reason in the header: with --min-corr 0.999 most are
+# rejected as low-correlation; every verified match is written; --drop-unrefined drops the same ones,
+# counted under "# dropped:"; tp-chain leaves them out unless --unrefined.
+tpkit_tool_test(tp-match.unrefined-kept-and-marked
+  COMMAND "tp-synth --out s --size 384 --seed 4 && tp-match s/view1.tif s/view2.tif --min-corr 0.999 -q -o k.m && tp-match s/view1.tif s/view2.tif --min-corr 0.999 --drop-unrefined -q -o d.m && v=$(sed -n 's/^# verified: \\([0-9]*\\).*/\\1/p' k.m) && u=$(awk '!/^#/ && $11 == 0' k.m | wc -l) && r=$(awk '!/^#/ && $11 == 1' k.m | wc -l) && test $u -gt 50 && test $((u + r)) -eq $v && awk '!/^#/ && $11 == 0 && ($5 != $7 || $6 != $8 || $9 < 0.5) {bad++} END {exit bad > 0}' k.m && grep -q \"^# unrefined: $u kept at the keypoint position, refined 0, sigma 0.5 px (.*low-correlation [0-9]\" k.m && grep -q \"^# dropped: 0 (none)\" k.m && test $(grep -vc '^#' d.m) -eq $r && grep -q \"^# dropped: $u (.*low-correlation\" d.m && tp-match s/view1.tif s/view3.tif -q -o k13.m && tp-match s/view2.tif s/view3.tif -q -o k23.m && tp-chain k.m k13.m k23.m -o a.t && tp-chain k.m k13.m k23.m --unrefined -o b.t && grep -q '^# unrefined: [1-9][0-9]* matches marked refined 0 left out' a.t && test $(grep -vc '^#' b.t) -gt $(grep -vc '^#' a.t)"
+  CHECK_FILE k.m FILE_MATCH "# columns: id1 x1 y1 id2 x2 y2 kx2 ky2 sigma corr refined\n")
+
 # These two need the benchmark program bench_match_accuracy (not built in the sanitizer build).
 if(TPKIT_BENCH)
 # Accuracy against the synthetic truth: refined median and 90th percentile (pixels) of every pair and

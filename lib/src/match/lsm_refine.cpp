@@ -20,6 +20,8 @@ const char* to_string(LsmStatus s) {
     case LsmStatus::NotConverged: return "not-converged";
     case LsmStatus::Drifted: return "drifted";
     case LsmStatus::LowCorrelation: return "low-correlation";
+    case LsmStatus::Imprecise: return "imprecise";
+    case LsmStatus::OffEpipolar: return "off-epipolar";
   }
   return "?";
 }
@@ -571,6 +573,10 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   }
   if ((res.p2 - p2).norm() > o.max_shift) {
     res.status = LsmStatus::Drifted;
+    return res;
+  }
+  if (!(res.sigma <= o.max_sigma)) {
+    res.status = LsmStatus::Imprecise;
     return res;
   }
   if (res.corr < o.min_corr) {

@@ -159,17 +159,19 @@ void keep_in_window(std::vector<size_t>& ver, const std::vector<DescriptorMatch>
 struct Rec {
   long long id1, id2;
   double x1, y1, x2, y2, kx2, ky2, sigma, corr;
-  bool ok;
-  LsmStatus status;
+  bool ok;           // (x2, y2) is the accepted LSM position (or there was no refinement)
+  LsmStatus status;  // why not, when refined
 };
 
 // 5. Least-squares matching of every record, image 1 in bands of refine_tile rows, one after the
 // other: each band's region of image 1 and the region of image 2 its windows reach are read once (a
 // strip-stored file is decoded about once in all), and the band's points are refined in parallel. A
 // band whose image-2 region would be too large (strong rotation between the images) is split along x
-// until it fits. A0 holds each record's initial local map (keypoint_affine).
+// until it fits. A0 holds each record's initial local map (keypoint_affine). With `F`, a refined position
+// farther than `max_residual` pixels (R^4) from the verified pair model is rejected (OffEpipolar): the
+// keypoint match passed that test, so the refinement moved it off the geometry.
 void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
-                    const LsmOptions& lsm, const PairMatchOptions& o) {
+                    const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual) {
   const long B = std::max(16L, o.refine_tile);
   std::vector<std::vector<size_t>> bands(static_cast<size_t>((a.info.height + B - 1) / B) + 1);
   for (size_t j = 0; j < recs.size(); ++j)
@@ -208,13 +210,15 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
       for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
         Rec& r = recs[js[q]];
         LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], lsm);
+        if (L.ok() && F && !(std::abs(F->residual(r.x1, r.y1, L.p2.x(), L.p2.y())) <= max_residual))
+          L.status = LsmStatus::OffEpipolar;
         r.ok = L.ok();
         r.status = L.status;
+        r.corr = std::isfinite(L.corr) ? L.corr : 0;
         if (r.ok) {
           r.x2 = L.p2.x();
           r.y2 = L.p2.y();
           r.sigma = L.sigma;
-          r.corr = L.corr;
         }
       }
     });
@@ -224,37 +228,49 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
   if (pr) pr->done();
 }
 
-// 6. The records that converged (all of them without refinement), in order.
+// 6. The records in order: the refined ones, and those whose refinement was rejected at their keypoint
+// position (x2, y2 = kx2, ky2; sigma st.unrefined_sigma; refined 0) unless o.keep_unrefined is false.
 Matches assemble_matches(const std::vector<Rec>& recs, const PairMatchOptions& o, PairMatchStats& st) {
   Matches M;
   size_t nout = 0;
+  long nref = 0;
   for (const Rec& r : recs) {
-    if (r.ok) ++nout;
+    if (r.ok) ++nref;
+    else if (o.keep_unrefined) st.unrefined[static_cast<int>(r.status)]++;
     else st.dropped[static_cast<int>(r.status)]++;
+    if (r.ok || o.keep_unrefined) ++nout;
   }
-  st.refined = o.refine ? static_cast<long>(nout) : 0;
+  st.refined = o.refine ? nref : 0;
+  st.unrefined_sigma = std::max(o.unrefined_sigma, st.ransac_rms);
   M.xy.resize(static_cast<Eigen::Index>(nout), 4);
   M.extra.names = {"kx2", "ky2"};
-  if (o.refine) {
-    M.extra.names.push_back("sigma");
-    M.extra.names.push_back("corr");
-  }
+  if (o.refine) M.extra.names.insert(M.extra.names.end(), {"sigma", "corr", "refined"});
   M.extra.values.resize(static_cast<Eigen::Index>(nout), static_cast<Eigen::Index>(M.extra.names.size()));
   Eigen::Index k = 0;
   for (const Rec& r : recs) {
-    if (!r.ok) continue;
+    if (!r.ok && !o.keep_unrefined) continue;
     M.id1.push_back(r.id1);
     M.id2.push_back(r.id2);
-    M.xy.row(k) << r.x1, r.y1, r.x2, r.y2;
+    if (r.ok) M.xy.row(k) << r.x1, r.y1, r.x2, r.y2;
+    else M.xy.row(k) << r.x1, r.y1, r.kx2, r.ky2;
     M.extra.values(k, 0) = r.kx2;
     M.extra.values(k, 1) = r.ky2;
     if (o.refine) {
-      M.extra.values(k, 2) = r.sigma;
+      M.extra.values(k, 2) = r.ok ? r.sigma : st.unrefined_sigma;
       M.extra.values(k, 3) = r.corr;
+      M.extra.values(k, 4) = r.ok ? 1 : 0;
     }
     ++k;
   }
   return M;
+}
+
+// "REASON N, REASON N" of the nonzero counts, by LsmStatus.
+std::string counts_by_reason(const long (&count)[kLsmStatusCount]) {
+  std::string s;
+  for (int k = 1; k < kLsmStatusCount; ++k)
+    if (count[k]) s += (s.empty() ? "" : ", ") + std::string(to_string(static_cast<LsmStatus>(k))) + " " + std::to_string(count[k]);
+  return s.empty() ? "none" : s;
 }
 
 // The header's account of the descriptor search.
@@ -301,14 +317,21 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
                                    ", threshold " + format_number(o.ransac_threshold) +
                                    " px, seed " + std::to_string(o.seed) + ", inlier rms " + format_number(std::round(st.ransac_rms * 1e4) / 1e4) + " px)");
   if (o.grid > 0) meta_set(M.meta, "grid", std::to_string(o.grid) + "x" + std::to_string(o.grid) + ", " + std::to_string(o.per_cell) + " per cell: " + std::to_string(st.gridded));
-  if (o.refine)
+  if (o.refine) {
     meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (o.lsm.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") + " taper " + format_number(o.lsm.taper) +
-                                       " max_shift " + format_number(o.lsm.max_shift) + " min_corr " + format_number(o.lsm.min_corr) +
+                                       " max_shift " + format_number(o.lsm.max_shift) + " max_sigma " + format_number(o.lsm.max_sigma) +
+                                       " min_corr " + format_number(o.lsm.min_corr) +
                                        (o.lsm.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
                                        ": " + std::to_string(st.refined) + " converged");
-  else
+    long nu = 0, nd = 0;
+    for (int k = 0; k < kLsmStatusCount; ++k) nu += st.unrefined[k], nd += st.dropped[k];
+    meta_set(M.meta, "unrefined", std::to_string(nu) + " kept at the keypoint position, refined 0, sigma " +
+                                      format_number(std::round(st.unrefined_sigma * 1e4) / 1e4) + " px (" + counts_by_reason(st.unrefined) + ")");
+    meta_set(M.meta, "dropped", std::to_string(nd) + " (" + counts_by_reason(st.dropped) + ")");
+  } else
     meta_set(M.meta, "refinement", "none (raw SIFT positions)");
-  meta_set(M.meta, "positions", "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2; kx2 ky2 keypoint of image2");
+  meta_set(M.meta, "positions", o.refine ? "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2 (refined 1) or its keypoint (refined 0); kx2 ky2 keypoint of image2"
+                                         : "x1 y1 keypoint of image1; x2 y2 = kx2 ky2 keypoint of image2");
 }
 
 }  // namespace
@@ -358,7 +381,10 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     LsmOptions lsm = o.lsm;
     // epipolar lines of image 2 run along (-b, a): the direction in which the map bends with the terrain
     if (lsm_epipolar) lsm.epipolar_dir = Eigen::Vector2d(-rr.F.n(1), rr.F.n(0));
-    refine_records(a, b, recs, A0, lsm, o);
+    // the refined position is held to the pair model that verified the keypoints (not with a 2-D map: that
+    // one holds only for views without parallax, which the LSM may still refine within max_shift)
+    const bool with_f = rr.ok && !st.no_parallax;
+    refine_records(a, b, recs, A0, lsm, o, with_f ? &rr.F : nullptr, o.ransac_threshold);
   }
   lap(st.seconds[3]);
 

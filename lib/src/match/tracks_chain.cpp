@@ -154,11 +154,15 @@ void TrackChainer::Impl::add(const Matches& m) {
   if (ab[0] == ab[1]) throw InputError(m.source, 0, "both images of the file are the same image");
   if (lu.size() + m.size() > kMaxIndex || occ[ab[0]].size() + m.size() > kMaxIndex || occ[ab[1]].size() + m.size() > kMaxIndex)
     throw InputError(m.source, 0, "more than 2^31 matches in one chain: chain the study area's groups of images apart");
-  const int ckx = m.extra.find("kx2"), cky = m.extra.find("ky2"), cs = m.extra.find("sigma");
+  const int ckx = m.extra.find("kx2"), cky = m.extra.find("ky2"), cs = m.extra.find("sigma"), crf = m.extra.find("refined");
   if (cs < 0) has_sigma = false;
   const size_t begin = lu.size();
   for (size_t r = 0; r < m.size(); ++r) {
     const Eigen::Index e = static_cast<Eigen::Index>(r);
+    if (crf >= 0 && !o.unrefined && m.extra.values(e, crf) == 0) {
+      ++st.unrefined_left_out;
+      continue;
+    }
     const double kx = ckx >= 0 ? m.extra.values(e, ckx) : m.xy(e, 2);
     const double ky = cky >= 0 ? m.extra.values(e, cky) : m.xy(e, 3);
     lu.push_back(static_cast<Index>(occ[ab[0]].size()));
@@ -456,6 +460,9 @@ Tracks TrackChainer::header() const {
   for (const auto& kv : I.st.written_by_length) counts += (counts.empty() ? "" : " ") + std::to_string(kv.first) + ":" + std::to_string(kv.second);
   meta_set(T.meta, "tracks_by_views", counts.empty() ? "none" : counts);
   if (I.has_sigma) meta_set(T.meta, "sigma", "px, each record's variance split between its two ends and added along the path");
+  if (I.o.unrefined) meta_set(T.meta, "unrefined", "matches marked refined 0 chained at their keypoint positions");
+  else if (I.st.unrefined_left_out > 0)
+    meta_set(T.meta, "unrefined", std::to_string(I.st.unrefined_left_out) + " matches marked refined 0 left out (tp-chain --unrefined chains them)");
   return T;
 }
 

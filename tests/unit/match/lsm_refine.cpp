@@ -273,3 +273,35 @@ TEST(Lsm, RegionOffsetAndTightCrop) {
   // the window's first column falls on the region's first pixel: no support left of it
   EXPECT_EQ(lsm_refine(I1, crop(55 - 10, y0, w, h), p1, p1, Eigen::Matrix2d::Identity(), o).status, LsmStatus::OutOfImage);
 }
+
+// Acceptance by what the fit measures: the same window with little noise is refined; under heavy noise
+// (the radiometry of image 2 barely related to image 1's) the refinement is rejected by its radiometric
+// fit (low correlation) or its precision (sigma from the normal equations), never passed as refined;
+// each test is the one that rejects when the other is switched off.
+TEST(Lsm, RejectsByPrecisionOrFit) {
+  Texture tex(17);
+  const Eigen::Vector2d c(60, 60), shift(0.4, -0.3);
+  const Raster I1 = render(tex, 120, Eigen::Matrix2d::Identity(), c, 300, 1000, 1.0, 5);
+  const Raster clean = render(tex, 120, Eigen::Matrix2d::Identity(), c + shift, 300, 1000, 1.0, 6);
+  const Raster noisy = render(tex, 120, Eigen::Matrix2d::Identity(), c + shift, 300, 1000, 2500.0, 6);
+  const Eigen::Vector2d p1(57, 61);
+  LsmOptions o;
+  const LsmResult good = lsm_refine(I1, clean, p1, p1, Eigen::Matrix2d::Identity(), o);
+  ASSERT_TRUE(good.ok()) << to_string(good.status);
+  EXPECT_LT(good.sigma, 0.02);
+  EXPECT_NEAR((good.p2 - (p1 + shift)).norm(), 0, 0.03);  // image 2 sees ground point g at g + c + shift
+  const LsmResult bad = lsm_refine(I1, noisy, p1, p1, Eigen::Matrix2d::Identity(), o);
+  EXPECT_FALSE(bad.ok());
+  EXPECT_TRUE(bad.status == LsmStatus::LowCorrelation || bad.status == LsmStatus::Imprecise || bad.status == LsmStatus::Drifted)
+      << to_string(bad.status) << " corr " << bad.corr << " sigma " << bad.sigma;
+  // the precision alone: a moderately noisy window (correlation ~0.9) refined with a sigma bound below its sigma
+  const Raster some = render(tex, 120, Eigen::Matrix2d::Identity(), c + shift, 300, 1000, 300.0, 6);
+  LsmResult r = lsm_refine(I1, some, p1, p1, Eigen::Matrix2d::Identity(), o);
+  ASSERT_TRUE(r.ok()) << to_string(r.status) << " corr " << r.corr << " sigma " << r.sigma;
+  o.max_sigma = r.sigma * 0.5;
+  EXPECT_EQ(lsm_refine(I1, some, p1, p1, Eigen::Matrix2d::Identity(), o).status, LsmStatus::Imprecise);
+  // the fit alone: the same window with the correlation bound above its correlation
+  o.max_sigma = 1;
+  o.min_corr = std::min(0.999, r.corr + 0.01);
+  EXPECT_EQ(lsm_refine(I1, some, p1, p1, Eigen::Matrix2d::Identity(), o).status, LsmStatus::LowCorrelation);
+}

@@ -41,8 +41,11 @@ struct LsmOptions {
   int window = 21;          // template size in pixels (odd)
   int max_iterations = 40;
   double tolerance = 5e-3;  // pixels, on the update of p2
-  double max_shift = 1.5;   // pixels: drop when p2 ends farther than this from its initial value
-  double min_corr = 0.8;    // drop when the final normalised cross-correlation is lower
+  // Acceptance of the refined position, by what the fit measures (a rejected refinement is not a lost
+  // match: match_keypoints keeps the verified keypoint position, unrefined and marked):
+  double max_shift = 1.5;   // pixels: reject when p2 ends farther than this from its initial value
+  double max_sigma = 0.15;  // pixels: reject when the position's precision from the normal equations is worse
+  double min_corr = 0.5;    // reject when the final normalised cross-correlation (the radiometric fit) is lower
   bool l1 = true;           // robust L1 (IRLS); false: plain least squares
   double eps = 0.02;        // IRLS floor on |r|, in units of the template's grey-level standard deviation
   double taper = 3;         // > 0: Gaussian weight exp(-(u^2+v^2) / (2 taper^2)) on the window (pixels); 0 = flat
@@ -59,7 +62,10 @@ struct LsmOptions {
   bool epipolar_curvature = true;  // match_keypoints: pass the verified affine F's epipolar direction
 };
 
-enum class LsmStatus { Ok, OutOfImage, Invalid, Flat, Diverged, NotConverged, Drifted, LowCorrelation };
+// Why a refinement was rejected. OffEpipolar is set by match_keypoints (the refined position leaves the
+// verified pair model by more than the RANSAC threshold), never by lsm_refine itself.
+enum class LsmStatus { Ok, OutOfImage, Invalid, Flat, Diverged, NotConverged, Drifted, LowCorrelation, Imprecise, OffEpipolar };
+constexpr int kLsmStatusCount = 10;
 const char* to_string(LsmStatus s);
 
 struct LsmResult {

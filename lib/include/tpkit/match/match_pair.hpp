@@ -7,8 +7,12 @@
 // match (lsm_refine.hpp) region by region. Image 1's position of every record is its keypoint
 // position (the LSM template is fixed there); image 2's is refined.
 //
-// Records: id1 x1 y1 id2 x2 y2 kx2 ky2 [sigma corr] -- (kx2, ky2) is image 2's keypoint position,
-// sigma the LSM standard deviation of (x2, y2) in pixels, corr the final correlation.
+// Records: id1 x1 y1 id2 x2 y2 kx2 ky2 [sigma corr refined] -- (kx2, ky2) is image 2's keypoint position,
+// sigma the standard deviation of (x2, y2) in pixels, corr the final correlation, refined 1 when (x2, y2)
+// is the LSM position and 0 when the refinement was rejected (lsm_refine.hpp's acceptance, or the refined
+// position off the verified pair model): the verified match is then kept at its keypoint position with
+// sigma = max(unrefined_sigma, the RANSAC inlier rms) (or dropped with keep_unrefined false), counted
+// by reason either way.
 #pragma once
 #include <array>
 #include <atomic>
@@ -46,6 +50,8 @@ struct PairMatchOptions {
   int per_cell = 4;               // matches kept per grid cell (best ratio first)
   bool refine = true;
   LsmOptions lsm;
+  bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
+  double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
   std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
   // Region runs (match_region.hpp): only the verified matches whose image-1 keypoint lies in this
   // window [x0, x1) x [y0, y1) (pixel-centre coordinates) are refined and returned; the others gave
@@ -70,7 +76,9 @@ struct PairMatchStats {
   RpcGuidedStats rpc;                          // their figures
   bool rpc_fallback = false;                   // the curves held no geometry: the coarse stage's was used
   double seconds[4] = {0, 0, 0, 0};             // wall time of detection, matching, verification, refinement
-  long dropped[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // by LsmStatus
+  long dropped[kLsmStatusCount] = {};          // by LsmStatus: refinement rejected, record dropped (keep_unrefined false)
+  long unrefined[kLsmStatusCount] = {};        // by LsmStatus: refinement rejected, kept at the keypoint position
+  double unrefined_sigma = 0;                  // the sigma those got
   bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
   bool overlap = true;                         // false: too few verified matches, zero records
 };

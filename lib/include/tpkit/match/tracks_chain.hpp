@@ -42,6 +42,9 @@ struct ChainOptions {
   std::vector<std::string> images;  // output image order (paths as in the files' headers); empty = first appearance
   int min_views = 3;
   double same_position = 0.01;      // pixels
+  // Records marked refined 0 (tp-match kept a verified match whose refinement was rejected at its keypoint
+  // position, with a larger sigma): chained only when set; else left out and counted (ChainStats, header).
+  bool unrefined = false;
 };
 
 struct ChainStats {
@@ -52,6 +55,7 @@ struct ChainStats {
   long views_dropped_conflicts = 0;
   long merged_duplicates = 0;
   long written = 0;
+  long unrefined_left_out = 0;      // records marked refined 0, not chained (ChainOptions::unrefined false)
 };
 
 // Adds matches files one by one (each may be dropped after add), joins them, writes the tracks.
