@@ -39,6 +39,10 @@ int main(int argc, char** argv) {
         app.add_option("--rpc-bias", o->rpc_bias, "VIEW:dx,dy[,dxy,dyy[,dxx,dyx]]: bias injected into a view's RPC (px, px/px)");
         app.add_option("--views", o->p.views, "views in all (3: the tri-stereo; 2 to 96)");
         app.add_option("--dates", o->p.dates, "acquisitions of a block (default: views / 3)");
+        app.add_option("--second-date", o->p.date2, "views 2..N from a second date: strength 0..1 of tone, season, texture, sun changes");
+        app.add_option("--clouds", o->p.clouds, "views 2..N: fraction of the ground under clouds, with their shadows");
+        app.add_option("--water", o->p.water, "fraction of the ground under featureless water (every view)");
+        app.add_option("--nodata-band", o->p.nodata, "views 2..N: fraction of the columns, from the left, written as 0 (nodata)");
         app.add_option("--random-bias", o->random_bias,
                        "seeded RPC bias of at most PX pixels (shift, drift, affine) on every view but view 1 and those of --rpc-bias");
         return [o]() {

@@ -25,6 +25,7 @@
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/synth/synth_conditions.hpp"
 #include "tpkit/synth/synth_noise.hpp"
 #include "tpkit/synth/synth_scene.hpp"
 #include "tpkit/synth/synth_terrain.hpp"
@@ -61,6 +62,7 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
   const double jump = 6 * params().gsd;
   const uint64_t ns_seed = synth::hash(params().seed, 0x401e, view);
   const double g = gain(view), off = offset(view), sigma = params().noise;
+  const bool conditions = synth_has_conditions(params());  // else exactly the scene as before
   for (long j = 0; j < rows; ++j) {
     const long y = y0 + j;
     for (long x = 0; x < W; ++x) {
@@ -89,11 +91,12 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
             terrain_().height(X.x(), X.y(), &grad);
           }
           const Eigen::Vector3d X = o + *t * d;
-          sum += radiance(X.x(), X.y(), grad);
+          sum += conditions ? synth_condition_radiance(*this, view, X.x(), X.y(), grad) : radiance(X.x(), X.y(), grad);
         }
       }
       double dn = g * sum / (ns * ns) + off;
       if (sigma > 0) dn += sigma * gauss(synth::hash(ns_seed, y, x));
+      if (conditions) dn = synth_condition_dn(params(), view, x, dn);
       dn = std::clamp(std::round(dn), 0.0, 4095.0);
       out[static_cast<size_t>(j) * W + x] = static_cast<uint16_t>(dn);
     }
@@ -185,6 +188,10 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
   meta_set(meta, "points", std::to_string(p.points));
   meta_set(meta, "noise", format_number(p.noise));
   meta_set(meta, "supersample", std::to_string(p.supersample));
+  if (synth_has_conditions(p))  // radiometric only (synth_conditions.hpp): the truth is unchanged
+    meta_set(meta, "conditions", "second_date " + format_number(p.date2) + " clouds " + format_number(p.clouds) + " water " +
+                                     format_number(p.water) + " nodata_band " + format_number(p.nodata) +
+                                     " (view 1 the reference date; DN 0 = nodata)");
   if (!p.cross_track.empty()) {  // given by --cross-track (else seeded, and no line, as before)
     std::string ct;
     for (double c : p.cross_track) ct += (ct.empty() ? "" : ",") + format_number(c);

@@ -54,6 +54,9 @@ void check_params(const SynthParams& p) {
     throw UsageError("--camera must be affine or perspective, got '" + p.camera + "'");
   if (p.points < 0) throw UsageError("--points must be >= 0");
   if (!(p.noise >= 0) || !std::isfinite(p.noise)) throw UsageError("--noise must be >= 0 DN");
+  if (!(p.date2 >= 0 && p.date2 <= 1)) throw UsageError("--second-date must be between 0 and 1");
+  for (const auto& [opt, v] : {std::pair<const char*, double>{"--clouds", p.clouds}, {"--water", p.water}, {"--nodata-band", p.nodata}})
+    if (!(v >= 0 && v <= 0.8)) throw UsageError(std::string(opt) + " must be a fraction between 0 and 0.8");
   if (p.supersample < 1 || p.supersample > 16) throw UsageError("--supersample must be between 1 and 16");
   if (p.views < 2 || p.views > kMaxSynthViews)
     throw UsageError("--views must be between 2 and " + std::to_string(kMaxSynthViews) + ", got " + std::to_string(p.views));
@@ -125,6 +128,9 @@ void save_params(const std::string& path, const SynthParams& p) {
      << "supersample = " << p.supersample << "\n";
   if (!p.cross_track.empty()) os << "cross_track = " << cross_track_text(p.cross_track) << "\n";  // default: no key
   if (synth_is_block(p)) os << "views = " << p.views << "\n" << "dates = " << synth_dates(p) << "\n";  // triplet: no keys
+  // conditions: keys only when set (the default scene's file is unchanged)
+  for (const auto& [key, v] : {std::pair<const char*, double>{"date2", p.date2}, {"clouds", p.clouds}, {"water", p.water}, {"nodata", p.nodata}})
+    if (v != 0) os << key << " = " << format_number(v) << "\n";
   os << "model = " << kSynthModel << "\n";
   write_file_atomic(path, os.str());
 }
@@ -203,6 +209,14 @@ SynthParams load_params(const std::string& path) {
       integer(i);
       if (i < 0 || i > kMaxSynthViews) throw InputError(path, n, "dates: out of range: '" + val + "'");
       p.dates = static_cast<int>(i);
+    } else if (key == "date2") {
+      num(p.date2);
+    } else if (key == "clouds") {
+      num(p.clouds);
+    } else if (key == "water") {
+      num(p.water);
+    } else if (key == "nodata") {
+      num(p.nodata);
     } else if (key == "model") {
       integer(i);
       if (i != kSynthModel)

@@ -51,6 +51,12 @@ struct SynthParams {
   std::vector<double> cross_track;
   int views = 3;   // views in all (2..kMaxSynthViews); 3 with dates = 1 is the tri-stereo above
   int dates = 0;   // acquisitions; 0: views / 3 (views must then be a multiple of 3)
+  // Conditions (synth_conditions.hpp), radiometric only: the geometry, and so the truth, is unchanged.
+  // All 0 (the default) leaves the scene as it was, byte for byte; scene.params names only those set.
+  double date2 = 0;   // views 2..N a second date: strength 0..1 of tone, seasonal, texture and sun changes
+  double clouds = 0;  // views 2..N: about this fraction of the ground under clouds (0..0.8), with shadows
+  double water = 0;   // every view: about this fraction of the ground under featureless water (0..0.8)
+  double nodata = 0;  // views 2..N: this fraction of the columns (from the left) is 0 = nodata (0..0.8)
 };
 constexpr int kMaxSynthViews = 96;
 constexpr int kMaxSynthViewsPerDate = 5;
