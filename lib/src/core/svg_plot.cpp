@@ -23,7 +23,9 @@ std::string num(double v) {
 }
 std::string tick_label(double v, double step) {
   char b[32];
-  int dec = step >= 1 ? 0 : static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
+  int dec = 0;  // the decimals that write the step exactly (0.025: 3, not 2)
+  while (dec < 6 && std::fabs(step * std::pow(10.0, dec) - std::round(step * std::pow(10.0, dec))) > 1e-6 * step * std::pow(10.0, dec))
+    ++dec;
   if (std::fabs(v) >= 1e5 || (std::fabs(v) < 1e-3 && v != 0 && step < 1e-3))
     std::snprintf(b, sizeof b, "%.3g", v);
   else
@@ -283,7 +285,7 @@ void SvgPlot::cell(int pi, double x0, double y0, double x1, double y1, const std
   if (Y0 > Y1) std::swap(Y0, Y1);
   std::ostringstream o;
   o << open_marks(id_, pi) << "<rect x=\"" << num(X0) << "\" y=\"" << num(Y0) << "\" width=\"" << num(X1 - X0) << "\" height=\""
-    << num(Y1 - Y0) << "\" fill=\"" << fill << "\"";
+    << num(Y1 - Y0) << "\" fill=\"" << fill << "\" shape-rendering=\"crispEdges\"";  // no seams between cells
   if (opacity < 1) o << " fill-opacity=\"" << opacity << "\"";
   o << "/>\n</g>\n";
   record(pi, X0, Y0, X1, Y1);
