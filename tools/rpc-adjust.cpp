@@ -356,7 +356,7 @@ int run(const Opts& o) {
   write_residuals((dir / "rpc.residuals").string(), images, tracks, r, check_rms, check_n);
   if (!sets.empty()) write_accuracy((dir / "accuracy").string(), images, sets);
   plot_rpc_residuals((dir / "residuals.svg").string(), images, r,
-                     "rpc-adjust --model " + o.model + ": residual vectors before (red) and after (blue)");
+                     "rpc-adjust --model " + o.model + ": residual fields before (zero bias) and after, projected minus observed");
 
   long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
   long used = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
