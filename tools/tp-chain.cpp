@@ -10,13 +10,14 @@
 #include "tpkit/core/formats.hpp"
 #include "tpkit/core/tool_support.hpp"
 #include "tpkit/match/tracks_chain.hpp"
+#include "tpkit/match/tracks_coverage.hpp"
 
 extern const char* const tpkit_man_page;
 
 namespace {
 struct Opts {
   std::vector<std::string> files, images;
-  std::string out = "-";
+  std::string out = "-", coverage;
   int min_views = 0;  // 0: not given (the option takes 2 or more); default 3 with three images, else 2
   double same = 0.01;
   bool quiet = false;
@@ -44,9 +45,10 @@ int main(int argc, char** argv) {
             ->check(tpkit::NonNegative);
         app.add_flag("--unrefined", o->unrefined, "chain matches whose LSM refinement was rejected (refined 0) too");
         app.add_option("-o,--output", o->out, "output tracks file (- = stdout)");
+        app.add_option("--coverage", o->coverage, "SVG figure: tie points per cell over each image's thumbnail");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
-          tpkit::check_outputs({{"-o", o->out}}, o->files);
+          tpkit::check_outputs({{"-o", o->out}, {"--coverage", o->coverage}}, o->files);
           for (size_t i = 0; i < o->images.size(); ++i)
             for (size_t j = 0; j < i; ++j)
               if (o->images[i] == o->images[j])
@@ -73,6 +75,7 @@ int main(int argc, char** argv) {
           const tpkit::ChainStats& st = chainer.join();
           tpkit::AtomicOutput out(o->out);
           chainer.write(out.stream());
+          if (!o->coverage.empty()) tpkit::save_tracks_coverage(o->coverage, chainer);
           out.commit();
           if (!o->quiet) {
             std::ostringstream line;

@@ -50,3 +50,12 @@ tpkit_tool_test(tp-chain.four-images-default-two-views
 tpkit_tool_test(tp-chain.sigma-carried
   COMMAND "printf '# tpkit matches 1\\n# image1: A 100 100\\n# image2: B 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n5 10 20 7 11 21 0.1\\n' > ab.m && printf '# tpkit matches 1\\n# image1: A 100 100\\n# image2: C 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n5 10 20 9 30 40 0.2\\n' > ac.m && printf '# tpkit matches 1\\n# image1: C 100 100\\n# image2: D 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n9 30 40 1 33 44 0.3\\n' > cd.m && tp-chain ab.m ac.m cd.m -o t.tracks"
   CHECK_FILE t.tracks FILE_MATCH "# columns: track x1 y1 x2 y2 x3 y3 x4 y4 kp ref sigma1 sigma2 sigma3 sigma4\n0 10 20 11 21 30 40 33 44 5 1 0.07071 0.07071 0.1414 0.255\n$")
+# issue 27: --coverage draws where the images have tracks: the one track (the other is a conflict) in
+# one of 16 x 16 cells over 100 x 100 px: 255 of 256 cells empty in each image; rendered by rsvg-convert,
+# every mark inside its panel; the images (not found) have no thumbnail, said
+tpkit_tool_test(tp-chain.coverage
+  COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m --min-views 2 -o t.tracks --coverage cov.svg && bash $SRC/tests/tools/figure_check.sh cov.svg && grep -c '1 points; 255 of 256 cells without any (100%); no thumbnail: image not found' cov.svg"
+  STDOUT_MATCH "figure ok: [0-9]+x[0-9]+\n3\n")
+tpkit_tool_test(tp-chain.coverage-is-an-input
+  COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m -o t.tracks --coverage ab.m"
+  EXPECT_FAIL NO_FILE t.tracks)
