@@ -9,6 +9,8 @@
 //       consistency with the true cameras (residuals of views 2 and 3 at the best 3-D point).
 //       --check: exit status 1 when the triplets' median or 90th percentile (views 2 and 3 together)
 //       is above MED / P90.
+//       --score FILE A B: instead, score any program's matches file of views A and B (1-based; e.g. COLMAP's
+//       through tp-convert --from colmap) against the truth: matches, correct (< 1 px), error median/p90.
 //       --min-corr R, --max-sigma PX: the LSM acceptance (tp-match's options); --nodata V: grey level of
 //       invalid pixels (tp-synth --nodata-band writes 0).
 //       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
@@ -101,6 +103,8 @@ int main(int argc, char** argv) {
     int adaptive = -1, sit = -1, epic = -1;
     double stol = -1, min_corr = -2, max_sigma = -1;
     std::optional<double> nodata;
+    std::string score;
+    int score_a = 1, score_b = 2;
     const char* usage =
         "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
     for (int i = 1; i < argc; ++i) {
@@ -145,6 +149,7 @@ int main(int argc, char** argv) {
       else if (a == "--min-corr") need(1), min_corr = num();
       else if (a == "--max-sigma") need(1), max_sigma = num();
       else if (a == "--nodata") need(1), nodata = num();
+      else if (a == "--score") need(3), score = argv[++i], score_a = whole(), score_b = whole();
       else {
         std::fputs(usage, a == "--help" || a == "-h" ? stdout : stderr);
         return a == "--help" || a == "-h" ? 0 : 2;
@@ -173,6 +178,23 @@ int main(int argc, char** argv) {
         std::printf("FAIL: RMSE %.4f > %.4f\n", rmse, crmse);
         fail = true;
       }
+    }
+    if (!synth.empty() && !score.empty()) {
+      // any program's matches (x1 y1 in view A, x2 y2 in view B) against the truth: the error of (x2, y2)
+      // from the projection in B of the ground point of (x1, y1) in A; correct = error below 1 px
+      tpkit::SynthScene scene = tpkit::SynthScene::load(synth);
+      const tpkit::Matches m = tpkit::read_matches(score);
+      std::vector<double> e, ok;
+      for (size_t r = 0; r < m.size(); ++r) {
+        auto X = ground_of(scene, score_a - 1, m.xy(r, 0), m.xy(r, 1));
+        if (!X || !scene.visible(score_b - 1, *X)) continue;
+        e.push_back((Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3)) - scene.project(score_b - 1, *X)).norm());
+        if (e.back() < 1) ok.push_back(e.back());
+      }
+      const Dist d = dist(e), c = dist(ok);
+      std::printf("score %s: matches %zu, with truth %ld, correct (< 1 px) %ld, correct median %.4f p90 %.4f, all median %.4f p90 %.4f px\n",
+                  score.c_str(), m.size(), d.n, c.n, c.med, c.p90, d.med, d.p90);
+      return 0;
     }
     if (!synth.empty()) {
       tpkit::SynthScene scene = tpkit::SynthScene::load(synth);

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Pairs from different dates and conditions (issue 29): per tp-synth family, tp-match's matches of
+# view1-view2 and their error against the truth beside COLMAP 3.8's on the same images.
+#
+#   bench/dates_conditions.sh [BUILD_DIR] [WORK_DIR]     (SIZE=1024 by default)
+#
+# Families (tp-synth options, view 1 the reference date, view 2 degraded; the geometry unchanged, so
+# the truth is exact): none, --second-date 1, --clouds 0.3, --water 0.3, --nodata-band 0.35,
+# --second-date 1 --clouds 0.3. tpkit: tp-match on the 16-bit views (--nodata 0), every record
+# written (refined and kept-unrefined). COLMAP: feature_extractor + exhaustive_matcher (CPU, 2
+# threads) on the 8-bit rendering tp-match's detector sees (bench_match_accuracy --render8), its
+# verified matches read back by tp-convert --from colmap. Both scored by bench_match_accuracy --score:
+# the error of x2 y2 from the truth projection of x1 y1's ground point; correct = error < 1 px.
+# COLMAP is a benchmark peer only (as in bench/match_speed_colmap.sh), never a build or CI dependency.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+build=$(cd "${1:-$here/build}" && pwd)
+work=${2:-$(mktemp -d /tmp/tpkit-dates.XXXXXX)}
+bin=$build/bin
+size=${SIZE:-1024}
+for t in tp-synth tp-match tp-convert bench_match_accuracy; do
+  [ -x "$bin/$t" ] || { echo "missing $bin/$t: build with -DTPKIT_BENCH=ON first" >&2; exit 1; }
+done
+command -v colmap >/dev/null || { echo "colmap is not installed (benchmark peer only: apt-get install colmap)" >&2; exit 1; }
+export QT_QPA_PLATFORM=offscreen
+mkdir -p "$work"
+cd "$work"
+families=("none|" "second-date|--second-date 1" "clouds|--clouds 0.3" "water|--water 0.3" "nodata|--nodata-band 0.35"
+          "second-date+clouds|--second-date 1 --clouds 0.3")
+printf '%-20s | %-42s | %-42s\n' family "tpkit: matches, correct, median/p90 px" "COLMAP: matches, correct, median/p90 px"
+for f in "${families[@]}"; do
+  name=${f%%|*} opts=${f#*|}
+  rm -rf "$name" && mkdir -p "$name/png"
+  # shellcheck disable=SC2086
+  "$bin/tp-synth" --out "$name/s" --size "$size" --threads 2 $opts > /dev/null 2>&1
+  "$bin/tp-match" "$name/s/view1.tif" "$name/s/view2.tif" --nodata 0 --threads 2 -q -o "$name/tp.matches"
+  for v in 1 2; do "$bin/bench_match_accuracy" --render8 "$name/s/view$v.tif" "$name/png/view$v.png" 2> /dev/null; done
+  colmap feature_extractor --database_path "$name/colmap.db" --image_path "$name/png" --SiftExtraction.use_gpu 0 \
+    --SiftExtraction.num_threads 2 > "$name/colmap.log" 2>&1
+  colmap exhaustive_matcher --database_path "$name/colmap.db" --SiftMatching.use_gpu 0 --SiftMatching.num_threads 2 \
+    >> "$name/colmap.log" 2>&1
+  "$bin/tp-convert" --from colmap "$name/colmap.db" -o "$name/colmap" 2> /dev/null
+  cm=$(ls "$name"/colmap/*.matches 2> /dev/null | head -1)
+  t=$("$bin/bench_match_accuracy" --synth "$name/s" --score "$name/tp.matches" 1 2)
+  if [ -n "$cm" ]; then
+    # COLMAP's file may hold the pair as view2 -> view1
+    if grep -q '^# image1: .*view2' "$cm"; then c=$("$bin/bench_match_accuracy" --synth "$name/s" --score "$cm" 2 1)
+    else c=$("$bin/bench_match_accuracy" --synth "$name/s" --score "$cm" 1 2); fi
+  else
+    c="score none: matches 0, with truth 0, correct (< 1 px) 0, correct median 0 p90 0, all median 0 p90 0 px"
+  fi
+  row() { echo "$1" | sed -E 's/.*matches ([0-9]+), with truth [0-9]+, correct \(< 1 px\) ([0-9]+), correct median ([0-9.]+) p90 ([0-9.]+), all median ([0-9.]+) p90 ([0-9.]+).*/\1 \2 \3 \4 \5 \6/'; }
+  read -r tn tc tm tp tam tap <<< "$(row "$t")"
+  read -r cn cc cmd cp cam cap <<< "$(row "$c")"
+  unref=$(sed -n 's/^# unrefined: \([0-9]*\) .*/\1/p' "$name/tp.matches")
+  printf '%-20s | %5d, %5d (%4d unrefined), %.3f/%.3f | %5d, %5d, %.3f/%.3f\n' "$name" "$tn" "$tc" "$unref" "$tm" "$tp" "$cn" "$cc" "$cmd" "$cp"
+done
+echo "(median/p90 of the correct matches' error; work folder: $work)"
