@@ -54,7 +54,7 @@ tpkit_tool_test(tp-chain.sigma-carried
 # one of 16 x 16 cells over 100 x 100 px: 255 of 256 cells empty in each image; rendered by rsvg-convert,
 # every mark inside its panel; the images (not found) have no thumbnail, said
 tpkit_tool_test(tp-chain.coverage
-  COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m --min-views 2 -o t.tracks --coverage cov.svg && bash $SRC/tests/tools/figure_check.sh cov.svg && grep -c '1 points; 255 of 256 cells without any (100%); no thumbnail: image not found' cov.svg"
+  COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m --min-views 2 -o t.tracks --coverage cov.svg && bash $SRC/tests/tools/figure_check.sh cov.svg && grep -c '1 point; 255 of 256 cells without any (100%); no thumbnail: image not found' cov.svg"
   STDOUT_MATCH "figure ok: [0-9]+x[0-9]+\n3\n")
 tpkit_tool_test(tp-chain.coverage-is-an-input
   COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m -o t.tracks --coverage ab.m"

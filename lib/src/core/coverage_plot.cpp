@@ -95,7 +95,7 @@ SvgPlot coverage_figure(const std::vector<CoverageView>& views, const std::strin
     SvgPlot::PanelSpec s = SvgPlot::spec(left + k * (pw + hgap), top, pw, pw, g.x0, x1, g.y0, y1, views[k].title, "x (px)", "y (px)");
     s.y_down = s.equal_aspect = true;
     char note[160];
-    std::snprintf(note, sizeof note, "%ld points; %ld of %d cells without any (%.0f%%)%s%s", used,
+    std::snprintf(note, sizeof note, "%ld point%s; %ld of %d cells without any (%.0f%%)%s%s", used, used == 1 ? "" : "s",
                   static_cast<long>(g.count.size()) - with, g.nx * g.ny, 100.0 * (g.count.size() - with) / g.count.size(),
                   why.empty() ? "" : "; ", why.c_str());
     s.note = note;
