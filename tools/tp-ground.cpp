@@ -61,6 +61,12 @@ DemStage dem_stage(const Opts& o, const std::vector<AdjustImage>& images, const 
     std::cerr << describe_dem_comparison(a.before, "tp-ground: before alignment, dz ")
               << describe_dem_comparison(a.after, "tp-ground: after alignment, dz ")
               << "tp-ground: shift east north up " << shift << " m (" << a.iterations << " iterations, " << a.used << " points in the fit)\n";
+    meta_set(report.meta, "tilt_after", format_figure(a.tilt.east_per_km) + " " + format_figure(a.tilt.north_per_km) +
+                                            " m/km east north, span " + format_figure(a.tilt.range_m) + " m over the points, NMAD about it " + format_figure(a.tilt.nmad_m) + " m");
+    if (a.tilt.significant())
+      warn("dz after alignment is tilted (" + format_figure(a.tilt.east_per_km) + " m/km east, " + format_figure(a.tilt.north_per_km) +
+           " m/km north: a span of " + format_figure(a.tilt.range_m) + " m over the points, against " + format_figure(a.tilt.nmad_m) +
+           " m NMAD about the plane): a shift cannot remove a tilt, and on slopes the tilt pulls the horizontal shift; adjust with the DEM as a height prior (rpc-adjust --dem) or with GCPs, then align");
     if (!a.converged) warn("the alignment did not converge in " + std::to_string(a.iterations) + " iterations: its shift is not to be trusted");
     for (GroundSample& p : points) p = a.shift.apply(p);
     for (size_t i = 0; i < images.size() && !o.models.empty(); ++i) {

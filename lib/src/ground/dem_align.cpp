@@ -1,5 +1,6 @@
 #include "tpkit/ground/dem_align.hpp"
 
+#include <Eigen/Dense>
 #include <ceres/ceres.h>
 
 #include <cmath>
@@ -74,6 +75,46 @@ void fit_cosine(const std::vector<Sample>& s, const DemAlignOptions& o, double& 
   te = x[1];
 }
 
+// The plane dz = c + a e + b n over the points the DEM covers (stage after the shift; see DzTilt).
+DzTilt fit_tilt(const std::vector<GroundSample>& moved, const ReferenceDem& dem, double lon0, double lat0) {
+  double me, mn;
+  metres_per_degree(lat0, me, mn);
+  std::vector<Eigen::Vector3d> en_dz;  // e, n (m), dz
+  for (const GroundSample& p : moved) {
+    double h;
+    if (dem.height(p.lon, p.lat, h)) en_dz.emplace_back((p.lon - lon0) * me, (p.lat - lat0) * mn, p.h - h);
+  }
+  DzTilt t;
+  if (en_dz.size() < 10) return t;
+  std::vector<double> dz;
+  for (const auto& v : en_dz) dz.push_back(v[2]);
+  const DzStats st = dz_stats(dz);
+  const double gate = 5 * std::max(st.nmad, 0.01);
+  std::vector<Eigen::Vector3d> kept;
+  for (const auto& v : en_dz)
+    if (std::fabs(v[2] - st.median) <= gate) kept.push_back(v);
+  Eigen::MatrixXd A(kept.size(), 3);
+  Eigen::VectorXd b(kept.size());
+  for (size_t i = 0; i < kept.size(); ++i) {
+    A.row(i) << 1, kept[i][0] / 1000, kept[i][1] / 1000;
+    b[i] = kept[i][2];
+  }
+  const Eigen::Vector3d x = A.colPivHouseholderQr().solve(b);
+  t.east_per_km = x[1];
+  t.north_per_km = x[2];
+  double lo = INFINITY, hi = -INFINITY;
+  std::vector<double> about;
+  for (const auto& v : kept) {
+    const double plane = x[1] * v[0] / 1000 + x[2] * v[1] / 1000;
+    lo = std::min(lo, plane);
+    hi = std::max(hi, plane);
+    about.push_back(v[2] - x[0] - plane);
+  }
+  t.range_m = hi - lo;
+  t.nmad_m = dz_stats(about).nmad;
+  return t;
+}
+
 }  // namespace
 
 double GroundShift::dlon() const {
@@ -118,6 +159,7 @@ DemAlignment align_to_dem(const std::vector<GroundSample>& points, const Referen
   std::vector<GroundSample> moved;
   for (const GroundSample& p : points) moved.push_back(r.shift.apply(p));
   r.after = compare_to_dem(moved, dem);
+  r.tilt = fit_tilt(moved, dem, r.shift.lon0, r.shift.lat0);
   return r;
 }
 

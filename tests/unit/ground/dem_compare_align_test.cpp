@@ -38,6 +38,11 @@ struct Utm {
     lon = q.lp.lam;
     lat = q.lp.phi;
   }
+  void forward(double lon, double lat, double& e, double& n) const {
+    const PJ_COORD q = proj_trans(pj, PJ_FWD, proj_coord(lon, lat, 0, 0));
+    e = q.xy.x;
+    n = q.xy.y;
+  }
 };
 
 // A DEM of surface z(e, n) on a UTM 31N grid, 'posting' m, top-left centre (e0, n0), w x h cells.
@@ -140,4 +145,21 @@ TEST(DemAlign, RecoversAKnownShift) {
   EXPECT_GT(std::fabs(a.before.all.median), 0.5);
   EXPECT_LT(std::fabs(a.after.all.median), 0.2);
   EXPECT_LT(a.after.all.nmad, a.before.all.nmad / 3);
+  // A translation leaves no tilt behind.
+  EXPECT_FALSE(a.tilt.significant()) << a.tilt.range_m << " m span";
+  EXPECT_LT(std::fabs(a.tilt.east_per_km), 0.05);
+  EXPECT_LT(std::fabs(a.tilt.north_per_km), 0.05);
+
+  // The same points with their heights tilted by 0.8 m/km eastward on top of t: the tilt is measured and said
+  // (a span of about 0.8 * 7 km = 5.6 m over the points), which no shift removes.
+  std::vector<GroundSample> tilted = pts;
+  for (GroundSample& p : tilted) {
+    double e, n;
+    utm.forward(p.lon, p.lat, e, n);
+    p.h += 0.8 * (e - (e0 + 4500)) / 1000;
+  }
+  const DemAlignment b = align_to_dem(tilted, dem);
+  EXPECT_TRUE(b.tilt.significant());
+  EXPECT_NEAR(b.tilt.east_per_km, 0.8, 0.1);
+  EXPECT_NEAR(b.tilt.range_m, 5.6, 0.6);
 }

@@ -7,6 +7,7 @@
 // the fit. The result is the shift to ADD to the points (the opposite of t) to fit the DEM: east/north in metres
 // in the tangent plane at the points' centre (converted to degrees there), up in metres.
 #pragma once
+#include <algorithm>
 #include <vector>
 
 #include "tpkit/ground/dem_compare.hpp"
@@ -27,9 +28,22 @@ struct GroundShift {
   GroundSample apply(const GroundSample& p) const;
 };
 
+// What a translation leaves: the plane dz = c + a e + b n fitted (least squares, points within 5 NMAD of the
+// median) to dz after the alignment, e and n metres east and north of the centre. A block adjusted without
+// ground control is often tilted (its height error grows across it) rather than shifted; no shift removes a
+// tilt, and on slopes a tilt pulls the horizontal shift. `range_m` is the plane's span over the points
+// (max - min of a e + b n), `nmad_m` the NMAD of dz about the plane (the DEM's noise and the points').
+struct DzTilt {
+  double east_per_km = 0, north_per_km = 0;  // a, b in m of dz per km
+  double range_m = 0, nmad_m = 0;
+  // A tilt worth saying: its span exceeds the scatter about it and 0.5 m.
+  bool significant() const { return range_m > std::max(0.5, nmad_m); }
+};
+
 struct DemAlignment {
   GroundShift shift;
   DemComparison before, after;
+  DzTilt tilt;  // of dz after the alignment
   int iterations = 0;
   bool converged = false;
   long used = 0;  // points in the last fit
