@@ -511,7 +511,14 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
   };
   c.median_dh = median(dh);
   c.median_abs_dh = median(adh);
-  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.02 || (c.covered > 0 && c.median_abs_dh > 3 * c.sigma) ||
+  // The heights of the free fit have a level only when something holds it (a fixed image, control points);
+  // otherwise the bias priors choose it, and a prior that moves it is choosing the datum, not contradicting.
+  const bool free_has_datum = !options.control.empty() ||
+                              std::any_of(images.begin(), images.end(), [](const AdjustImage& im) { return im.fixed; });
+  // The RMS may grow by what a prior of the tie points' own precision would cost: a quarter of their
+  // reference sigma (not a fixed 0.02 px: a 2 m DEM against noise-free tracks costs 0.05-0.09 px).
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with_prior.reference_sigma_px ||
+                  (free_has_datum && c.covered > 0 && c.median_abs_dh > 3 * c.sigma) ||
                   more_flagged > std::max<long>(10, static_cast<long>(free_fit.flagged.size() / 100));
   c.figures = "rms after " + format_figure(c.rms_with) + " px with it, " + format_figure(c.rms_without) + " px without (over the " +
               std::to_string(c.common_tracks) + " tracks neither flags); flagged tracks " +

@@ -150,10 +150,11 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
 // Does a height prior (options.height: --height-prior or --dem) contradict the tie points? The adjustment
 // is solved again without it and the two compared: the prior contradicts them when, with it, the RMS
 // after the fit (over the tracks neither fit flags: a few blunders held to the prior's heights are no
-// contradiction) exceeds the free fit's by more than 20% and 0.02 px, when it flags more than
-// max(10, 1% of the tracks) tracks more, or when the median of |prior - free height| over the tracks the
-// prior covers exceeds 3 prior sigmas. The free fit is as
-// well posed as the problem is without a prior (--fixed images; else the bias priors hold the datum).
+// contradiction) exceeds the free fit's by more than 20% and a quarter of the reference sigma s_ref, when
+// it flags more than max(10, 1% of the tracks) tracks more, or, when the free fit has a height level (a
+// fixed image or control points), when the median of |prior - free height| over the tracks the prior
+// covers exceeds 3 prior sigmas. The free fit is as well posed as the problem is without a prior (--fixed
+// images; else the bias priors hold the datum, and a prior that moves it is no contradiction).
 struct HeightPriorCheck {
   bool contradicts = false;
   double rms_with = 0, rms_without = 0;  // px, after the fit, over the tracks neither fit flags
