@@ -74,4 +74,11 @@ grep -q '^# tracks_by_views: 2:[0-9]* 3:[0-9]* 4:[0-9]* 5:[0-9]* 6:' block-run/t
 rms=$(header rms_after_unflagged_px block-run/adjusted/rpc.residuals)
 within "$rms" 0 0.06 || fail "block-run: rpc-adjust rms after $rms px, above the 0.06 px of a block adjusted to its tie points"
 [ "$(records block-run/ground.points)" = "$(records block-run/tracks.tracks)" ] || fail "block-run/ground.points: not a point per track"
+# "From tie points to the ground": check points within 0.5 m, the DEM-held block aligned with a median dz of 0
+ce=$(header check_after_rmse_h_m gcp-adjusted/accuracy) cv=$(header check_after_rmse_v_m gcp-adjusted/accuracy)
+within "$ce" 0 0.5 && within "$cv" 0 0.5 ||
+  fail "gcp-adjusted/accuracy: check points at ${ce:-?} m horizontal, ${cv:-?} m vertical RMSE, the README says 0.24 and 0.17 m"
+grep -q '^# shift_enu_m: ' hill.dz || fail "hill.dz: no shift_enu_m line"
+dz=$(sed -n 's/^tp-ground: after alignment, dz all: .* dz median \([-0-9.e]*\) m.*/\1/p' "$work/blocks/all.log" | head -n 1)
+within "${dz:-9}" -0.5 0.5 || fail "tp-ground --align: median dz ${dz:-?} m after alignment, the README says 0"
 echo "readme: ${#blocks[@]} blocks ran; $(wc -l < "$work/blocks/skipped.txt") not run; figures as stated"
