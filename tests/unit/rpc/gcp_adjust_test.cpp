@@ -16,17 +16,7 @@ using namespace tpkit;
 
 namespace {
 
-double terrain(const RpcModel& m, double lon, double lat) {
-  const double u = (lon - m.lon_off) / m.lon_scale, v = (lat - m.lat_off) / m.lat_scale;
-  return 150 + 40 * std::sin(3.1 * u + 0.4) * std::cos(2.3 * v) + 20 * u * v;
-}
-
-struct Truth {
-  std::vector<AdjustImage> images;
-  std::vector<ImageBias> bias;
-  std::vector<Eigen::Vector3d> ground;
-  std::vector<std::array<Eigen::Vector2d, 3>> xy;
-};
+using Truth = tpkit_test::BiasedTruth;
 
 // n x n ground points over image 1 (fractions 0.05 .. 0.95 of its size), seen in all three images.
 Truth truth(int n) {
@@ -39,23 +29,7 @@ Truth truth(int n) {
   T.bias[1].b = {-2.0, 0.0001, 0.0003};
   T.bias[2].a = {-4.0, -0.0003, 0.0001};
   T.bias[2].b = {1.5, 0.0002, -0.0004};
-  const RpcModel& m = T.images[0].model;
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) {
-      const double x = (0.05 + 0.9 * a / (n - 1)) * T.images[0].width, y = (0.05 + 0.9 * b / (n - 1)) * T.images[0].height;
-      Eigen::Vector2d ll = m.localize(x, y, 150);
-      for (int it = 0; it < 5; ++it) ll = m.localize(x, y, terrain(m, ll[0], ll[1]));
-      const Eigen::Vector3d g(ll[0], ll[1], terrain(m, ll[0], ll[1]));
-      std::array<Eigen::Vector2d, 3> p;
-      bool on = true;
-      for (int i = 0; i < 3; ++i) {
-        p[i] = T.bias[i].apply(T.images[i].model.project(g));
-        on = on && p[i][0] > 5 && p[i][1] > 5 && p[i][0] < T.images[i].width - 5 && p[i][1] < T.images[i].height - 5;
-      }
-      if (!on) continue;
-      T.ground.push_back(g);
-      T.xy.push_back(p);
-    }
+  tpkit_test::add_grid_points(T, n, 0.05 * T.images[0].width, 0.05 * T.images[0].height);
   return T;
 }
 

@@ -3,6 +3,8 @@
 #pragma once
 #include <unistd.h>
 
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <stdexcept>
@@ -36,6 +38,44 @@ inline std::vector<tpkit::AdjustImage> pleiades_images() {
     out.push_back({pleiades_image(i), info.width, info.height, *m, false});
   }
   return out;
+}
+
+// A smooth terrain over a model's validity box (m above the ellipsoid): 150 m +- 60 m of hills.
+inline double smooth_terrain(const tpkit::RpcModel& m, double lon, double lat) {
+  const double u = (lon - m.lon_off) / m.lon_scale, v = (lat - m.lat_off) / m.lat_scale;
+  return 150 + 40 * std::sin(3.1 * u + 0.4) * std::cos(2.3 * v) + 20 * u * v;
+}
+
+// Ground truth for the adjustment tests: three images, a bias per image, ground points on smooth_terrain and
+// their observed (biased) pixels, observed = bias(rpc(g)) (x column, y row).
+struct BiasedTruth {
+  std::vector<tpkit::AdjustImage> images;
+  std::vector<tpkit::ImageBias> bias;                     // injected, per image
+  std::vector<Eigen::Vector3d> ground;                    // per point: lon, lat, h
+  std::vector<std::array<Eigen::Vector2d, 3>> xy;        // observed pixel per point and image
+};
+
+// Adds n x n ground points over image 1 (from `margin` pixels of its edges, margin_x across, margin_y down),
+// each where image 1's ray meets smooth_terrain, kept when all three images see it 5 px inside their edges.
+inline void add_grid_points(BiasedTruth& T, int n, double margin_x, double margin_y) {
+  const tpkit::RpcModel& m = T.images[0].model;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const double x = margin_x + a * (T.images[0].width - 2 * margin_x) / (n - 1);
+      const double y = margin_y + b * (T.images[0].height - 2 * margin_y) / (n - 1);
+      Eigen::Vector2d ll = m.localize(x, y, 150);
+      for (int it = 0; it < 5; ++it) ll = m.localize(x, y, smooth_terrain(m, ll[0], ll[1]));
+      const Eigen::Vector3d g(ll[0], ll[1], smooth_terrain(m, ll[0], ll[1]));
+      std::array<Eigen::Vector2d, 3> p;
+      bool on = true;
+      for (int i = 0; i < 3; ++i) {
+        p[i] = T.bias[i].apply(T.images[i].model.project(g));
+        on = on && p[i][0] > 5 && p[i][1] > 5 && p[i][0] < T.images[i].width - 5 && p[i][1] < T.images[i].height - 5;
+      }
+      if (!on) continue;
+      T.ground.push_back(g);
+      T.xy.push_back(p);
+    }
 }
 
 // What f throws (its what()), or "" when it throws nothing.

@@ -28,33 +28,22 @@ std::vector<AdjustImage> pleiades() {
   return out;
 }
 
-// Terrain (m above the ellipsoid) of the truth: hills of +-60 m around 150 m over the crop.
-double terrain(const RpcModel& m, double lon, double lat) {
-  const double u = (lon - m.lon_off) / m.lon_scale, v = (lat - m.lat_off) / m.lat_scale;
-  return 150 + 40 * std::sin(3.1 * u + 0.4) * std::cos(2.3 * v) + 20 * u * v;
-}
-
 HeightPrior terrain_prior(const RpcModel& m, double sigma) {
   HeightPrior p;
   p.sigma = sigma;
   p.at = [m](double lon, double lat, double& h, double* grad) {
-    h = terrain(m, lon, lat);
+    h = tpkit_test::smooth_terrain(m, lon, lat);
     if (grad) {
       const double e = 1e-7;
-      grad[0] = (terrain(m, lon + e, lat) - terrain(m, lon - e, lat)) / (2 * e);
-      grad[1] = (terrain(m, lon, lat + e) - terrain(m, lon, lat - e)) / (2 * e);
+      grad[0] = (tpkit_test::smooth_terrain(m, lon + e, lat) - tpkit_test::smooth_terrain(m, lon - e, lat)) / (2 * e);
+      grad[1] = (tpkit_test::smooth_terrain(m, lon, lat + e) - tpkit_test::smooth_terrain(m, lon, lat - e)) / (2 * e);
     }
     return true;
   };
   return p;
 }
 
-struct Truth {
-  std::vector<AdjustImage> images;
-  std::vector<ImageBias> bias;           // injected, per image (image 1: none)
-  std::vector<Eigen::Vector3d> ground;   // per point
-  std::vector<std::array<Eigen::Vector2d, 3>> xy;  // observed (biased) pixel per point and image
-};
+using Truth = tpkit_test::BiasedTruth;
 
 // n x n ground points over image 1, each on all three images.
 Truth truth(int n = 20) {
@@ -65,23 +54,7 @@ Truth truth(int n = 20) {
   T.bias[1].b = {-2.0, 0.0001, 0.0003};
   T.bias[2].a = {-4.0, -0.0003, 0.0001};
   T.bias[2].b = {1.5, 0.0002, -0.0004};
-  const RpcModel& m = T.images[0].model;
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) {
-      const double x = 60 + a * (T.images[0].width - 120.0) / (n - 1), y = 60 + b * (T.images[0].height - 120.0) / (n - 1);
-      Eigen::Vector2d ll = m.localize(x, y, 150);
-      for (int it = 0; it < 5; ++it) ll = m.localize(x, y, terrain(m, ll[0], ll[1]));
-      Eigen::Vector3d g(ll[0], ll[1], terrain(m, ll[0], ll[1]));
-      std::array<Eigen::Vector2d, 3> p;
-      bool on = true;
-      for (int i = 0; i < 3; ++i) {
-        p[i] = T.bias[i].apply(T.images[i].model.project(g));
-        on = on && p[i][0] > 5 && p[i][1] > 5 && p[i][0] < T.images[i].width - 5 && p[i][1] < T.images[i].height - 5;
-      }
-      if (!on) continue;
-      T.ground.push_back(g);
-      T.xy.push_back(p);
-    }
+  tpkit_test::add_grid_points(T, n, 60, 60);
   return T;
 }
 
