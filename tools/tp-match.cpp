@@ -19,6 +19,7 @@
 #include "tpkit/match/match_region.hpp"
 #include "tpkit/match/opencv_threads.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
+#include "tpkit/match/tracks_coverage.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/core/tool_support.hpp"
 
@@ -27,7 +28,7 @@ extern const char* const tpkit_man_page;
 namespace {
 struct Opts {
   std::vector<std::string> images;
-  std::string out = "-", mask1, mask2;
+  std::string out = "-", mask1, mask2, coverage;
   int band = 1;
   std::optional<double> nodata;
   int threads = 0;
@@ -132,6 +133,7 @@ int main(int argc, char** argv) {
             ->required()
             ->expected(2, 1 << 16);
         app.add_option("-o,--output", o->out, "output matches file (- = stdout); with more than two images, a folder");
+        app.add_option("--coverage", o->coverage, "SVG figure: matches per cell over each image's thumbnail (two images)");
         app.add_option("--band", o->band, "band, from 1")->check(tpkit::Positive);
         app.add_option("--nodata", o->nodata, "nodata grey level (default: the GDAL_NODATA tag)");
         app.add_option("--mask1", o->mask1, "mask image of IMG1 (0 = invalid)");
@@ -234,6 +236,8 @@ int main(int argc, char** argv) {
           if ((!o->region.empty() || !o->write_geometry.empty()) && n != 2)
             throw tpkit::UsageError("--region and --write-geometry take two images");
           if (!o->geometry.empty() && o->region.empty()) throw tpkit::UsageError("--geometry goes with --region");
+          if (!o->coverage.empty() && (n != 2 || !o->region.empty() || !o->write_geometry.empty() || o->detect > 0))
+            throw tpkit::UsageError("--coverage draws one pair's matches: two images, no --region, --detect or --write-geometry (tp-chain --coverage draws a block's tracks)");
           if (o->detect > 0 && (o->region.empty() || o->p.cache_dir.empty()))
             throw tpkit::UsageError("--detect needs --region (the window of image " + std::to_string(o->detect) + ") and --cache");
           if (o->detect > 0 && !o->write_geometry.empty()) throw tpkit::UsageError("--detect and --write-geometry are separate runs");
@@ -249,7 +253,7 @@ int main(int argc, char** argv) {
           if (!o->write_geometry.empty())
             tpkit::check_outputs({{"--write-geometry", o->write_geometry}}, inputs);
           else if (n == 2)
-            tpkit::check_outputs({{"-o", o->out}}, inputs);
+            tpkit::check_outputs({{"-o", o->out}, {"--coverage", o->coverage}}, inputs);
           std::vector<tpkit::ImageSource> src;
           for (size_t i = 0; i < n; ++i)
             src.push_back(tpkit::open_image_source(o->images[i], o->band - 1, o->nodata, i == 0 ? o->mask1 : i == 1 ? o->mask2 : ""));
@@ -290,6 +294,7 @@ int main(int argc, char** argv) {
           if (n == 2) {
             tpkit::PairMatchStats st;
             tpkit::Matches m = tpkit::match_pair(src[0], src[1], o->p, &st);
+            if (!o->coverage.empty()) tpkit::save_matches_coverage(o->coverage, m);
             tpkit::save_matches(o->out, m);
             report(o->images[0] + " and " + o->images[1], st);
             return 0;

@@ -145,3 +145,13 @@ tpkit_tool_test(tp-match.threads-under-address-limit
 tpkit_tool_test(tp-match.every-pair-under-address-limit
   COMMAND "tp-synth --out s --size 256 --seed 4 && tp-match s/view1.tif s/view2.tif s/view3.tif --threads 1 -q -o a && (ulimit -v 4000000 && tp-match s/view1.tif s/view2.tif s/view3.tif --threads 1000 -q -o b) && diff -r a b"
   STDERR_MATCH "refused a worker thread" LABELS rlimit)
+# issue 27: --coverage shows where a pair has matches: a 40% nodata band on view 2's left leaves at least its
+# 6 columns of 16 cells (96 cells) empty there; every mark inside its panel (figure_check.sh renders it).
+tpkit_tool_test(tp-match.coverage
+  COMMAND "tp-synth -o s --size 384 --relief 20 --nodata-band 0.4 && tp-match s/view1.tif s/view2.tif --nodata 0 -o m.matches --coverage cov.svg && bash $SRC/tests/tools/figure_check.sh cov.svg && grep -o '[0-9]* of 256 cells without any' cov.svg | sed -n 2p | awk '{ print ($1 >= 96 ? \"band empty\" : \"band covered\"), $1 }'"
+  STDOUT_MATCH "band empty [0-9]+"
+  CHECK_FILE m.matches
+  FILE_MATCH "^# tpkit matches")
+tpkit_tool_test(tp-match.coverage-one-pair-only
+  COMMAND "tp-synth -o s --size 128 && tp-match s/view1.tif s/view2.tif s/view3.tif -o d --coverage c.svg"
+  EXPECT_FAIL STDERR_MATCH "tp-match: --coverage draws one pair's matches" NO_FILE c.svg)

@@ -23,4 +23,20 @@ void save_tracks_coverage(const std::string& path, const TrackChainer& chainer) 
   coverage_figure(views, "tie points per cell (tracks), over each image").save(path);
 }
 
+void save_matches_coverage(const std::string& path, const Matches& m) {
+  std::vector<CoverageView> views(2);
+  const ImageRef* refs[2] = {&m.image1, &m.image2};
+  for (int k = 0; k < 2; ++k) {
+    views[k].title = std::filesystem::path(refs[k]->path).filename().string();
+    views[k].image = refs[k]->path;
+    views[k].width = static_cast<double>(refs[k]->width);
+    views[k].height = static_cast<double>(refs[k]->height);
+    for (size_t i = 0; i < m.size(); ++i) {
+      views[k].x.push_back(m.xy(static_cast<Eigen::Index>(i), 2 * k));
+      views[k].y.push_back(m.xy(static_cast<Eigen::Index>(i), 2 * k + 1));
+    }
+  }
+  coverage_figure(views, "tie points per cell (matches), over each image").save(path);
+}
+
 }  // namespace tpkit
