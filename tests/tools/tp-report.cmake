@@ -13,3 +13,8 @@ tpkit_tool_test(tp-report.missing-input
 tpkit_tool_test(tp-report.unreadable-file-listed
   COMMAND "printf '# tpkit tracks 1\\n# columns: track x1 y1\\n1 2 oops\\n' > bad.tracks && tp-report bad.tracks -o page.html && grep -c 'class=\"error\"' page.html"
   STDOUT_MATCH "^1\n")
+# A value a kind writes as nan (a dem-dz file's empty slope class, an accuracy file's point not intersected)
+# is shown, not taken for an unreadable file.
+tpkit_tool_test(tp-report.nan-values-shown
+  COMMAND "printf '# tpkit dem-dz 1\\n# columns: stage class slope_min slope_max count median\\n0 0 0 90 10 0.5\\n0 5 40 90 0 nan\\n' > g.dz && tp-report g.dz -o page.html && grep -c 'class=\"error\"' page.html; grep -c '>nan<\\|nan' page.html"
+  STDOUT_MATCH "^0\n[1-9]")

@@ -185,7 +185,8 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
       double v;
       std::string name = (opt.columnar ? "'" + t.columns[i] + "'" : std::to_string(i + 1));
       if (!parse_double(f[i], v)) throw InputError(t.source, lineno, "field " + name + " is not a number: '" + f[i] + "'");
-      if (!std::isfinite(v) && !(std::isnan(v) && opt.columnar && opt.may_be_missing && opt.may_be_missing(t.columns[i])))
+      const std::string column = i < t.columns.size() ? t.columns[i] : std::string();  // a row longer than its columns: ""
+      if (!std::isfinite(v) && !(std::isnan(v) && opt.may_be_missing && opt.may_be_missing(column)))
         throw InputError(t.source, lineno, "field " + name + " is not finite: '" + f[i] + "'");
       row[i] = v;
     }

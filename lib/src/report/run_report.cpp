@@ -34,7 +34,8 @@ std::string tpkit_kind(const fs::path& p) {
 }
 
 // By kind: tracks and matches through their own readers (nan views allowed), any other kind with
-// records as numbers and rows of any length.
+// records as numbers (nan shown as it is written: an empty slope class of a dem-dz file, a check point not
+// intersected in an accuracy file) and rows of any length.
 TextTable read_any(const std::string& path) {
   const std::string kind = tpkit_kind(path);
   if (kind == "tracks") return read_table_file(path, tracks_read_options());
@@ -42,6 +43,7 @@ TextTable read_any(const std::string& path) {
   ReadOptions o;
   o.max_version = 99;
   o.columnar = false;
+  o.may_be_missing = [](const std::string&) { return true; };
   return read_table_file(path, o);
 }
 

@@ -66,7 +66,8 @@ struct ReadOptions {
   // When false, records may have any number of fields (matrix kinds); columns are not checked.
   bool columnar = true;
   // Columns whose field may be "nan" (a value that is not there, e.g. a view a track is not seen in); in
-  // every other column, and for infinities everywhere, a non-finite field is an error. Empty: none.
+  // every other column, and for infinities everywhere, a non-finite field is an error. Empty: none. Rows of
+  // any length (columnar false): asked with "" for a field beyond the named columns.
   std::function<bool(const std::string& column)> may_be_missing;
 };
 
