@@ -11,53 +11,21 @@
 
 #include "tpkit/ground/dem_align.hpp"
 #include "tpkit/ground/dem_compare.hpp"
+#include "utm_dem_fixture.hpp"
 
 namespace fs = std::filesystem;
 using namespace tpkit;
 
 namespace {
 
-std::string scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("tpkit_dem_align_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
-}
+std::string scratch(const std::string& name) { return tpkit_test::scratch("dem_align", name); }
 
-// UTM 31N <-> WGS 84 through PROJ.
-struct Utm {
-  PJ_CONTEXT* ctx = proj_context_create();
-  PJ* raw = proj_create_crs_to_crs(ctx, "EPSG:4326", "EPSG:32631", nullptr);
-  PJ* pj = proj_normalize_for_visualization(ctx, raw);
-  ~Utm() {
-    proj_destroy(pj);
-    proj_destroy(raw);
-    proj_context_destroy(ctx);
-  }
-  void lonlat(double e, double n, double& lon, double& lat) const {
-    const PJ_COORD q = proj_trans(pj, PJ_INV, proj_coord(e, n, 0, 0));
-    lon = q.lp.lam;
-    lat = q.lp.phi;
-  }
-  void forward(double lon, double lat, double& e, double& n) const {
-    const PJ_COORD q = proj_trans(pj, PJ_FWD, proj_coord(lon, lat, 0, 0));
-    e = q.xy.x;
-    n = q.xy.y;
-  }
-};
+using Utm = tpkit_test::Utm31;
 
 // A DEM of surface z(e, n) on a UTM 31N grid, 'posting' m, top-left centre (e0, n0), w x h cells.
 std::string write_dem(const std::string& name, double e0, double n0, double posting, long w, long h,
                       const std::function<double(double, double)>& z) {
-  DemRaster r;
-  r.epsg = 32631;
-  r.x0 = e0;
-  r.y0 = n0;
-  r.dx = r.dy = posting;
-  r.width = w;
-  r.height = h;
-  r.tile = 128;
-  for (long y = 0; y < h; ++y)
-    for (long x = 0; x < w; ++x) r.data.push_back(static_cast<float>(z(e0 + x * posting, n0 - y * posting)));
+  const DemRaster r = tpkit_test::utm_raster(e0, n0, posting, w, h, z, "ellipsoid", 128);
   const std::string path = scratch(name);
   write_reference_dem(path, r);
   return path;

@@ -11,30 +11,17 @@
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/ground/reference_dem.hpp"
+#include "utm_dem_fixture.hpp"
 
 namespace fs = std::filesystem;
 using namespace tpkit;
 
 namespace {
 
-std::string scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("tpkit_reference_dem_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
-}
+std::string scratch(const std::string& name) { return tpkit_test::scratch("reference_dem", name); }
 
-// WGS 84 lon, lat -> UTM 31N easting, northing (PROJ, independent of the reader's path through it).
-void to_utm31(double lon, double lat, double& e, double& n) {
-  PJ_CONTEXT* ctx = proj_context_create();
-  PJ* raw = proj_create_crs_to_crs(ctx, "EPSG:4326", "EPSG:32631", nullptr);
-  PJ* pj = proj_normalize_for_visualization(ctx, raw);
-  const PJ_COORD p = proj_trans(pj, PJ_FWD, proj_coord(lon, lat, 0, 0));
-  e = p.xy.x;
-  n = p.xy.y;
-  proj_destroy(pj);
-  proj_destroy(raw);
-  proj_context_destroy(ctx);
-}
+// WGS 84 lon, lat -> UTM 31N easting, northing.
+void to_utm31(double lon, double lat, double& e, double& n) { tpkit_test::Utm31().forward(lon, lat, e, n); }
 
 // A plane on a UTM 31N grid east of Marseille (lon 5.35-5.57, lat 43.2-43.33): z = 100 + 0.01 (E - E0) -
 // 0.02 (N - N0), 30 m posting.
@@ -43,19 +30,7 @@ struct PlaneDem {
   long w = 400, h = 400;
   double z(double e, double n) const { return 100 + 0.01 * (e - e0) - 0.02 * (n - n0); }
   DemRaster raster(const std::string& datum, int tile) const {
-    DemRaster r;
-    r.epsg = 32631;
-    r.x0 = e0;
-    r.y0 = n0;
-    r.dx = r.dy = dx;
-    r.width = w;
-    r.height = h;
-    r.datum = datum;
-    r.tile = tile;
-    r.data.resize(static_cast<size_t>(w * h));
-    for (long y = 0; y < h; ++y)
-      for (long x = 0; x < w; ++x) r.data[static_cast<size_t>(y * w + x)] = static_cast<float>(z(e0 + x * dx, n0 - y * dx));
-    return r;
+    return tpkit_test::utm_raster(e0, n0, dx, w, h, [this](double e, double n) { return z(e, n); }, datum, tile);
   }
 };
 
