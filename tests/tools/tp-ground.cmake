@@ -62,6 +62,7 @@ tpkit_tool_test(tp-ground.csv-failed-run-leaves-nothing
 tpkit_tool_test(tp-ground.csv-sidecar-is-an-input
   COMMAND "${synth_gis} && cp syn/truth.tracks g.prj && ${ground3} --tracks g.prj -o g.csv"
   EXPECT_FAIL STDERR_MATCH "g.prj" NO_FILE g.csv)
+set(synth_dem "tp-synth -o syn --size 192 --gsd 20 --relief 300 --points 300 > /dev/null")
 # These three need the benchmark program bench_dem_reference (not built in the sanitizer build; they run in
 # the Release suite). The DEM reader itself runs under the sanitizers in the ground unit tests.
 if(TPKIT_BENCH)
@@ -70,7 +71,6 @@ if(TPKIT_BENCH)
 # without it they are the EGM96 undulation (~49.4 m) above. --align on the terrain moved by (8, -5, 3) m in
 # UTM recovers that shift (1.65 deg of UTM grid convergence at lon 5.4 turn it by 0.25 m), the models it
 # writes put the tracks on the moved points, and the dem-dz file holds before and after.
-set(synth_dem "tp-synth -o syn --size 192 --gsd 20 --relief 300 --points 300 > /dev/null")
 tpkit_tool_test(tp-ground.compare-egm96
   COMMAND "${synth_dem} && bench_dem_reference syn/truth.dem.tif ref.tif 30 0 egm96 && ${ground3} --compare ref.tif --dem-datum egm96 --dz dz.txt -o /dev/null 2>&1 | grep 'dz all' && ${ground3} --compare ref.tif -o /dev/null 2>&1 | grep 'dz all'"
   STDOUT_MATCH "dz all: [0-9]+ points, dz median -?0\\.0[0-9]* m.*\n.*dz all: [0-9]+ points, dz median 49\\.4[0-9]* m"
