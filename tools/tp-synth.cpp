@@ -43,6 +43,9 @@ int main(int argc, char** argv) {
         app.add_option("--clouds", o->p.clouds, "views 2..N: fraction of the ground under clouds, with their shadows");
         app.add_option("--water", o->p.water, "fraction of the ground under featureless water (every view)");
         app.add_option("--nodata-band", o->p.nodata, "views 2..N: fraction of the columns, from the left, written as 0 (nodata)");
+        app.add_option("--blur", o->p.blur, "views 2..N: Gaussian PSF of this sigma (pixels, 0 to 5) before the noise");
+        app.add_option("--resolution-ratio", o->p.resolution_ratio, "views 2..N: R times the ground sampling distance (1 to 4)");
+        app.add_option("--rotation", o->p.rotation, "views 2..N: image axes turned about the optical axis (degrees)");
         app.add_option("--random-bias", o->random_bias,
                        "seeded RPC bias of at most PX pixels (shift, drift, affine) on every view but view 1 and those of --rpc-bias");
         return [o]() {

@@ -129,3 +129,36 @@ tpkit_tool_test(tp-synth.conditions-still-matched
   COMMAND "tp-synth --out s --size 512 --seed 3 --relief 15 --second-date 0.5 --clouds 0.2 --water 0.1 --nodata-band 0.2 --threads 2 && bench_match_accuracy --synth s --threads 2 --nodata 0 --check 0.1 0.35"
   STDOUT_MATCH "pair view1-view2: keypoints [0-9]+/[0-9]+, verified [2-9][0-9][0-9]," TIMEOUT 120)
 endif()
+# Sensors of views 2..N (--blur, --resolution-ratio, --rotation). The truth check: every view's truth x y
+# is the projection of the track's X Y Z through that view's truth.cameras matrix (within 1e-6 px), which
+# with the RPC fit lines (max below 0.01 px, else tp-synth refuses) ties tracks, cameras and RPCs together.
+set(_synth_truth "awk 'FNR == NR { if (/^# view /) { v++ @SEMI@ r = 0 } else if (!/^#/ && NF == 4) { for (c = 1 @SEMI@ c <= 4 @SEMI@ c++) P[v, r, c] = $c @SEMI@ r++ } next } /^#/ { next } { for (w = 1 @SEMI@ w <= v @SEMI@ w++) { if ($(2 * w) == \"nan\") continue @SEMI@ for (i = 0 @SEMI@ i < 3 @SEMI@ i++) h[i] = P[w, i, 1] * $(2 + 2 * v) + P[w, i, 2] * $(3 + 2 * v) + P[w, i, 3] * $(4 + 2 * v) + P[w, i, 4] @SEMI@ d = sqrt((h[0] / h[2] - $(2 * w)) ^ 2 + (h[1] / h[2] - $(2 * w + 1)) ^ 2) @SEMI@ if (d > e) e = d @SEMI@ n++ } } END { print \"truth\", n, \"projections, max error\", (e < 1e-6 ? \"below 1e-6 px\" : e) @SEMI@ exit !(n > 0 && e < 1e-6) }'")
+set(_synth_rpc_fit "# rpc_fit_view1_px: rms [0-9.e-]+, max [0-9.e-]+\n# rpc_fit_view2_px: rms [0-9.e-]+, max ([0-9]\\.[0-9]+e-(0[3-9]|[1-9][0-9])|0\\.00[0-9]*)\n")
+# --blur: radiometric only, as the conditions: truth, cameras and RPCs are those of the scene without it,
+# view 1 the same image, view 2 not; scene.params records it.
+tpkit_tool_test(tp-synth.blur-keeps-the-truth
+  COMMAND "tp-synth --out a --size 128 --relief 5 --points 20 --supersample 1 --threads 2 >/dev/null 2>&1 && tp-synth --out b --size 128 --relief 5 --points 20 --supersample 1 --threads 2 --blur 1.5 >/dev/null 2>&1 && for f in truth.tracks truth.cameras view2_rpc.txt @SEMI@ do cmp <(grep -v '^# written-by' a/$f) <(grep -v '^# written-by' b/$f) || exit 1 @SEMI@ done && cmp <(tail -c 20000 a/view1.tif) <(tail -c 20000 b/view1.tif) && ! cmp -s <(tail -c 20000 a/view2.tif) <(tail -c 20000 b/view2.tif) && grep -q '^blur = 1.5$' b/scene.params && ! grep -q blur a/scene.params && echo truth-kept"
+  STDOUT_MATCH "^truth-kept\n$")
+# --resolution-ratio 2: views 2 and 3 have half the image scale of the same scene without it (the norm of
+# their cameras' first row), view 1 the same; the truth follows the cameras and the RPCs fit them.
+tpkit_tool_test(tp-synth.resolution-ratio-truth
+  COMMAND "tp-synth --out a --size 128 --relief 10 --points 30 --supersample 1 --threads 2 >/dev/null 2>&1 && tp-synth --out b --size 128 --relief 10 --points 30 --supersample 1 --threads 2 --resolution-ratio 2 >/dev/null 2>&1 && grep -q '^resolution_ratio = 2$' b/scene.params && ${_synth_truth} b/truth.cameras b/truth.tracks && awk '!/^#/ && NF == 4 && ++k % 3 == 1 { s[k] = sqrt($1 ^ 2 + $2 ^ 2 + $3 ^ 2) } END { for (a = 1 @SEMI@ a <= 7 @SEMI@ a += 3) printf \"scale %.9f\\n\", s[a + 9] / s[a] }' a/truth.cameras b/truth.cameras"
+  STDOUT_MATCH "^truth 90 projections, max error below 1e-6 px\nscale 1\\.000000000\nscale 0\\.500000000\nscale 0\\.500000000\n$"
+  CHECK_FILE b/truth.tracks
+  FILE_MATCH "${_synth_rpc_fit}")
+# --rotation 30: views 2 and 3's image x axis is turned by 30 deg about the optical axis from where it was
+# without it (the angle between their cameras' first rows, s times the x axis), view 1's unchanged; with
+# --resolution-ratio 3, --blur 1 and conditions, the truth still follows the cameras.
+tpkit_tool_test(tp-synth.rotation-truth
+  COMMAND "tp-synth --out a --size 128 --relief 10 --points 30 --supersample 1 --threads 2 >/dev/null 2>&1 && tp-synth --out b --size 128 --relief 10 --points 30 --supersample 1 --threads 2 --rotation 30 --resolution-ratio 3 --blur 1 --second-date 0.5 --clouds 0.2 >/dev/null 2>&1 && grep -q '^rotation = 30$' b/scene.params && ${_synth_truth} b/truth.cameras b/truth.tracks && awk '!/^#/ && NF == 4 && ++k % 3 == 1 { for (c = 1 @SEMI@ c <= 3 @SEMI@ c++) r[k, c] = $c } END { for (v = 0 @SEMI@ v < 3 @SEMI@ v++) { a = 3 * v + 1 @SEMI@ b = a + 9 @SEMI@ d = 0 @SEMI@ na = 0 @SEMI@ nb = 0 @SEMI@ for (c = 1 @SEMI@ c <= 3 @SEMI@ c++) { d += r[a, c] * r[b, c] @SEMI@ na += r[a, c] ^ 2 @SEMI@ nb += r[b, c] ^ 2 } x = d / sqrt(na * nb) @SEMI@ printf \"turned %.6f\\n\", atan2(sqrt(1 - x * x), x) * 45 / atan2(1, 1) } }' a/truth.cameras b/truth.cameras"
+  STDOUT_MATCH "^truth 90 projections, max error below 1e-6 px\nturned 0\\.0000[0-9]+\nturned (29\\.99999[0-9]|30\\.00000[0-9])\nturned (29\\.99999[0-9]|30\\.00000[0-9])\n$"
+  CHECK_FILE b/truth.tracks
+  FILE_MATCH "${_synth_rpc_fit}")
+tpkit_tool_test(tp-synth.blur-out-of-range
+  COMMAND "tp-synth --out a --size 64 --blur 6" EXPECT_FAIL STDERR_MATCH "^tp-synth: --blur must be between 0 and 5 pixels, got 6\n$" NO_FILE a)
+tpkit_tool_test(tp-synth.resolution-ratio-out-of-range
+  COMMAND "tp-synth --out a --size 64 --resolution-ratio 0.5"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --resolution-ratio must be between 1 and 4, got 0\\.5\n$" NO_FILE a)
+tpkit_tool_test(tp-synth.rotation-out-of-range
+  COMMAND "tp-synth --out a --size 64 --rotation 200"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --rotation must be between -180 and 180 degrees, got 200\n$" NO_FILE a)

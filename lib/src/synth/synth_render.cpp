@@ -241,7 +241,7 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
       parallel_for(static_cast<size_t>(nb), threads, [&](size_t k) {
         const long y0 = (s0 + static_cast<long>(k)) * rows, h = std::min(rows, W - y0);
         buf[k].resize(static_cast<size_t>(h) * W);
-        scene.render_rows(v, y0, h, buf[k].data());
+        scene.sensor_rows(v, y0, h, buf[k].data());  // render_rows, blurred where the view's sensor blurs (synth_sensor.hpp)
         progress.add();
       });
       for (long k = 0; k < nb; ++k) {

@@ -41,6 +41,7 @@ struct SynthScene::Impl {
   std::vector<double> gain, offset;
   std::vector<Eigen::Vector3d> angles;  // along, cross, roll (deg) per view
   Eigen::Vector3d sun = Eigen::Vector3d::UnitZ();
+  std::unique_ptr<SynthScene> sharp;    // SynthParams::blur > 0: the scene seen by ideal sensors
 };
 
 int synth_dates(const SynthParams& p) { return p.dates > 0 ? p.dates : std::max(1, p.views / 3); }
@@ -58,6 +59,11 @@ void check_params(const SynthParams& p) {
   for (const auto& [opt, v] : {std::pair<const char*, double>{"--clouds", p.clouds}, {"--water", p.water}, {"--nodata-band", p.nodata}})
     if (!(v >= 0 && v <= 0.8)) throw UsageError(std::string(opt) + " must be a fraction between 0 and 0.8");
   if (p.supersample < 1 || p.supersample > 16) throw UsageError("--supersample must be between 1 and 16");
+  if (!(p.blur >= 0 && p.blur <= 5)) throw UsageError("--blur must be between 0 and 5 pixels, got " + format_number(p.blur));
+  if (!(p.resolution_ratio >= 1 && p.resolution_ratio <= 4))
+    throw UsageError("--resolution-ratio must be between 1 and 4, got " + format_number(p.resolution_ratio));
+  if (!(p.rotation >= -180 && p.rotation <= 180))
+    throw UsageError("--rotation must be between -180 and 180 degrees, got " + format_number(p.rotation));
   if (p.views < 2 || p.views > kMaxSynthViews)
     throw UsageError("--views must be between 2 and " + std::to_string(kMaxSynthViews) + ", got " + std::to_string(p.views));
   if (p.dates < 0 || p.dates > p.views)
@@ -131,6 +137,10 @@ void save_params(const std::string& path, const SynthParams& p) {
   // conditions: keys only when set (the default scene's file is unchanged)
   for (const auto& [key, v] : {std::pair<const char*, double>{"date2", p.date2}, {"clouds", p.clouds}, {"water", p.water}, {"nodata", p.nodata}})
     if (v != 0) os << key << " = " << format_number(v) << "\n";
+  // sensor of views 2..N: keys only when set
+  if (p.blur != 0) os << "blur = " << format_number(p.blur) << "\n";
+  if (p.resolution_ratio != 1) os << "resolution_ratio = " << format_number(p.resolution_ratio) << "\n";
+  if (p.rotation != 0) os << "rotation = " << format_number(p.rotation) << "\n";
   os << "model = " << kSynthModel << "\n";
   write_file_atomic(path, os.str());
 }
@@ -217,6 +227,12 @@ SynthParams load_params(const std::string& path) {
       num(p.water);
     } else if (key == "nodata") {
       num(p.nodata);
+    } else if (key == "blur") {
+      num(p.blur);
+    } else if (key == "resolution_ratio") {
+      num(p.resolution_ratio);
+    } else if (key == "rotation") {
+      num(p.rotation);
     } else if (key == "model") {
       integer(i);
       if (i != kSynthModel)
@@ -255,6 +271,12 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
   auto u = [&](int k) { return synth::uniform(gs, k); };
   const bool affine = params.camera == "affine";
   const long n = params.size;
+  // Sensor of views 2..N (synth_sensor.hpp): focal length / resolution_ratio, roll + rotation; view 1 and the
+  // defaults untouched (so the default scene is the same to the bit).
+  auto sensor_focal = [&](int v, double focal) {
+    return v > 0 && params.resolution_ratio != 1 ? focal / params.resolution_ratio : focal;
+  };
+  auto sensor_roll = [&](int v, double roll) { return v > 0 && params.rotation != 0 ? roll + params.rotation * kDeg : roll; };
   if (!synth_is_block(params)) {
     // Three-line geometry: along-track +22 / 0 / -22 deg (forward, nadir, backward) with small seeded
     // deviations, the same cross-track pointing (2..3 deg) give or take 0.3 deg, small rolls; or the
@@ -265,7 +287,7 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
     for (int v = 0; v < kViews; ++v) {
       along[v] = ((v == 0 ? 22.0 : v == 2 ? -22.0 : 0.0) + 0.5 * (2 * u(10 + v) - 1)) * kDeg;
       crossv[v] = ct.empty() ? cross + 0.3 * (2 * u(20 + v) - 1) * kDeg : ct[ct.size() == 3 ? v : 0] * kDeg;
-      roll[v] = 0.4 * (2 * u(30 + v) - 1) * kDeg;
+      roll[v] = sensor_roll(v, 0.4 * (2 * u(30 + v) - 1) * kDeg);
       m.gain[v] = 3000 + 600 * u(40 + v);
       m.offset[v] = 60 + 200 * u(50 + v);
       m.angles[v] = Eigen::Vector3d(along[v], crossv[v], roll[v]) / kDeg;
@@ -275,7 +297,8 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
     const double focal = range1 / params.gsd;
     auto build = [&](double S) {
       const Eigen::Vector3d centre(S / 2, S / 2, 0);
-      for (int v = 0; v < kViews; ++v) m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal, centre, n);
+      for (int v = 0; v < kViews; ++v)
+        m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, sensor_focal(v, focal), centre, n);
     };
     // The scene square: the largest S for which the box [0, S]^2 x [-relief/2, relief/2] projects inside
     // every view with a margin of max(4, 3% of size) pixels.
@@ -314,7 +337,7 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
       const double date_cross = (d % 2 == 0 ? 1 : -1) * (3 + 9 * ub(2, d));
       const double c = ct.empty() ? date_cross : ct.size() == 1 ? ct[0] : ct.size() == static_cast<size_t>(N) ? ct[v] : ct[d];
       crossv[v] = c * kDeg;
-      roll[v] = (1.0 * (2 * ub(3, d) - 1) + 0.2 * (2 * ub(4, v) - 1)) * kDeg;
+      roll[v] = sensor_roll(v, (1.0 * (2 * ub(3, d) - 1) + 0.2 * (2 * ub(4, v) - 1)) * kDeg);
       m.gain[v] = 3000 + 600 * ub(5, v);
       m.offset[v] = 60 + 200 * ub(6, v);
       m.angles[v] = Eigen::Vector3d(along[v], crossv[v], roll[v]) / kDeg;
@@ -323,7 +346,7 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
     // Footprint extents (bounding box on Z = 0, m) of each view looking at the origin.
     std::vector<Eigen::Vector2d> ext(N);
     for (int v = 0; v < N; ++v) {
-      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal, Eigen::Vector3d::Zero(), n);
+      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, sensor_focal(v, focal), Eigen::Vector3d::Zero(), n);
       Eigen::Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
       for (int c = 0; c < 4; ++c) {
         Eigen::Vector3d o, dir;
@@ -366,7 +389,7 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
     Eigen::Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
     double emax = 0;
     for (int v = 0; v < N; ++v) {
-      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal,
+      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, sensor_focal(v, focal),
                                    Eigen::Vector3d(centre[v].x(), centre[v].y(), 0), n);
       emax = std::max(emax, ext[v].maxCoeff());
       for (int c = 0; c < 8; ++c) {
@@ -381,7 +404,7 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
     m.S = (hi - lo).maxCoeff() + 0.04 * emax;
     const Eigen::Vector2d shift = Eigen::Vector2d::Constant(m.S / 2) - 0.5 * (lo + hi);
     for (int v = 0; v < N; ++v)
-      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, focal,
+      m.cam[v] = make_synth_camera(affine, along[v], crossv[v], roll[v], kAltitude, sensor_focal(v, focal),
                                    Eigen::Vector3d(centre[v].x() + shift.x(), centre[v].y() + shift.y(), 0), n);
   }
   // Terrain grid: covers what any pixel of any view can see at heights within +-relief (the clamp of the
@@ -409,9 +432,17 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
   const double sun_az = (200 + 40 * u(60)) * kDeg, sun_el = 55 * kDeg;
   m.sun = Eigen::Vector3d(std::cos(sun_el) * std::cos(sun_az), std::cos(sun_el) * std::sin(sun_az), std::sin(sun_el));
   m.texture = SynthTexture(params.seed, params.gsd, sun_az, sun_el);
+  if (params.blur > 0) {  // the same geometry and ground, seen by ideal sensors (sensor_rows blurs its rendering)
+    SynthParams q = params;
+    q.blur = 0;
+    q.noise = 0;
+    q.nodata = 0;
+    m.sharp = std::make_unique<SynthScene>(q);
+  }
 }
 
 const SynthTerrain& SynthScene::terrain_() const { return impl_->terrain; }
+const SynthScene* SynthScene::sharp_() const { return impl_->sharp.get(); }
 const SynthParams& SynthScene::params() const { return impl_->p; }
 double SynthScene::scene_size() const { return impl_->S; }
 double SynthScene::height(double X, double Y) const { return impl_->terrain.height(X, Y); }

@@ -23,6 +23,12 @@ inline uint64_t hash(uint64_t seed, int64_t a, int64_t b = 0, int64_t c = 0) {
 // Uniform in [0, 1) from a hash.
 inline double unit(uint64_t h) { return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0); }
 inline double uniform(uint64_t seed, int64_t a, int64_t b = 0, int64_t c = 0) { return unit(hash(seed, a, b, c)); }
+// Standard normal deviate from a hash (Box-Muller on two 53-bit uniforms, the first in (0, 1]).
+inline double normal(uint64_t h) {
+  const double u1 = (static_cast<double>(mix64(h) >> 11) + 1) * (1.0 / 9007199254740993.0);
+  const double u2 = unit(mix64(h ^ 0xabcdef12345ULL));
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * 3.14159265358979323846 * u2);
+}
 
 inline double smoothstep(double e0, double e1, double x) {
   double t = (x - e0) / (e1 - e0);

@@ -9,6 +9,9 @@
 // (about -22 deg); files view1.tif .. view3.tif. The satellite flies south (-Y): image rows (y) increase
 // along-track (southward), columns (x) increase eastward. Pixels: x = column, y = row, (0, 0) the centre
 // of the top-left pixel. The nadir view has ground sampling distance `gsd` at the scene centre.
+// Views 2..N may have another sensor (SynthParams::resolution_ratio, rotation; synth_sensor.hpp): their
+// focal length divided by the ratio, their image axes turned about the optical axis; the scene square and
+// the block layout below are then computed from those cameras.
 //
 // Blocks (views != 3 or dates != 1): `dates` acquisitions of k = views / dates views each; view v (0-based)
 // is view i = v % k of date d = v / k. Along-track angles within a date run evenly from +22 (forward) to -22
@@ -57,6 +60,12 @@ struct SynthParams {
   double clouds = 0;  // views 2..N: about this fraction of the ground under clouds (0..0.8), with shadows
   double water = 0;   // every view: about this fraction of the ground under featureless water (0..0.8)
   double nodata = 0;  // views 2..N: this fraction of the columns (from the left) is 0 = nodata (0..0.8)
+  // Sensor of views 2..N (synth_sensor.hpp). Defaults leave the scene as it was, byte for byte, and
+  // scene.params names only those set. blur is radiometric (the truth is unchanged); resolution_ratio and
+  // rotation are geometric: the cameras change, and the truth (tracks, cameras, RPCs) follows them.
+  double blur = 0;              // Gaussian PSF sigma, pixels of the view (0: none; up to 5)
+  double resolution_ratio = 1;  // focal length divided by R: R times the ground sampling distance (1..4)
+  double rotation = 0;          // rotated about the optical axis, degrees (-180..180)
 };
 constexpr int kMaxSynthViews = 96;
 constexpr int kMaxSynthViewsPerDate = 5;
@@ -129,12 +138,20 @@ class SynthScene {
   double offset(int view) const;
   // Renders rows y0 .. y0 + rows - 1 of `view` (width = size) into out (row-major uint16, 12-bit).
   // Noise is a function of (seed, view, pixel), so the result does not depend on strip or thread.
+  // The view's blur (SynthParams::blur) is not applied here: sensor_rows does.
   void render_rows(int view, long y0, long rows, uint16_t* out) const;
+  // The same rows as the view's sensor records them (synth_sensor.hpp): render_rows where the view has no
+  // blur; else the sharp, noise-free rendering blurred by the PSF, then the noise and the nodata band.
+  // Independent of strip and thread as render_rows is. write_synth_scene writes these.
+  void sensor_rows(int view, long y0, long rows, uint16_t* out) const;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
   const SynthTerrain& terrain_() const;
+  // With SynthParams::blur > 0: this scene seen by ideal sensors (no blur, no noise, no nodata band), the
+  // rendering sensor_rows blurs; nullptr otherwise.
+  const SynthScene* sharp_() const;
   explicit SynthScene(std::unique_ptr<Impl>);
 };
 
