@@ -22,6 +22,7 @@ struct Opts {
   double same = 0.01;
   bool quiet = false;
   bool unrefined = false;
+  double closure = 0.5;
 };
 }  // namespace
 
@@ -43,6 +44,8 @@ int main(int argc, char** argv) {
                 "INT >= 2"));
         app.add_option("--same-position", o->same, "keypoints of one image closer than this are one point, pixels")
             ->check(tpkit::NonNegative);
+        app.add_option("--closure", o->closure, "redundant links must agree within this (or 5 sigma of the cycle), pixels; 0 = no check")
+            ->check(tpkit::NonNegative);
         app.add_flag("--unrefined", o->unrefined, "chain matches whose LSM refinement was rejected (refined 0) too");
         app.add_option("-o,--output", o->out, "output tracks file (- = stdout)");
         app.add_option("--coverage", o->coverage, "SVG figure: tie points per cell over each image's thumbnail");
@@ -60,6 +63,7 @@ int main(int argc, char** argv) {
           co.images = o->images;
           co.same_position = o->same;
           co.unrefined = o->unrefined;
+          co.closure = o->closure;
           co.min_views = 2;
           tpkit::TrackChainer chainer(co);
           std::vector<std::string> seen;
@@ -82,7 +86,8 @@ int main(int argc, char** argv) {
             line << st.components << " components; tracks by views:";
             for (const auto& kv : st.by_length) line << " " << kv.first << ":" << kv.second;
             line << "; merged duplicates " << st.merged_duplicates << ", dropped (reference conflict) "
-                 << st.dropped_reference_conflicts << ", views dropped (conflict) " << st.views_dropped_conflicts << "; written "
+                 << st.dropped_reference_conflicts << ", views dropped (conflict) " << st.views_dropped_conflicts << ", views dropped (closure) "
+                 << st.views_dropped_closure << "; written "
                  << st.written << " tracks of " << co.min_views << " views or more among " << k << " images";
             if (st.written > 0) {
               line << " (by views:";

@@ -132,6 +132,10 @@ struct TrackChainer::Impl {
   // `conflicts`, when not null, counts the conflicts (the first walk).
   template <class F>
   void walk(F&& f, ChainStats* conflicts) const;
+  void check_closure(Index nb, Index ne, int ref, const std::vector<Index>& q, const std::vector<Eigen::Vector2d>& pos,
+                     const std::vector<double>& pvar, const std::vector<char>& reached, std::vector<char>& have,
+                     ChainStats* counts) const;
+  mutable std::vector<Index> closure_order;  // scratch of check_closure
 };
 
 void TrackChainer::Impl::add(const Matches& m) {
@@ -424,7 +428,43 @@ void TrackChainer::Impl::walk(F&& f, ChainStats* conflicts) const {
         }
       }
     }
+    if (o.closure > 0) check_closure(nb, ne, ref, q, pos, pvar, reached, have, conflicts);
     if (ref < K) f(ref, nodes[first[ref]].id, have, view, var);
+  }
+}
+
+// Every link of the component whose two ends were reached: the position it gives its image-2 end from
+// its image-1 end's position must be the breadth-first one (exactly so for the links of the search tree).
+// Variance of the disagreement: the records of the cycle, 2 pvar(u) + 2 pvar(v) + sigma_l^2 (pvar holds
+// half of each record's variance along the path).
+void TrackChainer::Impl::check_closure(Index nb, Index ne, int ref, const std::vector<Index>& q,
+                                       const std::vector<Eigen::Vector2d>& pos, const std::vector<double>& pvar,
+                                       const std::vector<char>& reached, std::vector<char>& have,
+                                       ChainStats* counts) const {
+  std::vector<Index>& order = closure_order;
+  order.assign(ne - nb, 0);
+  for (size_t k = 0; k < q.size(); ++k) order[local[q[k]]] = static_cast<Index>(k);
+  for (Index c = nb; c < ne; ++c) {
+    const Index u = comp_nodes[c];
+    if (!reached[local[u]]) continue;
+    for (Index a = adj_at[u]; a < adj_at[u + 1]; ++a) {
+      const Index l = adj[a];
+      if (lu[l] != u) continue;  // each link once, from its image-1 end
+      const Index v = lv[l];
+      if (!reached[local[v]]) continue;
+      const Eigen::Vector2d pv = Eigen::Vector2d(lx2[l], ly2[l]) + (pos[local[u]] - Eigen::Vector2d(nodes[u].x, nodes[u].y));
+      const double d = (pv - pos[local[v]]).norm();
+      const double zu = std::isnan(pvar[local[u]]) ? 0.0 : pvar[local[u]], zv = std::isnan(pvar[local[v]]) ? 0.0 : pvar[local[v]];
+      const double sl = std::isnan(lsig[l]) ? 0.0 : static_cast<double>(lsig[l]);
+      const double cycle_var = 2 * zu + 2 * zv + sl * sl;
+      if (!(d > std::max(o.closure, 5 * std::sqrt(cycle_var)))) continue;
+      const Index later = order[local[u]] > order[local[v]] ? u : v;
+      const int im = image_of(later) == ref ? image_of(later == u ? v : u) : image_of(later);
+      if (have[im]) {
+        have[im] = 0;
+        if (counts) ++counts->views_dropped_closure;
+      }
+    }
   }
 }
 
@@ -456,6 +496,11 @@ Tracks TrackChainer::header() const {
   T.extra.values.resize(0, static_cast<Eigen::Index>(T.extra.names.size()));
   meta_set(T.meta, "positions", "refer to the reference keypoint: image number ref, its id kp in that image's matches files");
   meta_set(T.meta, "min_views", std::to_string(I.o.min_views));
+  if (I.o.closure > 0)
+    meta_set(T.meta, "closure", "redundant links agree within max(" + format_number(I.o.closure) + " px, 5 sigma of the cycle); " +
+                                    std::to_string(I.st.views_dropped_closure) + " views dropped where they did not");
+  else
+    meta_set(T.meta, "closure", "not checked");
   std::string counts;
   for (const auto& kv : I.st.written_by_length) counts += (counts.empty() ? "" : " ") + std::to_string(kv.first) + ":" + std::to_string(kv.second);
   meta_set(T.meta, "tracks_by_views", counts.empty() ? "none" : counts);

@@ -188,3 +188,43 @@ TEST(TracksChain, BlockTracksOfAnyLength) {
   for (const auto& kv : by_length) five += kv.first >= 5 ? kv.second : 0;
   EXPECT_EQ(static_cast<long>(t5.size()), five);
 }
+
+TEST(TracksChain, LoopClosureDropsTheViewAWrongLinkContradicts) {
+  // A-B and A-C place C at (30.3, 40.1); B-C, moved by B's offset (0.2, 0.1), puts it at (31.75, 40.1):
+  // 1.45 px apart, so one of the three links is wrong and C, reached after B, loses its place.
+  auto ab = make("A", "B", {{{5, 10, 20, 7, 11.2, 21.1, 11, 21}}});
+  auto ac = make("A", "C", {{{5, 10, 20, 9, 30.3, 40.1, 30, 40}}});
+  auto bc = make("B", "C", {{{7, 11, 21, 9, 31.55, 40.0, 30, 40}}});
+  ChainOptions o;
+  ChainStats st;
+  EXPECT_EQ(chain_tracks({ab, ac, bc}, o, &st).size(), 0u);
+  EXPECT_EQ(st.views_dropped_closure, 1);
+  o.min_views = 2;
+  Tracks t = chain_tracks({ab, ac, bc}, o, nullptr);
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_DOUBLE_EQ(t.xy(0, 2), 11.2);
+  EXPECT_TRUE(std::isnan(t.xy(0, 4)));
+  o.closure = 1.5;  // within the tolerance: kept
+  EXPECT_DOUBLE_EQ(chain_tracks({ab, ac, bc}, o, nullptr).xy(0, 4), 30.3);
+  o.closure = 0;  // no check
+  EXPECT_DOUBLE_EQ(chain_tracks({ab, ac, bc}, o, nullptr).xy(0, 4), 30.3);
+}
+
+TEST(TracksChain, LoopClosureToleranceGrowsWithTheCycleSigmas) {
+  // the same 1.45 px disagreement on records of sigma 0.5 px (unrefined matches): the cycle's sigma is
+  // sqrt(3) x 0.5 = 0.87 px, so 5 sigma = 4.3 px and C stays
+  auto with_sigma = [](Matches m) {
+    m.extra.names.push_back("sigma");
+    m.extra.values.conservativeResize(Eigen::NoChange, 3);
+    m.extra.values.col(2).setConstant(0.5);
+    return m;
+  };
+  auto ab = with_sigma(make("A", "B", {{{5, 10, 20, 7, 11.2, 21.1, 11, 21}}}));
+  auto ac = with_sigma(make("A", "C", {{{5, 10, 20, 9, 30.3, 40.1, 30, 40}}}));
+  auto bc = with_sigma(make("B", "C", {{{7, 11, 21, 9, 31.55, 40.0, 30, 40}}}));
+  ChainStats st;
+  Tracks t = chain_tracks({ab, ac, bc}, ChainOptions{}, &st);
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_EQ(st.views_dropped_closure, 0);
+  EXPECT_DOUBLE_EQ(t.xy(0, 4), 30.3);
+}

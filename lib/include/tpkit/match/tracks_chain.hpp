@@ -12,6 +12,9 @@
 //    exactly; other links are followed breadth first from the reference, moving the position by the
 //    refined offset: through a record (image1 = u, image2 = v), v = x2 + (pos(u) - kp(u)); through a
 //    reversed record, u = kp(u) - (x2 - pos(v)). Shortest paths first, then file and record order.
+//  - loop closure: every other record between two reached keypoints must give the same position within
+//    max(ChainOptions::closure, 5 sigma of the cycle); where it does not, the view of the end reached
+//    later in the breadth-first order is dropped (the track keeps its other views).
 //  - keypoint positions: image 1's is (x1, y1); image 2's is (kx2, ky2) when the file has these
 //    columns, else (x2, y2).
 //  - sigmas (when every file has a `sigma` column: the standard deviation of the record's (x2, y2)
@@ -45,6 +48,11 @@ struct ChainOptions {
   // Records marked refined 0 (tp-match kept a verified match whose refinement was rejected at its keypoint
   // position, with a larger sigma): chained only when set; else left out and counted (ChainStats, header).
   bool unrefined = false;
+  // Loop closure: a link between two views of a track that the breadth-first positions do not reproduce
+  // (a redundant record, e.g. pair 2-3 of a triplet chained through 1-2 and 1-3) within
+  // max(closure, 5 sigma of the cycle) pixels shows a wrong link: the view reached later loses its place
+  // (counted). 0: no check.
+  double closure = 0.5;
 };
 
 struct ChainStats {
@@ -53,6 +61,7 @@ struct ChainStats {
   long components = 0;
   long dropped_reference_conflicts = 0;
   long views_dropped_conflicts = 0;
+  long views_dropped_closure = 0;   // views whose redundant links disagreed (ChainOptions::closure)
   long merged_duplicates = 0;
   long written = 0;
   long unrefined_left_out = 0;      // records marked refined 0, not chained (ChainOptions::unrefined false)
