@@ -14,6 +14,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/formats.hpp"
 #include "tpkit/core/image_io.hpp"
+#include "tpkit/synth/synth_render.hpp"
 #include "tpkit/synth/synth_scene.hpp"
 
 using namespace tpkit;
@@ -492,9 +493,14 @@ TEST(SynthParams, SaveLoadAndRejects) {
   EXPECT_THROW(SynthScene{bad}, UsageError);
 }
 
-TEST(SynthScene, FastRenderingEqualsExactCastsWithOcclusion) {
-  // render_rows finds most samples by Newton from the pixel corners; compare with an exact cast of every
-  // sample on a scene with occlusions (strong relief), noise off.
+TEST(SynthScene, FastRenderingAgreesWithExactCastsWithOcclusion) {
+  // render_rows evaluates the radiance on a half-pixel node lattice, finding most nodes by Newton from a
+  // coarse lattice of exact casts (synth_render.hpp); compare with the reference, an exact cast of every
+  // sample, on a scene with occlusions (strong relief), noise off. The Catmull-Rom interpolation of the
+  // nodes smooths the finest texture (2.2 DN RMS at gsd 0.5, synth_render.cpp; here, at gsd 2 where
+  // hedges and roof rims are a pixel wide, 5.0..5.8 DN RMS, and 0.3..0.65 % of the pixels off by > 30 DN
+  // against 0.1..0.15 % without occlusions, relief 20); occlusion edges handled wrongly would show as
+  // runs of pixels tens of DN off.
   SynthParams p = small_params("perspective");
   p.size = 200;
   p.gsd = 2;
@@ -503,23 +509,21 @@ TEST(SynthScene, FastRenderingEqualsExactCastsWithOcclusion) {
   p.supersample = 3;
   const SynthScene s(p);
   for (int v : {0, 2}) {
-    const long y0 = 60, rows = 6;
-    std::vector<uint16_t> fast(static_cast<size_t>(rows) * p.size);
+    const long y0 = 60, rows = 24;
+    std::vector<uint16_t> fast(static_cast<size_t>(rows) * p.size), ref(fast.size());
     s.render_rows(v, y0, rows, fast.data());
-    int worst = 0;
-    for (long j = 0; j < rows; ++j)
-      for (long x = 0; x < p.size; ++x) {
-        double sum = 0;
-        for (int b = 0; b < 3; ++b)
-          for (int a = 0; a < 3; ++a) {
-            const auto X = s.ground_point(v, x - 0.5 + (a + 0.5) / 3, y0 + j - 0.5 + (b + 0.5) / 3);
-            ASSERT_TRUE(X.has_value());
-            sum += s.radiance(X->x(), X->y());
-          }
-        const double dn = std::clamp(std::round(s.gain(v) * sum / 9 + s.offset(v)), 0.0, 4095.0);
-        worst = std::max(worst, std::abs(static_cast<int>(dn) - fast[j * p.size + x]));
-      }
-    EXPECT_LE(worst, 1) << "view " << v;
+    synth_reference_rows(s, v, y0, rows, ref.data());
+    double ss = 0;
+    long far = 0;
+    for (size_t i = 0; i < fast.size(); ++i) {
+      const double e = static_cast<double>(fast[i]) - ref[i];
+      ss += e * e;
+      far += std::abs(e) > 30;
+    }
+    const double rms = std::sqrt(ss / static_cast<double>(fast.size()));
+    std::cerr << "view " << v << ": fast - exact rms " << rms << " DN, " << far << " of " << fast.size() << " pixels off by > 30 DN\n";
+    EXPECT_LT(rms, 7.0) << "view " << v;
+    EXPECT_LE(far, static_cast<long>(fast.size()) / 100) << "view " << v;
   }
 }
 
