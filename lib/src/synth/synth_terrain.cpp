@@ -184,15 +184,20 @@ double SynthTerrain::height(double X, double Y, Eigen::Vector2d* grad) const {
 
 std::optional<double> SynthTerrain::refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t, double tol,
                                            Eigen::Vector2d* grad) const {
+  // height(X, Y, &g) written out (the same arithmetic; this loop is the renderer's inner loop)
+  const double ox = o.x(), oy = o.y(), oz = o.z(), dx = d.x(), dy = d.y(), dz = d.z();
   for (int it = 0; it < 8; ++it) {
-    Eigen::Vector2d g;
-    const double f = o.z() + t * d.z() - height(o.x() + t * d.x(), o.y() + t * d.y(), &g);
-    const double fp = d.z() - (g.x() * d.x() + g.y() * d.y());
+    const double u = (ox + t * dx - gx0_) / h_, v = (oy + t * dy - gy0_) / h_;
+    double gu = 0, gv = 0;
+    const double z = eval(u, v, &gu, &gv);
+    const double gx = u > 1 && u < nx_ - 2 ? gu / h_ : 0.0, gy = v > 1 && v < ny_ - 2 ? gv / h_ : 0.0;
+    const double f = oz + t * dz - z;
+    const double fp = dz - (gx * dx + gy * dy);
     if (!(fp < -1e-9)) return std::nullopt;
     const double dt = f / fp;
     t -= dt;
     if (std::abs(dt) < tol + 1e-15 * std::abs(t)) {
-      if (grad) *grad = g;
+      if (grad) *grad = Eigen::Vector2d(gx, gy);
       return t;
     }
   }
