@@ -139,7 +139,9 @@ TEST(SynthBlock, WrittenTruthTracksReadBackWithNanForUnseenViews) {
     EXPECT_GE(t.seen_views(i), 2);
     for (int v = 0; v < 6; ++v) {
       ASSERT_EQ(t.seen(i, v), !std::isnan(truth.xy(static_cast<Eigen::Index>(i), 2 * v)));
-      if (t.seen(i, v)) EXPECT_LT((t.point(i, v) - truth.xy.block<1, 2>(static_cast<Eigen::Index>(i), 2 * v).transpose()).norm(), 1e-9);
+      if (t.seen(i, v)) {
+        EXPECT_LT((t.point(i, v) - truth.xy.block<1, 2>(static_cast<Eigen::Index>(i), 2 * v).transpose()).norm(), 1e-9);
+      }
     }
   }
   for (int v = 1; v <= 6; ++v) EXPECT_TRUE(fs::exists(dir / ("view" + std::to_string(v) + ".tif")));
