@@ -28,14 +28,26 @@ inline double rect_sd(double x, double y, double cx, double cy, double hx, doubl
 // from x to the nearest cell boundary (0 and L included).
 // The k-th 16-bit field of a hash as a uniform in [0, 1) (k = 0..3): several draws from one hash.
 inline double b16(uint64_t h, int k) { return static_cast<double>((h >> (16 * k)) & 0xffff) * (1.0 / 65536); }
-inline int partition(uint64_t s, int n, double L, double x, double* dist) {
+// The cell boundaries e[0] < .. < e[n - 1] = L of the partition (the widths' arithmetic of one pass).
+struct Cuts {
+  int n = 0;
+  double e[8];
+};
+Cuts cuts(uint64_t s, int n, double L) {
+  Cuts c;
+  c.n = n;
   double w[8], total = 0;
   const uint64_t h0 = synth::mix64(s), h1 = n > 4 ? synth::mix64(s ^ 0x51ed27ULL) : 0;
   for (int k = 0; k < n; ++k) total += (w[k] = 0.5 + b16(k < 4 ? h0 : h1, k & 3));
   double b = 0;
-  for (int k = 0; k < n; ++k) {
-    const double e = (k == n - 1) ? L : b + L * w[k] / total;
-    if (x < e || k == n - 1) {
+  for (int k = 0; k < n; ++k) b = c.e[k] = (k == n - 1) ? L : b + L * w[k] / total;
+  return c;
+}
+inline int partition(const Cuts& c, double x, double* dist) {
+  double b = 0;
+  for (int k = 0; k < c.n; ++k) {
+    const double e = c.e[k];
+    if (x < e || k == c.n - 1) {
       *dist = std::min(x - b, e - x);
       return k;
     }
@@ -44,10 +56,23 @@ inline int partition(uint64_t s, int n, double L, double x, double* dist) {
   *dist = 0;
   return 0;
 }
+// What farmland() draws per block (its parcels), kept for the last block a thread visited: neighbouring
+// samples nearly always fall in the same 240 m block.
+struct FarmBlock {
+  bool valid = false;
+  uint64_t seed = 0;
+  int64_t bi = 0, bj = 0;
+  double block = 0;
+  Cuts strips;            // partition of u into strips
+  uint64_t sh[4] = {};    // per strip: its hash
+  Cuts parcels[4];        // per strip: partition of v into parcels
+};
 }  // namespace
 
 SynthTexture::SynthTexture(uint64_t seed, double gsd, double sun_azimuth, double sun_elevation)
     : seed_(hash(seed, 0x7e47)), gsd_(gsd) {
+  const int streams[5] = {20, 30, 31, 50, 51};
+  for (int k = 0; k < 5; ++k) noise_seed_[k] = hash(seed_, streams[k]);
   ew_ = std::max(gsd_, 0.3);
   const double a = kPi * (0.05 + 0.4 * uniform(seed_, 1));
   ca_ = std::cos(a);
@@ -62,13 +87,24 @@ SynthTexture::SynthTexture(uint64_t seed, double gsd, double sun_azimuth, double
 }
 
 double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const {
-  const uint64_t bh = hash(seed_, 10, bi, bj);
-  const int n1 = 2 + static_cast<int>(bh % 3);
+  thread_local FarmBlock fb;
+  if (!fb.valid || fb.seed != seed_ || fb.bi != bi || fb.bj != bj || fb.block != block_) {
+    const uint64_t bh = hash(seed_, 10, bi, bj);
+    fb.strips = cuts(hash(bh, 1), 2 + static_cast<int>(bh % 3), block_);
+    for (int k = 0; k < fb.strips.n; ++k) {
+      fb.sh[k] = hash(bh, 2, k);
+      fb.parcels[k] = cuts(hash(fb.sh[k], 3), 2 + static_cast<int>(fb.sh[k] % 4), block_);
+    }
+    fb.valid = true;
+    fb.seed = seed_;
+    fb.bi = bi;
+    fb.bj = bj;
+    fb.block = block_;
+  }
   double d1, d2;
-  const int s = partition(hash(bh, 1), n1, block_, lu, &d1);
-  const uint64_t sh = hash(bh, 2, s);
-  const int n2 = 2 + static_cast<int>(sh % 4);
-  const int p = partition(hash(sh, 3), n2, block_, lv, &d2);
+  const int s = partition(fb.strips, lu, &d1);
+  const uint64_t sh = fb.sh[s];
+  const int p = partition(fb.parcels[s], lv, &d2);
   const uint64_t ph = hash(sh, 4, p), ph2 = synth::mix64(ph);
   double a = 0.15 + 0.5 * b16(ph, 0);
   const double kind = b16(ph, 1);
@@ -93,7 +129,7 @@ double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double 
   const int64_t li = static_cast<int64_t>(std::floor(lu / lot)), lj = static_cast<int64_t>(std::floor(lv / lot));
   // In the lot, [0, 60): footprint + shadow stay >= 3 m inside it (30 + 5 + 16 + 5.6 < 60).
   const double x = lu - li * lot, y = lv - lj * lot;
-  double a = 0.33 + 0.05 * value_noise(hash(seed_, 20), u / 3, v / 3);
+  double a = 0.33 + 0.05 * value_noise(noise_seed_[0], u / 3, v / 3);
   const uint64_t h = hash(seed_, 21, bi * 8 + li, bj * 8 + lj);
   if (synth::unit(h) > 0.85) {
     // A small park: trees.
@@ -123,7 +159,7 @@ double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double 
 
 double SynthTexture::woodland(double u, double v) const {
   const double l = std::max(5.0, 3 * gsd_);
-  const double c = value_noise(hash(seed_, 30), u / l, v / l) + 0.5 * value_noise(hash(seed_, 31), 2 * u / l, 2 * v / l);
+  const double c = value_noise(noise_seed_[1], u / l, v / l) + 0.5 * value_noise(noise_seed_[2], 2 * u / l, 2 * v / l);
   const double crown = smoothstep(-0.3, 0.5, c);
   return 0.07 + 0.2 * crown;
 }
@@ -162,9 +198,9 @@ double SynthTexture::albedo(double X, double Y) const {
     a = lerp(a, r, inside(half - dist, ew_));
   }
   // Large-scale modulation and fine ground noise (wavelength >= 2 gsd).
-  a *= 1 + 0.15 * value_noise(hash(seed_, 50), X / 180, Y / 180);
+  a *= 1 + 0.15 * value_noise(noise_seed_[3], X / 180, Y / 180);
   const double lf = std::max(1.0, 2 * gsd_);
-  a += 0.025 * value_noise(hash(seed_, 51), X / lf, Y / lf);
+  a += 0.025 * value_noise(noise_seed_[4], X / lf, Y / lf);
   return std::clamp(a, 0.02, 0.98);
 }
 

@@ -26,6 +26,7 @@ class SynthTexture {
   double urban(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const;
   double woodland(double u, double v) const;
   uint64_t seed_ = 1;
+  uint64_t noise_seed_[5] = {};   // hash(seed_, k) of the value-noise streams k = 20, 30, 31, 50, 51
   double gsd_ = 0.5, ew_ = 0.5;   // ground sampling distance, edge width (m)
   double ca_ = 1, sa_ = 0, ou_ = 0, ov_ = 0;  // layout frame: rotation, offset
   double block_ = 240;
