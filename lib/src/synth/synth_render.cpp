@@ -25,7 +25,7 @@
 // at n = 8; the exact 4 x 4 and 8 x 8 renderings differ by 0.75 DN RMS, the sensor noise is 2 DN. The
 // interpolation smooths the finest texture a little; bench_match_accuracy's triplet errors on the
 // synthetic truth stay as they were (man/tp-synth.1, PERFORMANCE). Radiance evaluations a pixel: 4
-// nodes instead of 16 samples; time ~0.8 us instead of ~3.2 us a pixel a view (bench_synth).
+// nodes instead of 16 samples; 0.72 us instead of 3.5 us a pixel a view (bench_synth BM_RenderStrip).
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
