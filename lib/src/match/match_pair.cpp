@@ -10,6 +10,7 @@
 #include "tpkit/match/affine_fundamental.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/match/keypoint_cache.hpp"
+#include "tpkit/match/relative_blur.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
 #include "tpkit/core/text_table.hpp"
@@ -171,13 +172,14 @@ struct Rec {
 // farther than `max_residual` pixels (R^4) from the verified pair model is rejected (OffEpipolar): the
 // keypoint match passed that test, so the refinement moved it off the geometry.
 void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
-                    const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual) {
+                    const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual,
+                    double blur, bool progress) {
   const long B = std::max(16L, o.refine_tile);
   std::vector<std::vector<size_t>> bands(static_cast<size_t>((a.info.height + B - 1) / B) + 1);
   for (size_t j = 0; j < recs.size(); ++j)
     bands[std::clamp<size_t>(static_cast<size_t>(std::max(0.0, recs[j].y1 + 0.5) / B), 0, bands.size() - 1)].push_back(j);
   std::unique_ptr<Progress> pr;
-  if (o.progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
+  if (progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
   const int h = o.lsm.window / 2;
   const double max_area = 64.0 * 1024 * 1024;  // pixels of an image-2 region (256 MB as float)
   std::function<void(std::vector<size_t>&)> refine_group = [&](std::vector<size_t>& js) {
@@ -200,10 +202,15 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
       refine_group(hi);
       return;
     }
-    const Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
-                                        (long)std::ceil(ay1 - ay0) + 2);
-    const Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
-                                        (long)std::ceil(by1 - by0) + 2);
+    // the blur's support (3 sigma) joins the regions so that the windows see a full kernel
+    const double e1 = blur > 0 ? std::ceil(3 * blur) : 0, e2 = blur < 0 ? std::ceil(-3 * blur) : 0;
+    ax0 -= e1, ay0 -= e1, ax1 += e1, ay1 += e1, bx0 -= e2, by0 -= e2, bx1 += e2, by1 += e2;
+    Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
+                                  (long)std::ceil(ay1 - ay0) + 2);
+    Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
+                                  (long)std::ceil(by1 - by0) + 2);
+    if (blur > 0) blur_raster(R1, blur);
+    if (blur < 0) blur_raster(R2, -blur);
     const size_t chunk = 64;
     const int threads = o.live_threads ? std::max(1, o.live_threads->load()) : o.threads;
     parallel_for((js.size() + chunk - 1) / chunk, threads, [&](size_t c) {
@@ -226,6 +233,37 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
   };
   for (auto& js : bands) refine_group(js);
   if (pr) pr->done();
+}
+
+// 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
+// 200 records spread evenly over the list (every k-th), each candidate a refinement of that sample
+// scored by the median final correlation (a failed refinement counts its correlation too, 0 when none).
+RelativeBlur choose_relative_blur(const ImageSource& a, const ImageSource& b, const std::vector<Rec>& recs,
+                                  const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
+                                  const AffineFundamental* F) {
+  RelativeBlur rb;
+  if (o.blur) {
+    rb.sigma = *o.blur;
+    return rb;
+  }
+  const size_t n = recs.size(), want = 200;
+  if (n < 50) return rb;  // too few to judge: none
+  std::vector<Rec> sample;
+  std::vector<Eigen::Matrix2d> sA0;
+  for (size_t k = 0; k < std::min(n, want); ++k) {
+    const size_t j = k * n / std::min(n, want);
+    sample.push_back(recs[j]);
+    sA0.push_back(A0[j]);
+  }
+  auto score = [&](double sigma) {
+    std::vector<Rec> s = sample;
+    refine_records(a, b, s, sA0, lsm, o, F, o.ransac_threshold, sigma, false);
+    std::vector<double> c;
+    for (const Rec& r : s) c.push_back(r.corr);
+    std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
+    return c[c.size() / 2];
+  };
+  return estimate_relative_blur(score);
 }
 
 // 6. The records in order: the refined ones, and those whose refinement was rejected at their keypoint
@@ -328,6 +366,15 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
     meta_set(M.meta, "unrefined", std::to_string(nu) + " kept at the keypoint position, refined 0, sigma " +
                                       format_number(std::round(st.unrefined_sigma * 1e4) / 1e4) + " px (" + counts_by_reason(st.unrefined) + ")");
     meta_set(M.meta, "dropped", std::to_string(nd) + " (" + counts_by_reason(st.dropped) + ")");
+    const RelativeBlur& rb = st.blur;
+    const std::string which = rb.sigma > 0 ? "image 1" : "image 2";
+    std::string blur = rb.sigma == 0 ? std::string("none") : which + " blurred by a Gaussian of " + format_number(std::abs(rb.sigma)) + " px before refinement";
+    if (rb.evaluations > 0)
+      blur += " (estimated: median correlation of the sampled matches " + format_number(std::round(rb.score * 1e4) / 1e4) +
+              (rb.sigma == 0 ? "" : ", " + format_number(std::round(rb.score_none * 1e4) / 1e4) + " unblurred") + ")";
+    else if (o.blur)
+      blur += " (--blur)";
+    meta_set(M.meta, "blur", blur);
   } else
     meta_set(M.meta, "refinement", "none (raw SIFT positions)");
   meta_set(M.meta, "positions", o.refine ? "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2 (refined 1) or its keypoint (refined 0); kx2 ky2 keypoint of image2"
@@ -384,7 +431,9 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     // the refined position is held to the pair model that verified the keypoints (not with a 2-D map: that
     // one holds only for views without parallax, which the LSM may still refine within max_shift)
     const bool with_f = rr.ok && !st.no_parallax;
-    refine_records(a, b, recs, A0, lsm, o, with_f ? &rr.F : nullptr, o.ransac_threshold);
+    const AffineFundamental* F = with_f ? &rr.F : nullptr;
+    st.blur = choose_relative_blur(a, b, recs, A0, lsm, o, F);
+    refine_records(a, b, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, o.progress);
   }
   lap(st.seconds[3]);
 

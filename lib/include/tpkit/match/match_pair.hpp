@@ -12,7 +12,8 @@
 // is the LSM position and 0 when the refinement was rejected (lsm_refine.hpp's acceptance, or the refined
 // position off the verified pair model): the verified match is then kept at its keypoint position with
 // sigma = max(unrefined_sigma, the RANSAC inlier rms) (or dropped with keep_unrefined false), counted
-// by reason either way.
+// by reason either way. When one image is blurrier than the other, the sharper one's windows are blurred
+// by the relative blur first (relative_blur.hpp; estimated on a sample of the matches unless given).
 #pragma once
 #include <array>
 #include <atomic>
@@ -24,6 +25,7 @@
 #include "tpkit/match/guided_matching.hpp"
 #include "tpkit/match/image_tiles.hpp"
 #include "tpkit/match/lsm_refine.hpp"
+#include "tpkit/match/relative_blur.hpp"
 #include "tpkit/match/match_descriptors.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
 #include "tpkit/match/sift_tiles.hpp"
@@ -52,6 +54,9 @@ struct PairMatchOptions {
   LsmOptions lsm;
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
   double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
+  // Relative blur of the images before refinement (relative_blur.hpp: > 0 blurs image 1, < 0 image 2,
+  // pixels); unset: estimated from the pair's matches.
+  std::optional<double> blur;
   std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
   // Region runs (match_region.hpp): only the verified matches whose image-1 keypoint lies in this
   // window [x0, x1) x [y0, y1) (pixel-centre coordinates) are refined and returned; the others gave
@@ -79,6 +84,7 @@ struct PairMatchStats {
   long dropped[kLsmStatusCount] = {};          // by LsmStatus: refinement rejected, record dropped (keep_unrefined false)
   long unrefined[kLsmStatusCount] = {};        // by LsmStatus: refinement rejected, kept at the keypoint position
   double unrefined_sigma = 0;                  // the sigma those got
+  RelativeBlur blur;                           // the relative blur the refinement used (relative_blur.hpp)
   bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
   bool overlap = true;                         // false: too few verified matches, zero records
 };
