@@ -144,8 +144,10 @@ SynthTerrain::SynthTerrain(uint64_t seed, double scene, double relief, double sp
 }
 
 double SynthTerrain::eval(double u, double v, double* du, double* dv) const {
-  u = std::clamp(u, 1.0, static_cast<double>(nx_ - 2));
-  v = std::clamp(v, 1.0, static_cast<double>(ny_ - 2));
+  // std::max first: a nan position (a diverged Newton start) becomes the grid's edge instead of reaching
+  // the integer conversion below, which it would overflow
+  u = std::min(std::max(1.0, u), static_cast<double>(nx_ - 2));
+  v = std::min(std::max(1.0, v), static_cast<double>(ny_ - 2));
   long ku = std::min(static_cast<long>(u), nx_ - 3), kv = std::min(static_cast<long>(v), ny_ - 3);
   double wu[4], wv[4], dwu[4], dwv[4];
   const bool grad = du != nullptr;
@@ -189,6 +191,7 @@ std::optional<double> SynthTerrain::refine(const Eigen::Vector3d& o, const Eigen
   const double ox = o.x(), oy = o.y(), oz = o.z(), dx = d.x(), dy = d.y(), dz = d.z();
   const double ih = 1 / h_, umax = static_cast<double>(nx_ - 2), vmax = static_cast<double>(ny_ - 2);
   for (int it = 0; it < 8; ++it) {
+    if (!std::isfinite(t)) return std::nullopt;  // diverged: the caller casts exactly
     const double u = (ox + t * dx - gx0_) * ih, v = (oy + t * dy - gy0_) * ih;
     double gu = 0, gv = 0;
     const double z = eval(u, v, &gu, &gv);
