@@ -303,7 +303,10 @@ TiffWriterU16::TiffWriterU16(const std::string& path, long width, long height,
     impl_->out = ImageOutput::create(impl_->tmp);
     if (!impl_->out) throw InputError(path, 0, "cannot create an image writer: " + OIIO::geterror());
     ImageSpec spec(static_cast<int>(width), static_cast<int>(height), 1, TypeDesc::UINT16);
+    // deflate at its fastest level: on noisy 16-bit pixels level 6 (the default) saves 1.7 % of the bytes
+    // for 4x the compression time (a 4096² tp-synth view: 22.14 against 22.52 MB, 2.0 against 0.46 s)
     spec.attribute("compression", "zip");
+    spec.attribute("tiff:zipquality", 1);
     spec.attribute("tiff:RowsPerStrip", 64);
     spec.attribute("Software", written_by());
     for (const auto& kv : tags) spec.attribute(kv.first, kv.second);
