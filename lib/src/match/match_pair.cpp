@@ -211,8 +211,10 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
                                   (long)std::ceil(by1 - by0) + 2);
     if (blur > 0) blur_raster(R1, blur);
     if (blur < 0) blur_raster(R2, -blur);
-    const size_t chunk = 64;
     const int threads = o.live_threads ? std::max(1, o.live_threads->load()) : o.threads;
+    // chunks of up to 64 points, at least four per thread: a group of a few dozen (the blur estimate's
+    // sample, about 50 points a band) would otherwise run on one thread
+    const size_t chunk = std::clamp<size_t>(js.size() / (4 * static_cast<size_t>(std::max(1, threads))), 1, 64);
     parallel_for((js.size() + chunk - 1) / chunk, threads, [&](size_t c) {
       for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
         Rec& r = recs[js[q]];
