@@ -1,5 +1,7 @@
 # Every dependency is a Debian package (see scripts/install-deps.sh for the list).
 include(${CMAKE_CURRENT_LIST_DIR}/tpkitPublicDependencies.cmake)
+# image formats other than TIFF and NITF: the core's OpenImageIO module only (lib/CMakeLists.txt)
+find_package(OpenImageIO CONFIG REQUIRED)
 if(TPKIT_TESTS)
   find_package(GTest REQUIRED)
 endif()

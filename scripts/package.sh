@@ -29,3 +29,10 @@ hash -r
 echo "package: installed; $(command -v tp-match): $(tp-match --version)"
 echo "package: man tp-match: $(man -w tp-match)"
 man tp-match 2>/dev/null | grep -q 'tp-match' || { echo "package: man tp-match shows no page" >&2; exit 1; }
+# formats other than TIFF and NITF go through the OpenImageIO module the package installs beside the tools
+png_dir=$(mktemp -d)
+oiiotool --pattern noise:type=uniform:min=0:max=1 256x256 1 -d uint8 -o "$png_dir/noise.png"
+tp-match "$png_dir/noise.png" "$png_dir/noise.png" --no-refine -q -o "$png_dir/noise.matches" 2>/dev/null ||
+  { echo "package: tp-match cannot read a PNG (its OpenImageIO module)" >&2; tp-match "$png_dir/noise.png" "$png_dir/noise.png" -q -o "$png_dir/x" >&2; exit 1; }
+echo "package: tp-match read a PNG through $(dpkg -L tpkit | grep tpkit_oiio.so)"
+rm -rf "$png_dir"

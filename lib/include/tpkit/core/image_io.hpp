@@ -1,6 +1,6 @@
-// Image reading and writing through OpenImageIO (every format it reads: TIFF/GeoTIFF, PNG, ...) and of
-// NITF 2.1 images through nitf_image.hpp (OIIO has no NITF reader), and
-// the raw RPC tag 50844 of a GeoTIFF through libtiff (the one thing OIIO does not expose).
+// Image reading and writing, whatever the format: TIFF/GeoTIFF through libtiff (tiff_image.hpp), NITF 2.1
+// through nitf_image.hpp, every other format OpenImageIO reads (PNG, JPEG, ...) through its module
+// (oiio_images.hpp); and the raw RPC tag 50844 of a GeoTIFF.
 // Pixel convention: x = column, y = row, (0, 0) the centre of the top-left pixel. Regions are given in
 // whole pixels [x0, x0 + w) x [y0, y0 + h) and are read without loading the rest of the image.
 #pragma once
@@ -57,7 +57,8 @@ class TiffWriterU16 {
   std::unique_ptr<Impl> impl_;
 };
 
-// Writes a whole 8-bit or 16-bit single-band image (PNG/TIFF by extension), atomically.
+// Writes a whole 8-bit or 16-bit single-band image (TIFF through libtiff, other formats through OpenImageIO,
+// by extension), atomically.
 void write_image_u8(const std::string& path, long width, long height, const std::vector<uint8_t>& data);
 void write_image_u16(const std::string& path, long width, long height, const std::vector<uint16_t>& data);
 
@@ -82,8 +83,8 @@ struct GeoGrid {
 // Writes a float32 GeoTIFF (EPSG:4326, PixelIsPoint: ModelPixelScale, ModelTiepoint and GeoKeyDirectory
 // through libtiff), atomically.
 void write_geotiff_grid(const std::string& path, const GeoGrid& grid);
-// Reads a single-band GeoTIFF with OIIO, its georeferencing from the GeoTIFF tags OIIO exposes
-// (geotiff:ModelPixelScale, geotiff:ModelTiePoint; geographic WGS84 only, PixelIsArea converted to sample
+// Reads a single-band GeoTIFF, its georeferencing from the GeoTIFF tags
+// (ModelPixelScale, ModelTiepoint; geographic WGS84 only, PixelIsArea converted to sample
 // centres). InputError for a file without them or in another coordinate system.
 // Samples equal to the GDAL_NODATA tag (42113) are NaN. With `within`, only the samples covering those
 // bounds (two more on each side) are read; InputError when the grid does not reach them.
