@@ -17,6 +17,7 @@
 #include "tpkit/match/match_every_pair.hpp"
 #include "tpkit/match/match_pair.hpp"
 #include "tpkit/match/match_region.hpp"
+#include "tpkit/match/opencv_memory.hpp"
 #include "tpkit/match/opencv_threads.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
 #include "tpkit/match/tracks_coverage.hpp"
@@ -244,6 +245,7 @@ int main(int argc, char** argv) {
           o->p.threads = o->threads > 0 ? o->threads : std::max(1u, std::thread::hardware_concurrency());
           o->p.threads = std::min(o->p.threads, tpkit::kMaxThreads);
           tpkit::set_opencv_threads(o->p.threads);
+          tpkit::use_large_page_mat_allocator();
           o->p.progress = !o->quiet;
           const size_t n = o->images.size();
           if (n > 2 && (o->out == "-" || o->out.empty()))
