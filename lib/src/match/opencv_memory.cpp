@@ -2,6 +2,7 @@
 
 #include <sys/mman.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <mutex>
 #include <opencv2/core.hpp>
@@ -41,7 +42,7 @@ class LargePageMatAllocator : public cv::MatAllocator {
     CV_Assert(u->urefcount == 0);
     CV_Assert(u->refcount == 0);
     if (!(u->flags & cv::UMatData::USER_ALLOCATED)) {
-      if (u->size >= kLargePage) std::free(u->origdata);
+      if (u->size >= kLargePage) ::munmap(u->origdata, round_up(u->size));
       else cv::fastFree(u->origdata);
       u->origdata = nullptr;
     }
@@ -49,13 +50,22 @@ class LargePageMatAllocator : public cv::MatAllocator {
   }
 
  private:
+  static size_t round_up(size_t n) { return (n + kLargePage - 1) / kLargePage * kLargePage; }
+  // Large blocks are mapped and unmapped directly, so that a freed pyramid goes back to the system at
+  // once: from malloc's heaps, memory backed by huge pages stays resident after free (a 10000² pair
+  // peaked at 2.2 GB that way, against 1.4 GB).
   static uchar* allocate_bytes(size_t n) {
     if (n < kLargePage) return static_cast<uchar*>(cv::fastMalloc(n));
-    const size_t rounded = (n + kLargePage - 1) / kLargePage * kLargePage;
-    void* p = std::aligned_alloc(kLargePage, rounded);
-    if (!p) CV_Error(cv::Error::StsNoMem, "out of memory");
-    ::madvise(p, rounded, MADV_HUGEPAGE);  // advice only: without huge pages the block is ordinary memory
-    return static_cast<uchar*>(p);
+    const size_t size = round_up(n), len = size + kLargePage;
+    void* p = ::mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) CV_Error(cv::Error::StsNoMem, "out of memory");
+    // keep the 2 MiB-aligned part, give back the rest
+    const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kLargePage - 1) & ~(uintptr_t(kLargePage) - 1);
+    const size_t head = aligned - start, tail = len - head - size;
+    if (head) ::munmap(p, head);
+    if (tail) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
+    ::madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);  // advice only: without huge pages, ordinary memory
+    return reinterpret_cast<uchar*>(aligned);
   }
 };
 }  // namespace
