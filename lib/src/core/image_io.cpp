@@ -43,6 +43,18 @@ Raster read_region(const std::string& path, int band, long x0, long y0, long w, 
   return oiio_read_region(path, band, x0, y0, w, h);
 }
 
+Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h) {
+  if (band < 0 || band >= bands)
+    throw InputError(path, 0, "band " + std::to_string(band + 1) + " does not exist (the image has " + std::to_string(bands) + ")");
+  Raster r;
+  r.x0 = std::max(0L, x0);
+  r.y0 = std::max(0L, y0);
+  r.width = std::max(0L, std::min(width, x0 + w) - r.x0);
+  r.height = std::max(0L, std::min(height, y0 + h) - r.y0);
+  r.data.resize(static_cast<size_t>(r.width) * r.height);
+  return r;
+}
+
 Raster read_band(const std::string& path, int band) {
   ImageInfo info = image_info(path);
   return read_region(path, band, 0, 0, info.width, info.height);

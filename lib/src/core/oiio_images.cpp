@@ -95,19 +95,10 @@ ImageInfo oiio_image_info(const std::string& path) {
 
 Raster oiio_read_region(const std::string& path, int band, long x0, long y0, long w, long h) {
   const ImageInfo info = oiio_image_info(path);
-  if (band < 0 || band >= info.bands)
-    throw InputError(path, 0, "band " + std::to_string(band + 1) + " does not exist (the image has " + std::to_string(info.bands) + ")");
-  Raster r;
-  const long xa = std::max(0L, x0), ya = std::max(0L, y0);
-  const long xb = std::min(info.width, x0 + w), yb = std::min(info.height, y0 + h);
-  r.x0 = xa;
-  r.y0 = ya;
-  r.width = std::max(0L, xb - xa);
-  r.height = std::max(0L, yb - ya);
-  if (r.width == 0 || r.height == 0) return r;
-  r.data.resize(static_cast<size_t>(r.width) * r.height);
+  Raster r = clipped_raster(path, info.width, info.height, info.bands, band, x0, y0, w, h);
+  if (r.data.empty()) return r;
   std::string err;
-  if (!api_for(path).read(path.c_str(), band, xa, ya, r.width, r.height, r.data.data(), &err)) throw InputError(path, 0, err);
+  if (!api_for(path).read(path.c_str(), band, r.x0, r.y0, r.width, r.height, r.data.data(), &err)) throw InputError(path, 0, err);
   return r;
 }
 

@@ -158,17 +158,9 @@ std::optional<Raster> read_tiff_region(const std::string& path, int band, long x
   TIFF* tif = t.tif;
   const Layout L = layout_of(tif);
   if (!handled(L)) return std::nullopt;
-  if (band < 0 || band >= L.spp)
-    throw InputError(path, 0, "band " + std::to_string(band + 1) + " does not exist (the image has " + std::to_string(L.spp) + ")");
-  Raster r;
-  const long xa = std::max(0L, x0), ya = std::max(0L, y0);
-  const long xb = std::min<long>(L.width, x0 + w), yb = std::min<long>(L.height, y0 + h);
-  r.x0 = xa;
-  r.y0 = ya;
-  r.width = std::max(0L, xb - xa);
-  r.height = std::max(0L, yb - ya);
-  if (r.width == 0 || r.height == 0) return r;
-  r.data.resize(static_cast<size_t>(r.width) * r.height);
+  Raster r = clipped_raster(path, L.width, L.height, L.spp, band, x0, y0, w, h);
+  if (r.data.empty()) return r;
+  const long xa = r.x0, ya = r.y0, xb = r.x0 + r.width, yb = r.y0 + r.height;
 
   // Chunk geometry: a contiguous chunk interleaves the bands (stride spp), a separate one holds one band.
   const bool contig = L.planar == PLANARCONFIG_CONTIG;

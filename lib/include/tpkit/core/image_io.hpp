@@ -39,6 +39,9 @@ struct Raster {
 Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h);
 // Whole band.
 Raster read_band(const std::string& path, int band = 0);
+// For the readers: the raster of the region's part inside a width x height image (its samples
+// allocated, zero), after checking that `band` is one of the image's `bands` (InputError naming `path`).
+Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h);
 
 // Writes a single-band 16-bit TIFF row strip by row strip (bounded memory), atomically: rows go to a
 // temporary file that replaces `path` on close().
