@@ -10,6 +10,7 @@
 #include "tpkit/match/affine_fundamental.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/match/keypoint_cache.hpp"
+#include "tpkit/match/opencv_memory.hpp"
 #include "tpkit/match/relative_blur.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
@@ -387,6 +388,7 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
 
 Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
                         PairMatchStats* stats) {
+  release_large_blocks();  // the detection's pyramids, kept for reuse, are not needed from here on
   PairMatchStats st;
   auto clock = std::chrono::steady_clock::now();
   auto lap = [&clock](double& out) {

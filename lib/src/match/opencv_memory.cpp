@@ -2,18 +2,105 @@
 
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <iterator>
 #include <cstdlib>
+#include <map>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <unordered_map>
 
 namespace tpkit {
 
 namespace {
 constexpr size_t kLargePage = size_t(2) << 20;
+// At most this much freed memory is kept for reuse; more goes back to the system at once.
+constexpr size_t kMaxPooled = size_t(1) << 30;
 
-// OpenCV's standard allocator (modules/core/src/matrix.cpp, StdMatAllocator) with large blocks taken
-// 2 MiB-aligned and advised for huge pages.
+size_t round_up(size_t n) { return (n + kLargePage - 1) / kLargePage * kLargePage; }
+
+// Large blocks: mapped 2 MiB-aligned and advised for huge pages, and on free kept for the next request
+// of about their size (one to 5/4 times it) instead of unmapped. Blocks in use and in the pool together
+// never exceed the most ever in use at once (pooled blocks are unmapped to make room), so the pool adds
+// nothing to the peak; it holds at most kMaxPooled bytes and is emptied by release_large_blocks(). Blocks are mapped and
+// unmapped directly rather than taken from malloc: from malloc's heaps, memory backed by huge pages
+// stayed resident after free (a 10000² pair peaked at 2.2 GB that way, against 1.4 GB).
+class LargeBlocks {
+ public:
+  void* take(size_t n) {
+    const size_t size = round_up(n);
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      auto it = free_.lower_bound(size);
+      if (it != free_.end() && it->first <= size + size / 4) {
+        void* p = it->second;
+        pooled_ -= it->first;
+        in_use_ += it->first;
+        high_ = std::max(high_, in_use_);
+        mapped_[p] = it->first;
+        free_.erase(it);
+        return p;
+      }
+      // no block fits: free pooled ones until what is mapped stays within the most ever in use at once,
+      // so that the pool adds nothing to the peak (pooled blocks of another size would pile up)
+      while (!free_.empty() && in_use_ + pooled_ + size > std::max(high_, in_use_ + size)) {
+        auto big = std::prev(free_.end());
+        ::munmap(big->second, big->first);
+        pooled_ -= big->first;
+        free_.erase(big);
+      }
+    }
+    const size_t len = size + kLargePage;
+    void* p = ::mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) return nullptr;
+    // keep the 2 MiB-aligned part, give back the rest
+    const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kLargePage - 1) & ~(uintptr_t(kLargePage) - 1);
+    const size_t head = aligned - start, tail = len - head - size;
+    if (head) ::munmap(p, head);
+    if (tail) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
+    ::madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);  // advice only: without huge pages, ordinary memory
+    std::lock_guard<std::mutex> lock(m_);
+    mapped_[reinterpret_cast<void*>(aligned)] = size;
+    in_use_ += size;
+    high_ = std::max(high_, in_use_);
+    return reinterpret_cast<void*>(aligned);
+  }
+  void give(void* p) {
+    std::lock_guard<std::mutex> lock(m_);
+    auto it = mapped_.find(p);
+    if (it == mapped_.end()) return;
+    const size_t size = it->second;
+    mapped_.erase(it);
+    in_use_ -= size;
+    if (pooled_ + size > kMaxPooled) {
+      ::munmap(p, size);
+      return;
+    }
+    free_.emplace(size, p);
+    pooled_ += size;
+  }
+  void release() {
+    std::lock_guard<std::mutex> lock(m_);
+    for (const auto& [size, p] : free_) ::munmap(p, size);
+    free_.clear();
+    pooled_ = 0;
+  }
+
+ private:
+  std::mutex m_;
+  std::multimap<size_t, void*> free_;        // size -> block, free
+  std::unordered_map<void*, size_t> mapped_;  // block in use -> its mapped size
+  size_t pooled_ = 0, in_use_ = 0, high_ = 0;  // bytes: free in the pool, handed out, most handed out at once
+};
+
+LargeBlocks& large_blocks() {
+  static LargeBlocks* blocks = new LargeBlocks;  // never destroyed: matrices may outlive static destruction
+  return *blocks;
+}
+
+// OpenCV's standard allocator (modules/core/src/matrix.cpp, StdMatAllocator) with blocks of 2 MiB and
+// more from LargeBlocks.
 class LargePageMatAllocator : public cv::MatAllocator {
  public:
   cv::UMatData* allocate(int dims, const int* sizes, int type, void* data0, size_t* step, cv::AccessFlag,
@@ -42,7 +129,7 @@ class LargePageMatAllocator : public cv::MatAllocator {
     CV_Assert(u->urefcount == 0);
     CV_Assert(u->refcount == 0);
     if (!(u->flags & cv::UMatData::USER_ALLOCATED)) {
-      if (u->size >= kLargePage) ::munmap(u->origdata, round_up(u->size));
+      if (u->size >= kLargePage) large_blocks().give(u->origdata);
       else cv::fastFree(u->origdata);
       u->origdata = nullptr;
     }
@@ -50,22 +137,11 @@ class LargePageMatAllocator : public cv::MatAllocator {
   }
 
  private:
-  static size_t round_up(size_t n) { return (n + kLargePage - 1) / kLargePage * kLargePage; }
-  // Large blocks are mapped and unmapped directly, so that a freed pyramid goes back to the system at
-  // once: from malloc's heaps, memory backed by huge pages stays resident after free (a 10000² pair
-  // peaked at 2.2 GB that way, against 1.4 GB).
   static uchar* allocate_bytes(size_t n) {
     if (n < kLargePage) return static_cast<uchar*>(cv::fastMalloc(n));
-    const size_t size = round_up(n), len = size + kLargePage;
-    void* p = ::mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) CV_Error(cv::Error::StsNoMem, "out of memory");
-    // keep the 2 MiB-aligned part, give back the rest
-    const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kLargePage - 1) & ~(uintptr_t(kLargePage) - 1);
-    const size_t head = aligned - start, tail = len - head - size;
-    if (head) ::munmap(p, head);
-    if (tail) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
-    ::madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);  // advice only: without huge pages, ordinary memory
-    return reinterpret_cast<uchar*>(aligned);
+    void* p = large_blocks().take(n);
+    if (!p) CV_Error(cv::Error::StsNoMem, "out of memory");
+    return static_cast<uchar*>(p);
   }
 };
 }  // namespace
@@ -77,5 +153,7 @@ void use_large_page_mat_allocator() {
     cv::Mat::setDefaultAllocator(&allocator);
   });
 }
+
+void release_large_blocks() { large_blocks().release(); }
 
 }  // namespace tpkit

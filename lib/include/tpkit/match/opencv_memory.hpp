@@ -6,7 +6,9 @@
 // tp-match's time was 14 % (1.07 s of system time against 3.35 s of user time). Matrices of 2 MiB and more
 // are here allocated 2 MiB-aligned and marked MADV_HUGEPAGE, so that the kernel backs them with huge pages
 // where transparent huge pages are enabled ("always" or "madvise", Debian's default), 512 times fewer
-// faults; smaller ones, and everything where huge pages are off, are as before.
+// faults; smaller ones, and everything where huge pages are off, are as before. A freed large block is
+// kept (up to 1 GiB) for the next matrix of about its size: the next tile's or image's pyramid then needs
+// neither faults nor the kernel's zeroing of fresh pages.
 #pragma once
 
 namespace tpkit {
@@ -14,5 +16,9 @@ namespace tpkit {
 // Makes the allocator above OpenCV's default for the process (cv::Mat::setDefaultAllocator). Call once,
 // at start-up, before the first OpenCV call; later calls do nothing.
 void use_large_page_mat_allocator();
+
+// Returns the freed large blocks kept for reuse to the system (detection calls it when an image is done,
+// so that matching and refinement have that memory).
+void release_large_blocks();
 
 }  // namespace tpkit
