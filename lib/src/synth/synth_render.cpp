@@ -142,48 +142,81 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
     return std::isfinite(a) && std::isfinite(b) && std::isfinite(c) && std::isfinite(e) && std::abs(b - a) < jump &&
            std::abs(e - c) < jump && std::abs(c - a) < jump && std::abs(e - b) < jump;
   };
-  // Stage 2: node radiances, each row left to right.
+  // Stage 2: node radiances, in groups of kRowGroup node rows: first the ground points of the group, each
+  // row left to right, the rows' Newton chains interleaved (they are independent: the CPU overlaps their
+  // latencies), then the radiances of the group's nodes.
   const bool conditions = synth_has_conditions(params());
   std::vector<double> node(static_cast<size_t>(NI * NJ));
-  for (long J = J0; J <= J1; ++J) {
-    const long R = floor_div(J, kCoarse);
-    const double fy = static_cast<double>(J - R * kCoarse) / kCoarse;
-    const double* c0 = &tc[static_cast<size_t>((R - R0) * NC)];
-    const double* c1 = c0 + NC;
+  struct Row {
+    const double* c0;  // coarse parameters above and below the row
+    const double* c1;
+    double fy;
     // Offsets of the two previous nodes' Newton results from their bilinear starts (nan: none): the start
     // is the bilinear interpolation plus their linear extrapolation.
-    double res1 = nan, res2 = nan;
-    for (long I = I0; I <= I1; ++I) {
-      const long C = floor_div(I, kCoarse);
-      const double fx = static_cast<double>(I - C * kCoarse) / kCoarse;
-      const double t00 = c0[C - C0], t10 = c0[C - C0 + 1], t01 = c1[C - C0], t11 = c1[C - C0 + 1];
-      ray(view, static_cast<double>(I) / m, static_cast<double>(J) / m, o, d);
-      std::optional<double> t;
-      Eigen::Vector2d grad;
-      if (smooth(t00, t10, t01, t11)) {
-        const double bil = (1 - fy) * ((1 - fx) * t00 + fx * t10) + fy * ((1 - fx) * t01 + fx * t11);
-        // Newton until a step is below 1 cm: the position error is then ~ (curvature / slope) x step^2,
-        // below 1e-4 m for the terrains made here; the gradient of its last evaluation shades.
-        const double carry = std::isfinite(res2) ? 2 * res1 - res2 : std::isfinite(res1) ? res1 : 0;
-        t = terrain_().refine(o, d, bil + carry, 1e-2, &grad);
-        res2 = res1;
-        res1 = t ? *t - bil : nan;
-      } else {
-        res1 = res2 = nan;
-      }
-      double rad = 0;  // a ray that misses cannot happen inside the terrain grid: black
-      if (!t) {
-        t = terrain_().intersect(o, d);
-        if (t) {
-          const Eigen::Vector3d X = o + *t * d;
-          terrain_().height(X.x(), X.y(), &grad);
-        }
-      }
+    double res1, res2;
+  };
+  struct Hit {
+    double X, Y, gx, gy;  // ground point, terrain gradient; X = nan: the ray missed
+  };
+  constexpr long kRowGroup = 4;
+  std::vector<Hit> hits(static_cast<size_t>(kRowGroup * NI));
+  auto ground = [&](Row& w, long I, long J, Hit& h) {
+    Eigen::Vector3d o, d;
+    const long C = floor_div(I, kCoarse);
+    const double fx = static_cast<double>(I - C * kCoarse) / kCoarse;
+    const double t00 = w.c0[C - C0], t10 = w.c0[C - C0 + 1], t01 = w.c1[C - C0], t11 = w.c1[C - C0 + 1];
+    ray(view, static_cast<double>(I) / m, static_cast<double>(J) / m, o, d);
+    std::optional<double> t;
+    Eigen::Vector2d grad;
+    if (smooth(t00, t10, t01, t11)) {
+      const double fy = w.fy;
+      const double bil = (1 - fy) * ((1 - fx) * t00 + fx * t10) + fy * ((1 - fx) * t01 + fx * t11);
+      // Newton until a step is below 1 cm: the position error is then ~ (curvature / slope) x step^2,
+      // below 1e-4 m for the terrains made here; the gradient of its last evaluation shades.
+      const double carry = std::isfinite(w.res2) ? 2 * w.res1 - w.res2 : std::isfinite(w.res1) ? w.res1 : 0;
+      t = terrain_().refine(o, d, bil + carry, 1e-2, &grad);
+      w.res2 = w.res1;
+      w.res1 = t ? *t - bil : nan;
+    } else {
+      w.res1 = w.res2 = nan;
+    }
+    if (!t) {
+      t = terrain_().intersect(o, d);
       if (t) {
         const Eigen::Vector3d X = o + *t * d;
-        rad = conditions ? synth_condition_radiance(*this, view, X.x(), X.y(), grad) : radiance(X.x(), X.y(), grad);
+        terrain_().height(X.x(), X.y(), &grad);
       }
-      node[static_cast<size_t>((J - J0) * NI + (I - I0))] = rad;
+    }
+    if (!t) {
+      h.X = nan;  // a ray that misses cannot happen inside the terrain grid: black
+      return;
+    }
+    const Eigen::Vector3d X = o + *t * d;
+    h = {X.x(), X.y(), grad.x(), grad.y()};
+  };
+  for (long Jg = J0; Jg <= J1; Jg += kRowGroup) {
+    const long nk = std::min(kRowGroup, J1 - Jg + 1);
+    Row rw[kRowGroup];
+    for (long k = 0; k < nk; ++k) {
+      const long J = Jg + k, R = floor_div(J, kCoarse);
+      rw[k].c0 = &tc[static_cast<size_t>((R - R0) * NC)];
+      rw[k].c1 = rw[k].c0 + NC;
+      rw[k].fy = static_cast<double>(J - R * kCoarse) / kCoarse;
+      rw[k].res1 = rw[k].res2 = nan;
+    }
+    for (long I = I0; I <= I1; ++I)
+      for (long k = 0; k < nk; ++k) ground(rw[k], I, Jg + k, hits[static_cast<size_t>(k * NI + (I - I0))]);
+    for (long k = 0; k < nk; ++k) {
+      double* out_row = &node[static_cast<size_t>((Jg + k - J0) * NI)];
+      const Hit* h = &hits[static_cast<size_t>(k * NI)];
+      for (long i = 0; i < NI; ++i) {
+        if (std::isnan(h[i].X)) {
+          out_row[i] = 0;
+          continue;
+        }
+        const Eigen::Vector2d g(h[i].gx, h[i].gy);
+        out_row[i] = conditions ? synth_condition_radiance(*this, view, h[i].X, h[i].Y, g) : radiance(h[i].X, h[i].Y, g);
+      }
     }
   }
   // Stage 3: the pixel filter, rows then columns: pixel (x, y) = sum_ij w_i w_j node(m x + i, m y + j).

@@ -56,8 +56,7 @@ inline int partition(const Cuts& c, double x, double* dist) {
   *dist = 0;
   return 0;
 }
-// What farmland() draws per block (its parcels), kept for the last block a thread visited: neighbouring
-// samples nearly always fall in the same 240 m block.
+// What farmland() draws per block (its parcels).
 struct FarmBlock {
   bool valid = false;
   uint64_t seed = 0;
@@ -67,6 +66,29 @@ struct FarmBlock {
   uint64_t sh[4] = {};    // per strip: its hash
   Cuts parcels[4];        // per strip: partition of v into parcels
 };
+// A hash kept for the last key it was drawn for.
+struct Kept {
+  bool valid = false;
+  uint64_t seed = 0;
+  int64_t a = 0, b = 0;
+  uint64_t h = 0;
+};
+template <class Draw>
+inline uint64_t kept(Kept& k, uint64_t seed, int64_t a, int64_t b, Draw draw) {
+  if (!k.valid || k.a != a || k.b != b || k.seed != seed) k = {true, seed, a, b, draw()};
+  return k.h;
+}
+// What albedo() draws from hashes, kept per thread for the last block, parcel, lot, road and value-noise
+// cell it visited: neighbouring samples nearly always share them (the same values as drawing them afresh).
+struct AlbedoMemo {
+  FarmBlock farm;
+  Kept type, lot, road[2], parcel;
+  synth::NoiseCell pavement, crown[2], field, asphalt, large, fine;
+};
+AlbedoMemo& memo() {
+  thread_local AlbedoMemo m;
+  return m;
+}
 }  // namespace
 
 SynthTexture::SynthTexture(uint64_t seed, double gsd, double sun_azimuth, double sun_elevation)
@@ -87,7 +109,8 @@ SynthTexture::SynthTexture(uint64_t seed, double gsd, double sun_azimuth, double
 }
 
 double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const {
-  thread_local FarmBlock fb;
+  AlbedoMemo& mm = memo();
+  FarmBlock& fb = mm.farm;
   if (!fb.valid || fb.seed != seed_ || fb.bi != bi || fb.bj != bj || fb.block != block_) {
     const uint64_t bh = hash(seed_, 10, bi, bj);
     fb.strips = cuts(hash(bh, 1), 2 + static_cast<int>(bh % 3), block_);
@@ -105,7 +128,8 @@ double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, doub
   const int s = partition(fb.strips, lu, &d1);
   const uint64_t sh = fb.sh[s];
   const int p = partition(fb.parcels[s], lv, &d2);
-  const uint64_t ph = hash(sh, 4, p), ph2 = synth::mix64(ph);
+  const uint64_t ph = kept(mm.parcel, sh, p, 0, [&] { return hash(sh, 4, p); });
+  const uint64_t ph2 = synth::mix64(ph);
   double a = 0.15 + 0.5 * b16(ph, 0);
   const double kind = b16(ph, 1);
   if (kind < 0.6) {
@@ -117,7 +141,7 @@ double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, doub
   } else {
     // Rough fields: blotchy noise.
     const double l = std::max(4 + 8 * b16(ph2, 2), 3 * gsd_);
-    a += 0.08 * value_noise(ph2, u / l, v / l);
+    a += 0.08 * value_noise(ph2, u / l, v / l, mm.field);
   }
   // Dark hedges (1 m half width) along every parcel boundary.
   const double d = std::min(d1, d2);
@@ -126,11 +150,13 @@ double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, doub
 
 double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const {
   const double lot = block_ / 4;
-  const int64_t li = static_cast<int64_t>(std::floor(lu / lot)), lj = static_cast<int64_t>(std::floor(lv / lot));
+  const int64_t li = synth::floor_int(lu / lot), lj = synth::floor_int(lv / lot);
   // In the lot, [0, 60): footprint + shadow stay >= 3 m inside it (30 + 5 + 16 + 5.6 < 60).
   const double x = lu - li * lot, y = lv - lj * lot;
-  double a = 0.33 + 0.05 * value_noise(noise_seed_[0], u / 3, v / 3);
-  const uint64_t h = hash(seed_, 21, bi * 8 + li, bj * 8 + lj);
+  AlbedoMemo& mm = memo();
+  double a = 0.33 + 0.05 * value_noise(noise_seed_[0], u / 3, v / 3, mm.pavement);
+  const int64_t ki = bi * 8 + li, kj = bj * 8 + lj;
+  const uint64_t h = kept(mm.lot, seed_, ki, kj, [&] { return hash(seed_, 21, ki, kj); });
   if (synth::unit(h) > 0.85) {
     // A small park: trees.
     return lerp(a, woodland(u, v), inside(std::min(std::min(x, lot - x), std::min(y, lot - y)) - 3, ew_));
@@ -159,16 +185,19 @@ double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double 
 
 double SynthTexture::woodland(double u, double v) const {
   const double l = std::max(5.0, 3 * gsd_);
-  const double c = value_noise(noise_seed_[1], u / l, v / l) + 0.5 * value_noise(noise_seed_[2], 2 * u / l, 2 * v / l);
+  AlbedoMemo& mm = memo();
+  const double c = value_noise(noise_seed_[1], u / l, v / l, mm.crown[0]) +
+                   0.5 * value_noise(noise_seed_[2], 2 * u / l, 2 * v / l, mm.crown[1]);
   const double crown = smoothstep(-0.3, 0.5, c);
   return 0.07 + 0.2 * crown;
 }
 
 double SynthTexture::albedo(double X, double Y) const {
   const double u = ca_ * X + sa_ * Y + ou_, v = -sa_ * X + ca_ * Y + ov_;
-  const int64_t bi = static_cast<int64_t>(std::floor(u / block_)), bj = static_cast<int64_t>(std::floor(v / block_));
+  const int64_t bi = synth::floor_int(u / block_), bj = synth::floor_int(v / block_);
   const double lu = u - bi * block_, lv = v - bj * block_;
-  const double type = uniform(seed_, 1, bi, bj);
+  AlbedoMemo& mm = memo();
+  const double type = synth::unit(kept(mm.type, seed_, bi, bj, [&] { return hash(seed_, 1, bi, bj); }));
   double a;
   if (type < 0.55)
     a = farmland(bi, bj, lu, lv, u, v);
@@ -184,23 +213,23 @@ double SynthTexture::albedo(double X, double Y) const {
     const double l = axis == 0 ? lu : lv;
     const int64_t k = (axis == 0 ? bi : bj) + (l > block_ / 2 ? 1 : 0);
     const double dist = std::min(l, block_ - l);
-    const uint64_t rh = hash(seed_, 40 + axis, k);
+    const uint64_t rh = kept(mm.road[axis], seed_, k, 0, [&] { return hash(seed_, 40 + axis, k); });
     if (synth::unit(rh) > 0.45) continue;
     const double half = 3 + 3 * synth::unit(hash(rh, 1));
     if (dist > half + ew_) continue;
     const double asphalt = 0.2 + 0.25 * synth::unit(hash(rh, 2));
-    double r = asphalt + 0.03 * value_noise(hash(rh, 3), u / 2, v / 2);
+    double r = asphalt + 0.03 * value_noise(hash(rh, 3), u / 2, v / 2, mm.asphalt);
     // Dashed centre marking: 0.4 m wide (at least one edge width), 3 m dashes every 9 m.
     const double along = axis == 0 ? v : u;
-    const double phase = along / 9 - std::floor(along / 9);
+    const double phase = along / 9 - static_cast<double>(synth::floor_int(along / 9));
     const double dash = inside(1.5 / 9 - std::abs(phase - 0.5), ew_ / 9);
     r = lerp(r, 0.85, dash * inside(0.2 - dist, ew_) * (half > 4 ? 1 : 0));
     a = lerp(a, r, inside(half - dist, ew_));
   }
   // Large-scale modulation and fine ground noise (wavelength >= 2 gsd).
-  a *= 1 + 0.15 * value_noise(noise_seed_[3], X / 180, Y / 180);
+  a *= 1 + 0.15 * value_noise(noise_seed_[3], X / 180, Y / 180, mm.large);
   const double lf = std::max(1.0, 2 * gsd_);
-  a += 0.025 * value_noise(noise_seed_[4], X / lf, Y / lf);
+  a += 0.025 * value_noise(noise_seed_[4], X / lf, Y / lf, mm.fine);
   return std::clamp(a, 0.02, 0.98);
 }
 

@@ -37,21 +37,41 @@ inline double smoothstep(double e0, double e1, double x) {
 }
 inline double lerp(double a, double b, double t) { return a + (b - a) * t; }
 
+// Floor of x as an integer, for |x| < 2^63 (the same value as std::floor, without its library call).
+inline int64_t floor_int(double x) {
+  const int64_t i = static_cast<int64_t>(x);
+  return x < static_cast<double>(i) ? i - 1 : i;
+}
+
+// The four hashed lattice values of one cell of a value noise, kept between calls (value_noise below):
+// consecutive samples of a rendering mostly fall in the same cell.
+struct NoiseCell {
+  bool valid = false;
+  uint64_t seed = 0;
+  int64_t ix = 0, iy = 0;
+  double v00 = 0, v10 = 0, v01 = 0, v11 = 0;
+};
+
 // 2-D value noise in [-1, 1] on the unit lattice with quintic (C2) interpolation of hashed lattice values:
 // continuous with continuous first and second derivatives; its spectrum is concentrated below 1 cycle per
-// lattice unit.
-inline double value_noise(uint64_t seed, double x, double y) {
-  const double fx = std::floor(x), fy = std::floor(y);
-  const int64_t ix = static_cast<int64_t>(fx), iy = static_cast<int64_t>(fy);
-  const double tx = x - fx, ty = y - fy;
+// lattice unit. `cell` holds the last cell's lattice values (the same values as hashing them afresh).
+inline double value_noise(uint64_t seed, double x, double y, NoiseCell& cell) {
+  const int64_t ix = floor_int(x), iy = floor_int(y);
+  const double tx = x - static_cast<double>(ix), ty = y - static_cast<double>(iy);
   const double sx = tx * tx * tx * (tx * (tx * 6 - 15) + 10);
   const double sy = ty * ty * ty * (ty * (ty * 6 - 15) + 10);
-  // hash(seed, ix + a, iy + b) for a, b in {0, 1}, sharing the products (the same values as four hash calls)
-  const uint64_t h00 = seed + static_cast<uint64_t>(ix) * 0xd1b54a32d192ed03ULL + static_cast<uint64_t>(iy) * 0xaef17502108ef2d9ULL;
-  const uint64_t h10 = h00 + 0xd1b54a32d192ed03ULL, h01 = h00 + 0xaef17502108ef2d9ULL, h11 = h10 + 0xaef17502108ef2d9ULL;
-  const double v00 = 2 * unit(mix64(h00)) - 1, v10 = 2 * unit(mix64(h10)) - 1;
-  const double v01 = 2 * unit(mix64(h01)) - 1, v11 = 2 * unit(mix64(h11)) - 1;
-  return lerp(lerp(v00, v10, sx), lerp(v01, v11, sx), sy);
+  if (!cell.valid || cell.ix != ix || cell.iy != iy || cell.seed != seed) {
+    // hash(seed, ix + a, iy + b) for a, b in {0, 1}, sharing the products (the same values as four hash calls)
+    const uint64_t h00 = seed + static_cast<uint64_t>(ix) * 0xd1b54a32d192ed03ULL + static_cast<uint64_t>(iy) * 0xaef17502108ef2d9ULL;
+    const uint64_t h10 = h00 + 0xd1b54a32d192ed03ULL, h01 = h00 + 0xaef17502108ef2d9ULL, h11 = h10 + 0xaef17502108ef2d9ULL;
+    cell = {true, seed, ix, iy, 2 * unit(mix64(h00)) - 1, 2 * unit(mix64(h10)) - 1, 2 * unit(mix64(h01)) - 1,
+            2 * unit(mix64(h11)) - 1};
+  }
+  return lerp(lerp(cell.v00, cell.v10, sx), lerp(cell.v01, cell.v11, sx), sy);
+}
+inline double value_noise(uint64_t seed, double x, double y) {
+  NoiseCell cell;
+  return value_noise(seed, x, y, cell);
 }
 
 }  // namespace tpkit::synth
