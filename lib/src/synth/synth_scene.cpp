@@ -458,8 +458,10 @@ double SynthScene::radiance(double X, double Y) const {
   return radiance(X, Y, g);
 }
 double SynthScene::radiance(double X, double Y, const Eigen::Vector2d& g) const {
-  const Eigen::Vector3d nrm = Eigen::Vector3d(-g.x(), -g.y(), 1).normalized();
-  const double shade = 0.3 + 0.7 * std::max(0.0, nrm.dot(impl_->sun));
+  // cosine of the sun's angle to the normal (-g, 1) / |(-g, 1)|, one division
+  const Eigen::Vector3d& s = impl_->sun;
+  const double cosine = (s.z() - g.x() * s.x() - g.y() * s.y()) / std::sqrt(g.x() * g.x() + g.y() * g.y() + 1);
+  const double shade = 0.3 + 0.7 * std::max(0.0, cosine);
   return impl_->texture.albedo(X, Y) * shade;
 }
 int SynthScene::views() const { return impl_->p.views; }

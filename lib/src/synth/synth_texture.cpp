@@ -22,7 +22,9 @@ inline double inside(double sd, double w) { return smoothstep(-0.5 * w, 0.5 * w,
 inline double rect_sd(double x, double y, double cx, double cy, double hx, double hy) {
   const double qx = std::abs(x - cx) - hx, qy = std::abs(y - cy) - hy;
   const double ox = std::max(qx, 0.0), oy = std::max(qy, 0.0);
-  return -(std::sqrt(ox * ox + oy * oy) + std::min(std::max(qx, qy), 0.0));
+  // the length of (ox, oy); sqrt(x * x) is x exactly, so the square root only where both are positive
+  const double out = oy == 0 ? ox : ox == 0 ? oy : std::sqrt(ox * ox + oy * oy);
+  return -(out + std::min(std::max(qx, qy), 0.0));
 }
 // Partition of [0, L) into n cells with seeded random widths; returns the cell of x and the distance
 // from x to the nearest cell boundary (0 and L included).
@@ -96,6 +98,9 @@ SynthTexture::SynthTexture(uint64_t seed, double gsd, double sun_azimuth, double
   const int streams[5] = {20, 30, 31, 50, 51};
   for (int k = 0; k < 5; ++k) noise_seed_[k] = hash(seed_, streams[k]);
   ew_ = std::max(gsd_, 0.3);
+  inv_block_ = 1 / block_;
+  inv_crown_ = 1 / std::max(5.0, 3 * gsd_);
+  inv_fine_ = 1 / std::max(1.0, 2 * gsd_);
   const double a = kPi * (0.05 + 0.4 * uniform(seed_, 1));
   ca_ = std::cos(a);
   sa_ = std::sin(a);
@@ -140,8 +145,8 @@ double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, doub
     a += amp * std::sin(2 * kPi * (u * dx + v * dy) / (dn * period));
   } else {
     // Rough fields: blotchy noise.
-    const double l = std::max(4 + 8 * b16(ph2, 2), 3 * gsd_);
-    a += 0.08 * value_noise(ph2, u / l, v / l, mm.field);
+    const double il = 1 / std::max(4 + 8 * b16(ph2, 2), 3 * gsd_);
+    a += 0.08 * value_noise(ph2, u * il, v * il, mm.field);
   }
   // Dark hedges (1 m half width) along every parcel boundary.
   const double d = std::min(d1, d2);
@@ -150,11 +155,12 @@ double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, doub
 
 double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const {
   const double lot = block_ / 4;
-  const int64_t li = synth::floor_int(lu / lot), lj = synth::floor_int(lv / lot);
+  const double inv_lot = 4 * inv_block_;
+  const int64_t li = synth::floor_int(lu * inv_lot), lj = synth::floor_int(lv * inv_lot);
   // In the lot, [0, 60): footprint + shadow stay >= 3 m inside it (30 + 5 + 16 + 5.6 < 60).
   const double x = lu - li * lot, y = lv - lj * lot;
   AlbedoMemo& mm = memo();
-  double a = 0.33 + 0.05 * value_noise(noise_seed_[0], u / 3, v / 3, mm.pavement);
+  double a = 0.33 + 0.05 * value_noise(noise_seed_[0], u * (1.0 / 3), v * (1.0 / 3), mm.pavement);
   const int64_t ki = bi * 8 + li, kj = bj * 8 + lj;
   const uint64_t h = kept(mm.lot, seed_, ki, kj, [&] { return hash(seed_, 21, ki, kj); });
   if (synth::unit(h) > 0.85) {
@@ -184,17 +190,16 @@ double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double 
 }
 
 double SynthTexture::woodland(double u, double v) const {
-  const double l = std::max(5.0, 3 * gsd_);
   AlbedoMemo& mm = memo();
-  const double c = value_noise(noise_seed_[1], u / l, v / l, mm.crown[0]) +
-                   0.5 * value_noise(noise_seed_[2], 2 * u / l, 2 * v / l, mm.crown[1]);
+  const double x = u * inv_crown_, y = v * inv_crown_;
+  const double c = value_noise(noise_seed_[1], x, y, mm.crown[0]) + 0.5 * value_noise(noise_seed_[2], 2 * x, 2 * y, mm.crown[1]);
   const double crown = smoothstep(-0.3, 0.5, c);
   return 0.07 + 0.2 * crown;
 }
 
 double SynthTexture::albedo(double X, double Y) const {
   const double u = ca_ * X + sa_ * Y + ou_, v = -sa_ * X + ca_ * Y + ov_;
-  const int64_t bi = synth::floor_int(u / block_), bj = synth::floor_int(v / block_);
+  const int64_t bi = synth::floor_int(u * inv_block_), bj = synth::floor_int(v * inv_block_);
   const double lu = u - bi * block_, lv = v - bj * block_;
   AlbedoMemo& mm = memo();
   const double type = synth::unit(kept(mm.type, seed_, bi, bj, [&] { return hash(seed_, 1, bi, bj); }));
@@ -221,15 +226,14 @@ double SynthTexture::albedo(double X, double Y) const {
     double r = asphalt + 0.03 * value_noise(hash(rh, 3), u / 2, v / 2, mm.asphalt);
     // Dashed centre marking: 0.4 m wide (at least one edge width), 3 m dashes every 9 m.
     const double along = axis == 0 ? v : u;
-    const double phase = along / 9 - static_cast<double>(synth::floor_int(along / 9));
+    const double n9 = along * (1.0 / 9), phase = n9 - static_cast<double>(synth::floor_int(n9));
     const double dash = inside(1.5 / 9 - std::abs(phase - 0.5), ew_ / 9);
     r = lerp(r, 0.85, dash * inside(0.2 - dist, ew_) * (half > 4 ? 1 : 0));
     a = lerp(a, r, inside(half - dist, ew_));
   }
   // Large-scale modulation and fine ground noise (wavelength >= 2 gsd).
-  a *= 1 + 0.15 * value_noise(noise_seed_[3], X / 180, Y / 180, mm.large);
-  const double lf = std::max(1.0, 2 * gsd_);
-  a += 0.025 * value_noise(noise_seed_[4], X / lf, Y / lf, mm.fine);
+  a *= 1 + 0.15 * value_noise(noise_seed_[3], X * (1.0 / 180), Y * (1.0 / 180), mm.large);
+  a += 0.025 * value_noise(noise_seed_[4], X * inv_fine_, Y * inv_fine_, mm.fine);
   return std::clamp(a, 0.02, 0.98);
 }
 

@@ -30,7 +30,11 @@ inline double normal(uint64_t h) {
   return std::sqrt(-2 * std::log(u1)) * std::cos(2 * 3.14159265358979323846 * u2);
 }
 
+// 0 below e0, 1 above e1 (e0 < e1), the cubic smoothstep between; outside the ramp, where most samples
+// lie, without the division (the same values).
 inline double smoothstep(double e0, double e1, double x) {
+  if (x <= e0) return 0;
+  if (x >= e1) return 1;
   double t = (x - e0) / (e1 - e0);
   t = t < 0 ? 0 : (t > 1 ? 1 : t);
   return t * t * (3 - 2 * t);

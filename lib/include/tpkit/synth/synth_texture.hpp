@@ -30,6 +30,9 @@ class SynthTexture {
   double gsd_ = 0.5, ew_ = 0.5;   // ground sampling distance, edge width (m)
   double ca_ = 1, sa_ = 0, ou_ = 0, ov_ = 0;  // layout frame: rotation, offset
   double block_ = 240;
+  // Reciprocals of the block size and of the crown and fine-noise wavelengths (max(5, 3 gsd), max(1, 2 gsd)):
+  // the texture multiplies where it would divide (a last-bit difference in a noise argument, nothing more)
+  double inv_block_ = 1.0 / 240, inv_crown_ = 0.2, inv_fine_ = 1;
   double sun_u_ = 0.5, sun_v_ = 0.5;          // shadow offset direction per metre of building height
 };
 
