@@ -27,6 +27,28 @@
 extern const char* const tpkit_man_page;
 
 namespace {
+// CLI11 callback of an option that takes `auto` (unset) or a number of pixels in [lo, hi].
+std::function<bool(const CLI::results_t&)> auto_or_pixels(std::optional<double>& target, const std::string& name, double lo, double hi) {
+  return [&target, name, lo, hi](const CLI::results_t& r) {
+    if (r[0] == "auto") {
+      target.reset();
+      return true;
+    }
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(r[0], &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != r[0].size() || !std::isfinite(v) || v < lo || v > hi)
+      throw CLI::ValidationError(name, "auto or a number of pixels in [" + tpkit::format_number(lo) + ", " + tpkit::format_number(hi) +
+                                           "], got '" + r[0] + "'");
+    target = v;
+    return true;
+  };
+}
+
 struct Opts {
   std::vector<std::string> images;
   std::string out = "-", mask1, mask2, coverage;
@@ -182,23 +204,12 @@ int main(int argc, char** argv) {
         app.add_option("--min-corr", o->p.lsm.min_corr, "reject refinements with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
         app.add_option("--unrefined-sigma", o->p.unrefined_sigma, "least sigma of a match kept unrefined, pixels")->check(tpkit::Positive);
         app.add_flag("--drop-unrefined", o->drop_unrefined, "drop verified matches whose refinement is rejected (counted by reason)");
-        app.add_option("--blur", [o](CLI::results_t r) {
-          if (r[0] == "auto") {
-            o->p.blur.reset();
-            return true;
-          }
-          size_t used = 0;
-          double v = 0;
-          try {
-            v = std::stod(r[0], &used);
-          } catch (const std::exception&) {
-            used = 0;
-          }
-          if (used == 0 || used != r[0].size() || !std::isfinite(v) || std::abs(v) > 10)
-            throw CLI::ValidationError("--blur", "auto or a number of pixels in [-10, 10], got '" + r[0] + "'");
-          o->p.blur = v;
-          return true;
-        }, "relative blur before refinement: auto (default), 0 none, > 0 blurs IMG1, < 0 IMG2, pixels")->type_name("auto|SIGMA");
+        app.add_option("--blur", auto_or_pixels(o->p.blur, "--blur", -10, 10),
+                       "relative blur before refinement: auto (default), 0 none, > 0 blurs IMG1, < 0 IMG2, pixels")
+            ->type_name("auto|SIGMA");
+        app.add_option("--highpass", auto_or_pixels(o->p.highpass, "--highpass", 0, 10),
+                       "local mean subtracted from both images before refinement: auto (default), 0 none, Gaussian sigma in pixels")
+            ->type_name("auto|SIGMA");
         app.add_option("--taper", o->p.lsm.taper, "Gaussian weight of the LSM window, sigma in pixels (0 = flat)")
             ->check(tpkit::NonNegative);
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");

@@ -58,6 +58,17 @@ tpkit_tool_test(tp-match.blur-bad-value
   COMMAND "tp-match a.tif b.tif --blur sharp -o x.m"
   EXPECT_FAIL STDERR_MATCH "--blur: auto or a number of pixels in \\[-10, 10\\], got 'sharp'" NO_FILE x.m)
 
+# A view 2 of another date (tp-synth --second-date: another sun's shading, tone curve, seasonal field):
+# the local-mean high-pass is chosen from the matches (their spread about their own epipolar lines
+# falls by a third); --highpass gives it; a pair of one date keeps none; a bad value is refused.
+set(synth_date "tp-synth --out s --size 512 --second-date 1 > /dev/null")
+tpkit_tool_test(tp-match.highpass-estimated
+  COMMAND "${synth_date} && tp-match s/view1.tif s/view2.tif -q -o h.m && grep '^# highpass' h.m && tp-match s/view1.tif s/view2.tif -q --highpass 0 -o n.m && grep '^# highpass' n.m && tp-synth --out c --size 256 --relief 20 --points 20 > /dev/null && tp-match c/view1.tif c/view2.tif -q -o c.m && grep '^# highpass' c.m"
+  STDOUT_MATCH "^# highpass: local mean \\(Gaussian of [12] px\\) subtracted from both images before refinement \\(estimated on [0-9]+ sampled matches: spread about their epipolar lines 0\\.0[0-9]* px unfiltered, [0-9.]+ px at 1 px, [0-9.]+ px at 2 px\\)\n# highpass: none \\(--highpass\\)\n# highpass: none \\(estimated")
+tpkit_tool_test(tp-match.highpass-bad-value
+  COMMAND "tp-match a.tif b.tif --highpass soft -o x.m"
+  EXPECT_FAIL STDERR_MATCH "--highpass: auto or a number of pixels in \\[0, 10\\], got 'soft'" NO_FILE x.m)
+
 # These need the benchmark program bench_match_accuracy (not built in the sanitizer build).
 if(TPKIT_BENCH)
 # The blurred view 2 against the truth: the estimated blur brings the median error of the correct
@@ -65,6 +76,11 @@ if(TPKIT_BENCH)
 tpkit_tool_test(tp-match.blur-accuracy
   COMMAND "${synth_blur} && tp-match s/view1.tif s/view2.tif -q -o b.m && tp-match s/view1.tif s/view2.tif -q --blur 0 -o n.m && bench_match_accuracy --synth s --score b.m 1 2 && bench_match_accuracy --synth s --score n.m 1 2 | sed 's/^/none: /' && bench_match_accuracy --synth s --score b.m 1 2 > b.s && bench_match_accuracy --synth s --score n.m 1 2 > n.s && paste b.s n.s | awk '{for (i = 1; i <= NF; ++i) if ($i == \"median\") m[++k] = $(i + 1)} END {exit !(m[1] < 0.08 && m[3] > 2 * m[1])}'"
   STDOUT_MATCH "correct \\(< 1 px\\) [0-9]+, correct median 0\\.0[0-7]")
+# The other date against the truth (768², 400 matches): the chosen high-pass brings the median error of
+# the correct matches from 0.118 px (--highpass 0) to 0.079 px.
+tpkit_tool_test(tp-match.highpass-accuracy
+  COMMAND "tp-synth --out s --size 768 --second-date 1 > /dev/null && tp-match s/view1.tif s/view2.tif -q -o h.m && tp-match s/view1.tif s/view2.tif -q --highpass 0 -o n.m && bench_match_accuracy --synth s --score h.m 1 2 > h.s && bench_match_accuracy --synth s --score n.m 1 2 > n.s && cat h.s && paste h.s n.s | awk '{for (i = 1; i <= NF; ++i) if ($i == \"median\") m[++k] = $(i + 1)} END {exit !(m[1] < 0.09 && m[1] < 0.8 * m[3])}'"
+  STDOUT_MATCH "correct \\(< 1 px\\) [0-9]+, correct median 0\\.0[0-8]")
 # Accuracy against the synthetic truth: refined median and 90th percentile (pixels) of every pair and
 # of the chained triplets; the bench exits 1 when a bound fails.
 tpkit_tool_test(tp-match.synth-accuracy

@@ -11,6 +11,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/match/keypoint_cache.hpp"
 #include "tpkit/match/opencv_memory.hpp"
+#include "tpkit/match/radiometric_highpass.hpp"
 #include "tpkit/match/relative_blur.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
@@ -174,7 +175,7 @@ struct Rec {
 // keypoint match passed that test, so the refinement moved it off the geometry.
 void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                     const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual,
-                    double blur, bool progress) {
+                    double blur, double highpass, bool progress) {
   const long B = std::max(16L, o.refine_tile);
   std::vector<std::vector<size_t>> bands(static_cast<size_t>((a.info.height + B - 1) / B) + 1);
   for (size_t j = 0; j < recs.size(); ++j)
@@ -203,8 +204,9 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
       refine_group(hi);
       return;
     }
-    // the blur's support (3 sigma) joins the regions so that the windows see a full kernel
-    const double e1 = blur > 0 ? std::ceil(3 * blur) : 0, e2 = blur < 0 ? std::ceil(-3 * blur) : 0;
+    // the blur's and the local mean's support (3 sigma) join the regions so that the windows see full kernels
+    const double eh = highpass > 0 ? std::ceil(3 * highpass) : 0;
+    const double e1 = (blur > 0 ? std::ceil(3 * blur) : 0) + eh, e2 = (blur < 0 ? std::ceil(-3 * blur) : 0) + eh;
     ax0 -= e1, ay0 -= e1, ax1 += e1, ay1 += e1, bx0 -= e2, by0 -= e2, bx1 += e2, by1 += e2;
     Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
                                   (long)std::ceil(ay1 - ay0) + 2);
@@ -212,6 +214,8 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
                                   (long)std::ceil(by1 - by0) + 2);
     if (blur > 0) blur_raster(R1, blur);
     if (blur < 0) blur_raster(R2, -blur);
+    highpass_raster(R1, highpass);
+    highpass_raster(R2, highpass);
     const int threads = o.live_threads ? std::max(1, o.live_threads->load()) : o.threads;
     // chunks of up to 64 points, at least four per thread: a group of a few dozen (the blur estimate's
     // sample, about 50 points a band) would otherwise run on one thread
@@ -238,9 +242,25 @@ void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>
   if (pr) pr->done();
 }
 
+// A sample of up to `want` records spread evenly over the list (every k-th), with their initial maps.
+struct RecordSample {
+  std::vector<Rec> recs;
+  std::vector<Eigen::Matrix2d> A0;
+};
+RecordSample sample_records(const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0, size_t want) {
+  RecordSample s;
+  const size_t n = recs.size(), m = std::min(n, want);
+  for (size_t k = 0; k < m; ++k) {
+    const size_t j = k * n / m;
+    s.recs.push_back(recs[j]);
+    s.A0.push_back(A0[j]);
+  }
+  return s;
+}
+
 // 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
-// 200 records spread evenly over the list (every k-th), each candidate a refinement of that sample
-// scored by the median final correlation (a failed refinement counts its correlation too, 0 when none).
+// 200 records spread evenly over the list, each candidate a refinement of that sample scored by the
+// median final correlation (a failed refinement counts its correlation too, 0 when none).
 RelativeBlur choose_relative_blur(const ImageSource& a, const ImageSource& b, const std::vector<Rec>& recs,
                                   const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
                                   const AffineFundamental* F) {
@@ -249,24 +269,48 @@ RelativeBlur choose_relative_blur(const ImageSource& a, const ImageSource& b, co
     rb.sigma = *o.blur;
     return rb;
   }
-  const size_t n = recs.size(), want = 200;
-  if (n < 50) return rb;  // too few to judge: none
-  std::vector<Rec> sample;
-  std::vector<Eigen::Matrix2d> sA0;
-  for (size_t k = 0; k < std::min(n, want); ++k) {
-    const size_t j = k * n / std::min(n, want);
-    sample.push_back(recs[j]);
-    sA0.push_back(A0[j]);
-  }
+  if (recs.size() < 50) return rb;  // too few to judge: none
+  const RecordSample sample = sample_records(recs, A0, 200);
   auto score = [&](double sigma) {
-    std::vector<Rec> s = sample;
-    refine_records(a, b, s, sA0, lsm, o, F, o.ransac_threshold, sigma, false);
+    std::vector<Rec> s = sample.recs;
+    refine_records(a, b, s, sample.A0, lsm, o, F, o.ransac_threshold, sigma, 0, false);
     std::vector<double> c;
     for (const Rec& r : s) c.push_back(r.corr);
     std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
     return c[c.size() / 2];
   };
   return estimate_relative_blur(score);
+}
+
+// 5b. The local-mean high-pass of both images (radiometric_highpass.hpp): o.highpass when given, else
+// chosen on up to 500 records spread evenly over the list (after the relative blur), each candidate a
+// refinement of that sample scored by the spread of its refined positions about their own affine
+// epipolar geometry. Needs the pair's epipolar geometry (F) and 50 records: otherwise none.
+HighpassChoice choose_pair_highpass(const ImageSource& a, const ImageSource& b, const std::vector<Rec>& recs,
+                               const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
+                               const AffineFundamental* F, double blur) {
+  HighpassChoice hc;
+  if (o.highpass) {
+    hc.sigma = *o.highpass;
+    return hc;
+  }
+  if (!F || recs.size() < 50) return hc;
+  const RecordSample sample = sample_records(recs, A0, 500);
+  hc = choose_highpass([&](double sigma) {
+    std::vector<Rec> s = sample.recs;
+    refine_records(a, b, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false);
+    std::vector<int> ok;
+    for (size_t k = 0; k < s.size(); ++k)
+      if (s[k].ok) ok.push_back(static_cast<int>(k));
+    Eigen::MatrixX4d xy(static_cast<Eigen::Index>(ok.size()), 4);
+    for (size_t q = 0; q < ok.size(); ++q) {
+      const Rec& r = s[static_cast<size_t>(ok[q])];
+      xy.row(static_cast<Eigen::Index>(q)) << r.x1, r.y1, r.x2, r.y2;
+    }
+    return epipolar_spread(xy);
+  });
+  hc.samples = static_cast<long>(sample.recs.size());
+  return hc;
 }
 
 // 6. The records in order: the refined ones, and those whose refinement was rejected at their keypoint
@@ -346,6 +390,19 @@ std::string search_description(const PairMatchStats& st, const PairMatchOptions&
   return search;
 }
 
+// The "# highpass:" header value: what the refinement used and, when chosen here, the spreads it saw.
+std::string describe_highpass(const HighpassChoice& h, const PairMatchOptions& o) {
+  auto px = [](double v) { return std::isfinite(v) ? format_number(std::round(v * 1e4) / 1e4) + " px" : std::string("undefined"); };
+  std::string s = h.sigma > 0 ? "local mean (Gaussian of " + format_number(h.sigma) + " px) subtracted from both images before refinement"
+                              : std::string("none");
+  if (o.highpass) return s + " (--highpass)";
+  if (h.samples == 0) return s + " (not estimated: fewer than 50 verified matches or no epipolar geometry)";
+  s += " (estimated on " + std::to_string(h.samples) + " sampled matches: spread about their epipolar lines " + px(h.spread_none) +
+       " unfiltered";
+  for (size_t k = 0; k < h.tried.size(); ++k) s += ", " + px(h.tried_spread[k]) + " at " + format_number(h.tried[k]) + " px";
+  return s + ")";
+}
+
 // The header lines that say how the records were made.
 void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const PairMatchOptions& o, const PairMatchStats& st,
                   bool lsm_epipolar) {
@@ -378,6 +435,7 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
     else if (o.blur)
       blur += " (--blur)";
     meta_set(M.meta, "blur", blur);
+    meta_set(M.meta, "highpass", describe_highpass(st.highpass, o));
   } else
     meta_set(M.meta, "refinement", "none (raw SIFT positions)");
   meta_set(M.meta, "positions", o.refine ? "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2 (refined 1) or its keypoint (refined 0); kx2 ky2 keypoint of image2"
@@ -437,7 +495,8 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     const bool with_f = rr.ok && !st.no_parallax;
     const AffineFundamental* F = with_f ? &rr.F : nullptr;
     st.blur = choose_relative_blur(a, b, recs, A0, lsm, o, F);
-    refine_records(a, b, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, o.progress);
+    st.highpass = choose_pair_highpass(a, b, recs, A0, lsm, o, F, st.blur.sigma);
+    refine_records(a, b, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);
   }
   lap(st.seconds[3]);
 

@@ -13,7 +13,9 @@
 // position off the verified pair model): the verified match is then kept at its keypoint position with
 // sigma = max(unrefined_sigma, the RANSAC inlier rms) (or dropped with keep_unrefined false), counted
 // by reason either way. When one image is blurrier than the other, the sharper one's windows are blurred
-// by the relative blur first (relative_blur.hpp; estimated on a sample of the matches unless given).
+// by the relative blur first (relative_blur.hpp; estimated on a sample of the matches unless given); when
+// their radiometry differs within the windows (another date), both images' local mean is subtracted
+// (radiometric_highpass.hpp; chosen on a sample of the matches unless given).
 #pragma once
 #include <array>
 #include <atomic>
@@ -25,6 +27,7 @@
 #include "tpkit/match/guided_matching.hpp"
 #include "tpkit/match/image_tiles.hpp"
 #include "tpkit/match/lsm_refine.hpp"
+#include "tpkit/match/radiometric_highpass.hpp"
 #include "tpkit/match/relative_blur.hpp"
 #include "tpkit/match/match_descriptors.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
@@ -57,6 +60,9 @@ struct PairMatchOptions {
   // Relative blur of the images before refinement (relative_blur.hpp: > 0 blurs image 1, < 0 image 2,
   // pixels); unset: estimated from the pair's matches.
   std::optional<double> blur;
+  // Local-mean high-pass of both images before refinement (radiometric_highpass.hpp: Gaussian sigma in
+  // pixels, 0 none); unset: chosen from the pair's matches.
+  std::optional<double> highpass;
   std::string cache_dir;          // keypoint cache folder (keypoint_cache.hpp); empty = none
   // Region runs (match_region.hpp): only the verified matches whose image-1 keypoint lies in this
   // window [x0, x1) x [y0, y1) (pixel-centre coordinates) are refined and returned; the others gave
@@ -85,6 +91,7 @@ struct PairMatchStats {
   long unrefined[kLsmStatusCount] = {};        // by LsmStatus: refinement rejected, kept at the keypoint position
   double unrefined_sigma = 0;                  // the sigma those got
   RelativeBlur blur;                           // the relative blur the refinement used (relative_blur.hpp)
+  HighpassChoice highpass;                     // the high-pass it used (radiometric_highpass.hpp)
   bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
   bool overlap = true;                         // false: too few verified matches, zero records
 };
