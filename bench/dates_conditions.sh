@@ -17,18 +17,18 @@
 # camera, loaded from scene.params) of x1 y1's ground point; correct = error < 1 px of view 2 (so at a
 # resolution ratio R, below R pixels of view 1's size).
 # COLMAP is a benchmark peer only (as in bench/match_speed_colmap.sh), never a build or CI dependency.
-# Measured at 697ad62 (tp-match estimates the relative blur), SIZE=1024 (matches, correct; median px of
-# the correct; tpkit | COLMAP 3.8):
-#   none 6914, 6829, 0.052 | 6075, 5865, 0.138          second-date 815, 802, 0.114 | 433, 421, 0.171
-#   clouds 2466, 2433, 0.054 | 1826, 1763, 0.131        water 5400, 5289, 0.054 | 6263, 6026, 0.125
-#   nodata 4087, 4036, 0.053 | 3293, 3166, 0.143        second-date+clouds 414, 412, 0.113 | 198, 195, 0.157
-#   blur-1.5 2300, 2184, 0.105 | 2449, 2121, 0.340      ratio-2 3972, 3941, 0.055 | 3055, 2967, 0.146
-#   ratio-3 1957, 1945, 0.054 | 870, 848, 0.203         rotation-30 4938, 4820, 0.049 | 4983, 4724, 0.149
-#   rotation-90 6950, 6821, 0.052 | 6042, 5740, 0.151   date+clouds+blur 80, 68, 0.232 | 31, 23, 0.244
-# (before the blur estimate, at e9c9f29: blur-1.5 2094 correct at 0.248, ratio-2 0.078, ratio-3 0.088,
-# date+clouds+blur 65 at 0.339). Short of issue 29's bar: water (COLMAP 14% more correct matches;
-# tp-match --contrast 0.015 gives 6038, but on Marseille the fit RMSE then rises to 0.102 px) and the
-# second-date families' error (0.11 px against COLMAP's 0.16-0.17, not half).
+# Measured with the local-mean high-pass chosen per pair (radiometric_highpass.hpp), SIZE=1024 (matches,
+# correct; median px of the correct; tpkit | COLMAP 3.8):
+#   none 6914, 6829, 0.052 | 6058, 5849, 0.137          second-date 815, 803, 0.077 | 441, 427, 0.171
+#   clouds 2466, 2433, 0.054 | 1807, 1761, 0.118        water 5400, 5289, 0.054 | 6257, 5941, 0.136
+#   nodata 4087, 4036, 0.053 | 3309, 3181, 0.143        second-date+clouds 414, 412, 0.077 | 205, 200, 0.162
+#   blur-1.5 2300, 2184, 0.105 | 2447, 2115, 0.340      ratio-2 3972, 3941, 0.055 | 3058, 2967, 0.147
+#   ratio-3 1957, 1945, 0.054 | 867, 842, 0.205         rotation-30 4938, 4820, 0.049 | 4999, 4741, 0.149
+#   rotation-90 6950, 6821, 0.052 | 6025, 5794, 0.137   date+clouds+blur 80, 72, 0.100 | 30, 25, 0.368
+# (before the high-pass: second-date 0.114, second-date+clouds 0.113, date+clouds+blur 68 at 0.232; before
+# the blur estimate, at e9c9f29: blur-1.5 2094 correct at 0.248). COLMAP's figures move a little between
+# runs (date+clouds+blur 23 at 0.244 in an earlier one). Short of issue 29's bar: water (COLMAP 12% more
+# correct matches; tp-match --contrast 0.015 gives 6038, but on Marseille the fit RMSE then rises to 0.102 px).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=$(cd "${1:-$here/build}" && pwd)
