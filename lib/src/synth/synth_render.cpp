@@ -158,45 +158,12 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
   struct Hit {
     double X, Y, gx, gy;  // ground point, terrain gradient; X = nan: the ray missed
   };
-  constexpr long kRowGroup = 4;
+  constexpr long kRowGroup = SynthTerrain::kLanes;
   std::vector<Hit> hits(static_cast<size_t>(kRowGroup * NI));
-  auto ground = [&](Row& w, long I, long J, Hit& h) {
-    Eigen::Vector3d o, d;
-    const long C = floor_div(I, kCoarse);
-    const double fx = static_cast<double>(I - C * kCoarse) / kCoarse;
-    const double t00 = w.c0[C - C0], t10 = w.c0[C - C0 + 1], t01 = w.c1[C - C0], t11 = w.c1[C - C0 + 1];
-    ray(view, static_cast<double>(I) / m, static_cast<double>(J) / m, o, d);
-    std::optional<double> t;
-    Eigen::Vector2d grad;
-    if (smooth(t00, t10, t01, t11)) {
-      const double fy = w.fy;
-      const double bil = (1 - fy) * ((1 - fx) * t00 + fx * t10) + fy * ((1 - fx) * t01 + fx * t11);
-      // Newton until a step is below 1 cm: the position error is then ~ (curvature / slope) x step^2,
-      // below 1e-4 m for the terrains made here; the gradient of its last evaluation shades.
-      const double carry = std::isfinite(w.res2) ? 2 * w.res1 - w.res2 : std::isfinite(w.res1) ? w.res1 : 0;
-      t = terrain_().refine(o, d, bil + carry, 1e-2, &grad);
-      w.res2 = w.res1;
-      w.res1 = t ? *t - bil : nan;
-    } else {
-      w.res1 = w.res2 = nan;
-    }
-    if (!t) {
-      t = terrain_().intersect(o, d);
-      if (t) {
-        const Eigen::Vector3d X = o + *t * d;
-        terrain_().height(X.x(), X.y(), &grad);
-      }
-    }
-    if (!t) {
-      h.X = nan;  // a ray that misses cannot happen inside the terrain grid: black
-      return;
-    }
-    const Eigen::Vector3d X = o + *t * d;
-    h = {X.x(), X.y(), grad.x(), grad.y()};
-  };
   for (long Jg = J0; Jg <= J1; Jg += kRowGroup) {
     const long nk = std::min(kRowGroup, J1 - Jg + 1);
     Row rw[kRowGroup];
+    SynthTerrain::Patch patch[kRowGroup];  // per row: the terrain cell of its last Newton step
     for (long k = 0; k < nk; ++k) {
       const long J = Jg + k, R = floor_div(J, kCoarse);
       rw[k].c0 = &tc[static_cast<size_t>((R - R0) * NC)];
@@ -204,8 +171,52 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
       rw[k].fy = static_cast<double>(J - R * kCoarse) / kCoarse;
       rw[k].res1 = rw[k].res2 = nan;
     }
-    for (long I = I0; I <= I1; ++I)
-      for (long k = 0; k < nk; ++k) ground(rw[k], I, Jg + k, hits[static_cast<size_t>(k * NI + (I - I0))]);
+    for (long I = I0; I <= I1; ++I) {
+      // Node I of every row of the group: Newton from the start where the cell is smooth (t nan: not)...
+      Eigen::Vector3d o[kRowGroup], d[kRowGroup];
+      Eigen::Vector2d grad[kRowGroup];
+      double t[kRowGroup], bil[kRowGroup];
+      const long C = floor_div(I, kCoarse);
+      const double fx = static_cast<double>(I - C * kCoarse) / kCoarse;
+      for (long k = 0; k < nk; ++k) {
+        Row& w = rw[k];
+        const double t00 = w.c0[C - C0], t10 = w.c0[C - C0 + 1], t01 = w.c1[C - C0], t11 = w.c1[C - C0 + 1];
+        ray(view, static_cast<double>(I) / m, static_cast<double>(Jg + k) / m, o[k], d[k]);
+        t[k] = bil[k] = nan;
+        if (smooth(t00, t10, t01, t11)) {
+          const double fy = w.fy;
+          bil[k] = (1 - fy) * ((1 - fx) * t00 + fx * t10) + fy * ((1 - fx) * t01 + fx * t11);
+          const double carry = std::isfinite(w.res2) ? 2 * w.res1 - w.res2 : std::isfinite(w.res1) ? w.res1 : 0;
+          t[k] = bil[k] + carry;
+        }
+      }
+      // ... until a step is below 1 cm: the position error is then ~ (curvature / slope) x step^2, below
+      // 1e-4 m for the terrains made here; the gradient of its last evaluation shades ...
+      terrain_().refine_lanes(static_cast<int>(nk), o, d, t, 1e-2, grad, patch);
+      for (long k = 0; k < nk; ++k) {
+        Row& w = rw[k];
+        if (!std::isnan(bil[k])) {
+          w.res2 = w.res1;
+          w.res1 = t[k] - bil[k];  // nan where Newton failed
+        } else {
+          w.res1 = w.res2 = nan;
+        }
+        // ... else an exact cast.
+        Hit& h = hits[static_cast<size_t>(k * NI + (I - I0))];
+        if (std::isnan(t[k])) {
+          const auto te = terrain_().intersect(o[k], d[k]);
+          if (!te) {
+            h.X = nan;  // a ray that misses cannot happen inside the terrain grid: black
+            continue;
+          }
+          t[k] = *te;
+          const Eigen::Vector3d X = o[k] + t[k] * d[k];
+          terrain_().height(X.x(), X.y(), &grad[k]);
+        }
+        const Eigen::Vector3d X = o[k] + t[k] * d[k];
+        h = {X.x(), X.y(), grad[k].x(), grad[k].y()};
+      }
+    }
     for (long k = 0; k < nk; ++k) {
       double* out_row = &node[static_cast<size_t>((Jg + k - J0) * NI)];
       const Hit* h = &hits[static_cast<size_t>(k * NI)];

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <limits>
 
@@ -33,40 +32,55 @@ inline void bspline(double t, double w[4], double dw[4]) {
   }
 }
 
-// The renderer's evaluation of the surface and its gradient at (u, v) grid units, clamped as eval() clamps:
-// the same function as eval() but not bit for bit (multiplications by 1/6 instead of divisions, two
-// control columns a lane, sums in another order; ~1e-16 relative), so that refine() (only the renderer's
-// Newton at 1 cm steps) may use it while the exact casts, the truth, keep eval().
+// The renderer's evaluation of the surface and its gradient at (u, v) grid units, clamped as eval() clamps,
+// from the power-basis polynomial of the cell (SynthTerrain::Patch): the same function as eval() but not bit
+// for bit (~1e-16 relative), so that refine() (only the renderer's Newton at 1 cm steps) may use it while
+// the exact casts, the truth, keep eval().
 typedef double v2d __attribute__((vector_size(16)));
-typedef float v2f __attribute__((vector_size(8)));
-inline v2d load2(const float* p) {
-  v2f f;
-  std::memcpy(&f, p, sizeof f);
-  return __builtin_convertvector(f, v2d);
+// Cubic B-spline control values p0..p3 at knots -1..2 -> power-basis coefficients q0..q3 of t in [0, 1].
+inline void bspline_power(const double p[4], double q[4]) {
+  q[0] = (p[0] + 4 * p[1] + p[2]) * (1.0 / 6);
+  q[1] = (p[2] - p[0]) * 0.5;
+  q[2] = (p[0] - 2 * p[1] + p[2]) * 0.5;
+  q[3] = (3 * (p[1] - p[2]) + p[3] - p[0]) * (1.0 / 6);
 }
-inline double eval_fast(const float* c, long nx, long ny, double u, double v, double& gu, double& gv) {
+// The power-basis coefficients of cell (ku, kv) (out of line: a cell serves ~8 Newton steps).
+[[gnu::noinline]] void fill_patch(const float* c, long nx, long ku, long kv, SynthTerrain::Patch& P) {
+  // rows (knots v) to the power basis in s, then each power of s to the power basis in r
+  double rows[4][4];
+  for (int b = 0; b < 4; ++b) {
+    const float* p = c + (kv - 1 + b) * nx + (ku - 1);
+    const double pd[4] = {p[0], p[1], p[2], p[3]};
+    bspline_power(pd, rows[b]);
+  }
+  for (int k = 0; k < 4; ++k) {
+    const double col[4] = {rows[0][k], rows[1][k], rows[2][k], rows[3][k]};
+    bspline_power(col, P.c[k]);
+  }
+  P.ku = ku;
+  P.kv = kv;
+}
+[[gnu::always_inline]] inline double eval_patch(const float* c, long nx, long ny, double u, double v, SynthTerrain::Patch& P, double& gu,
+                         double& gv) {
   u = std::min(std::max(1.0, u), static_cast<double>(nx - 2));
   v = std::min(std::max(1.0, v), static_cast<double>(ny - 2));
   const long ku = std::min(static_cast<long>(u), nx - 3), kv = std::min(static_cast<long>(v), ny - 3);
-  constexpr double k6 = 1.0 / 6;
-  const double t = u - static_cast<double>(ku), t2 = t * t, t3 = t2 * t, s = 1 - t;
-  const v2d wu01 = {s * s * s * k6, (3 * t3 - 6 * t2 + 4) * k6}, wu23 = {(-3 * t3 + 3 * t2 + 3 * t + 1) * k6, t3 * k6};
-  const v2d du01 = {-0.5 * s * s, 1.5 * t2 - 2 * t}, du23 = {-1.5 * t2 + t + 0.5, 0.5 * t2};
-  const double r = v - static_cast<double>(kv), r2 = r * r, r3 = r2 * r, q = 1 - r;
-  const double wv[4] = {q * q * q * k6, (3 * r3 - 6 * r2 + 4) * k6, (-3 * r3 + 3 * r2 + 3 * r + 1) * k6, r3 * k6};
-  const double dv[4] = {-0.5 * q * q, 1.5 * r2 - 2 * r, -1.5 * r2 + r + 0.5, 0.5 * r2};
-  v2d z2 = {0, 0}, gu2 = {0, 0}, gv2 = {0, 0};
-  for (int b = 0; b < 4; ++b) {
-    const float* p = c + (kv - 1 + b) * nx + (ku - 1);
-    const v2d a = load2(p), e = load2(p + 2);
-    const v2d row = wu01 * a + wu23 * e, drow = du01 * a + du23 * e;
-    z2 += wv[b] * row;
-    gv2 += dv[b] * row;
-    gu2 += wv[b] * drow;
+  if (ku != P.ku || kv != P.kv) fill_patch(c, nx, ku, kv, P);
+  const double s = u - static_cast<double>(ku), r = v - static_cast<double>(kv);
+  // Horner in r for every power of s, the lanes holding r^0, r^1 and r^2, r^3 coefficients
+  v2d col[4][2];
+  for (int k = 0; k < 4; ++k) {
+    col[k][0] = v2d{P.c[k][0], P.c[k][1]};
+    col[k][1] = v2d{P.c[k][2], P.c[k][3]};
   }
-  gu = gu2[0] + gu2[1];
-  gv = gv2[0] + gv2[1];
-  return z2[0] + z2[1];
+  // h(s) coefficients of r^j: lanes (j = 0, 1), (j = 2, 3)
+  const v2d h01 = ((col[3][0] * s + col[2][0]) * s + col[1][0]) * s + col[0][0];
+  const v2d h23 = ((col[3][1] * s + col[2][1]) * s + col[1][1]) * s + col[0][1];
+  const v2d d01 = (3 * col[3][0] * s + 2 * col[2][0]) * s + col[1][0];
+  const v2d d23 = (3 * col[3][1] * s + 2 * col[2][1]) * s + col[1][1];
+  gu = ((d23[1] * r + d23[0]) * r + d01[1]) * r + d01[0];
+  gv = (3 * h23[1] * r + 2 * h23[0]) * r + h01[1];
+  return ((h23[1] * r + h23[0]) * r + h01[1]) * r + h01[0];
 }
 
 }  // namespace
@@ -221,30 +235,59 @@ double SynthTerrain::height(double X, double Y, Eigen::Vector2d* grad) const {
   return z;
 }
 
-std::optional<double> SynthTerrain::refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t, double tol,
-                                           Eigen::Vector2d* grad) const {
-  // height(X, Y, &g) written out, multiplying by 1 / h instead of dividing, with eval_fast (this loop is the
+double SynthTerrain::refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t, double tol, Eigen::Vector2d* grad,
+                            Patch* patch) const {
+  Patch own;
+  Eigen::Vector2d g;
+  refine_lanes(1, &o, &d, &t, tol, &g, patch ? patch : &own);
+  if (grad && !std::isnan(t)) *grad = g;
+  return t;
+}
+
+void SynthTerrain::refine_lanes(int n, const Eigen::Vector3d* o, const Eigen::Vector3d* d, double* t, double tol,
+                                Eigen::Vector2d* grad, Patch* patch) const {
+  // height(X, Y, &g) written out, multiplying by 1 / h instead of dividing, with eval_patch (this loop is the
   // renderer's inner loop: one call a node; a last-bit difference from height() is immaterial at its 1 cm
   // tolerance)
-  const double ox = o.x(), oy = o.y(), oz = o.z(), dx = d.x(), dy = d.y(), dz = d.z();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   const double ih = 1 / h_, umax = static_cast<double>(nx_ - 2), vmax = static_cast<double>(ny_ - 2);
-  for (int it = 0; it < 8; ++it) {
-    if (!std::isfinite(t)) return std::nullopt;  // diverged: the caller casts exactly
-    const double u = (ox + t * dx - gx0_) * ih, v = (oy + t * dy - gy0_) * ih;
-    double gu = 0, gv = 0;
-    const double z = eval_fast(c_.data(), nx_, ny_, u, v, gu, gv);
-    const double gx = u > 1 && u < umax ? gu * ih : 0.0, gy = v > 1 && v < vmax ? gv * ih : 0.0;
-    const double f = oz + t * dz - z;
-    const double fp = dz - (gx * dx + gy * dy);
-    if (!(fp < -1e-9)) return std::nullopt;
-    const double dt = f / fp;
-    t -= dt;
-    if (std::abs(dt) < tol + 1e-15 * std::abs(t)) {
-      if (grad) *grad = Eigen::Vector2d(gx, gy);
-      return t;
+  bool open[kLanes];
+  int left = n;
+  for (int k = 0; k < kLanes; ++k) open[k] = k < n;
+  for (int it = 0; it < 8 && left > 0; ++it)
+    for (int k = 0; k < kLanes; ++k) {  // one Newton step of every open ray
+      if (!open[k]) continue;
+      double& tk = t[k];
+      const double ox = o[k].x(), oy = o[k].y(), oz = o[k].z(), dx = d[k].x(), dy = d[k].y(), dz = d[k].z();
+      bool done = !std::isfinite(tk);  // diverged: the caller casts exactly
+      if (done) {
+        tk = nan;
+      } else {
+        const double u = (ox + tk * dx - gx0_) * ih, v = (oy + tk * dy - gy0_) * ih;
+        double gu = 0, gv = 0;
+        const double z = eval_patch(c_.data(), nx_, ny_, u, v, patch[k], gu, gv);
+        const double gx = u > 1 && u < umax ? gu * ih : 0.0, gy = v > 1 && v < vmax ? gv * ih : 0.0;
+        const double f = oz + tk * dz - z;
+        const double fp = dz - (gx * dx + gy * dy);
+        if (!(fp < -1e-9)) {
+          tk = nan;
+          done = true;
+        } else {
+          const double dt = f / fp;
+          tk -= dt;
+          if (std::abs(dt) < tol + 1e-15 * std::abs(tk)) {
+            grad[k] = Eigen::Vector2d(gx, gy);
+            done = true;
+          }
+        }
+      }
+      if (done) {
+        open[k] = false;
+        --left;
+      }
     }
-  }
-  return std::nullopt;
+  for (int k = 0; k < n; ++k)
+    if (open[k]) t[k] = nan;  // no convergence in 8 steps
 }
 
 std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tol_t) const {

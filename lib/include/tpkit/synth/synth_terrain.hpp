@@ -34,12 +34,25 @@ class SynthTerrain {
   // when the ray leaves the height bounds without meeting it (or d.z >= 0).
   // tol: bracket width (m along the ray) at which the refinement stops.
   std::optional<double> intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tol = 1e-10) const;
-  // Newton refinement of the intersection starting from t0; nothing if it does not converge quickly
-  // (caller falls back to intersect()). Used for supersamples next to an exact cast.
+  // Newton refinement of the intersection starting from t0; nan if it does not converge quickly (caller
+  // falls back to intersect()); a double rather than an optional, which cost a store-forwarding stall at
+  // every return. The renderer's ground points between its exact casts (synth_render.cpp).
   // tol: stop when the Newton step is below tol (m along the ray); the error of the result is then of
   // the order of curvature x tol^2. grad (optional): terrain gradient at the last evaluation.
-  std::optional<double> refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0, double tol = 1e-10,
-                               Eigen::Vector2d* grad = nullptr) const;
+  // patch (optional): the cell polynomial of the caller's last refine(), reused while its Newton steps stay
+  // in that cell (consecutive nodes of a rendered row mostly do).
+  struct Patch {
+    long ku = -1, kv = -1;  // its cell: u in [ku, ku + 1), v in [kv, kv + 1) grid units; -1: none yet
+    double c[4][4] = {};    // surface = sum over k, j of c[k][j] s^k r^j (s = u - ku, r = v - kv)
+  };
+  double refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0, double tol = 1e-10,
+                Eigen::Vector2d* grad = nullptr, Patch* patch = nullptr) const;
+  // refine() of n <= kLanes rays at once, their Newton steps interleaved: the chains are independent, so
+  // the CPU overlaps their latencies (the same result per ray as refine()). t[k]: start in, result or nan
+  // out (a nan start gives nan); grad[k], patch[k]: as refine()'s, per ray.
+  static constexpr int kLanes = 4;
+  void refine_lanes(int n, const Eigen::Vector3d* o, const Eigen::Vector3d* d, double* t, double tol, Eigen::Vector2d* grad,
+                    Patch* patch) const;
 
  private:
   double eval(double u, double v, double* du, double* dv) const;  // grid units
