@@ -68,23 +68,55 @@ struct FarmBlock {
   uint64_t sh[4] = {};    // per strip: its hash
   Cuts parcels[4];        // per strip: partition of v into parcels
 };
-// A hash kept for the last key it was drawn for.
+// What was drawn for the last key (a seed, two integers and the gsd): draw() runs when the key changes.
+template <class T>
 struct Kept {
   bool valid = false;
   uint64_t seed = 0;
   int64_t a = 0, b = 0;
-  uint64_t h = 0;
+  double gsd = 0;
+  T v{};
 };
-template <class Draw>
-inline uint64_t kept(Kept& k, uint64_t seed, int64_t a, int64_t b, Draw draw) {
-  if (!k.valid || k.a != a || k.b != b || k.seed != seed) k = {true, seed, a, b, draw()};
-  return k.h;
+template <class T, class Draw>
+inline const T& kept(Kept<T>& k, uint64_t seed, int64_t a, int64_t b, double gsd, Draw draw) {
+  if (!k.valid || k.a != a || k.b != b || k.seed != seed || k.gsd != gsd) {
+    k.v = draw();
+    k.valid = true;
+    k.seed = seed;
+    k.a = a;
+    k.b = b;
+    k.gsd = gsd;
+  }
+  return k.v;
 }
+// A parcel of farmland() (drawn from its hash ph and the gsd).
+struct Parcel {
+  uint64_t ph2 = 0;         // mix64(ph): the second draw, the rough field's noise seed
+  double a = 0;             // base albedo
+  bool crop = false;        // crop rows, else a rough field
+  double dx = 0, dy = 0, wavelength = 0, amp = 0;  // crop rows: direction, dn * period, amplitude
+  double il = 0;            // rough field: 1 / noise scale
+};
+// A lot of urban() (drawn from its hash h).
+struct Lot {
+  bool park = false;
+  double cx = 0, cy = 0, hx = 0, hy = 0;  // building footprint: centre, half sizes
+  double bh = 0, roof = 0;                // building height, roof albedo
+};
+// A road line of albedo() (drawn from its hash).
+struct Road {
+  bool present = false;
+  double half = 0, asphalt = 0;
+  uint64_t noise_seed = 0;
+};
 // What albedo() draws from hashes, kept per thread for the last block, parcel, lot, road and value-noise
 // cell it visited: neighbouring samples nearly always share them (the same values as drawing them afresh).
 struct AlbedoMemo {
   FarmBlock farm;
-  Kept type, lot, road[2], parcel;
+  Kept<uint64_t> type;
+  Kept<Lot> lot;
+  Kept<Road> road[2];
+  Kept<Parcel> parcel;
   synth::NoiseCell pavement, crown[2], field, asphalt, large, fine;
 };
 AlbedoMemo& memo() {
@@ -133,21 +165,30 @@ double SynthTexture::farmland(int64_t bi, int64_t bj, double lu, double lv, doub
   const int s = partition(fb.strips, lu, &d1);
   const uint64_t sh = fb.sh[s];
   const int p = partition(fb.parcels[s], lv, &d2);
-  const uint64_t ph = kept(mm.parcel, sh, p, 0, [&] { return hash(sh, 4, p); });
-  const uint64_t ph2 = synth::mix64(ph);
-  double a = 0.15 + 0.5 * b16(ph, 0);
-  const double kind = b16(ph, 1);
-  if (kind < 0.6) {
-    // Crop rows: stripes at a parcel-specific orientation and period (>= 3 gsd).
-    const double dx = b16(ph, 2) - 0.5, dy = b16(ph, 3) * 0.5 + 1e-3, dn = std::sqrt(dx * dx + dy * dy);
-    const double period = std::max(2.5 + 6 * b16(ph2, 0), 3 * gsd_);
-    const double amp = 0.04 + 0.1 * b16(ph2, 1);
-    a += amp * std::sin(2 * kPi * (u * dx + v * dy) / (dn * period));
-  } else {
-    // Rough fields: blotchy noise.
-    const double il = 1 / std::max(4 + 8 * b16(ph2, 2), 3 * gsd_);
-    a += 0.08 * value_noise(ph2, u * il, v * il, mm.field);
-  }
+  const Parcel& pc = kept(mm.parcel, sh, p, 0, gsd_, [&] {
+    Parcel c;
+    const uint64_t ph = hash(sh, 4, p);
+    c.ph2 = synth::mix64(ph);
+    c.a = 0.15 + 0.5 * b16(ph, 0);
+    c.crop = b16(ph, 1) < 0.6;
+    if (c.crop) {
+      // Crop rows: stripes at a parcel-specific orientation and period (>= 3 gsd).
+      c.dx = b16(ph, 2) - 0.5;
+      c.dy = b16(ph, 3) * 0.5 + 1e-3;
+      const double dn = std::sqrt(c.dx * c.dx + c.dy * c.dy);
+      c.wavelength = dn * std::max(2.5 + 6 * b16(c.ph2, 0), 3 * gsd_);
+      c.amp = 0.04 + 0.1 * b16(c.ph2, 1);
+    } else {
+      // Rough fields: blotchy noise.
+      c.il = 1 / std::max(4 + 8 * b16(c.ph2, 2), 3 * gsd_);
+    }
+    return c;
+  });
+  double a = pc.a;
+  if (pc.crop)
+    a += pc.amp * std::sin(2 * kPi * (u * pc.dx + v * pc.dy) / pc.wavelength);
+  else
+    a += 0.08 * value_noise(pc.ph2, u * pc.il, v * pc.il, mm.field);
   // Dark hedges (1 m half width) along every parcel boundary.
   const double d = std::min(d1, d2);
   return lerp(0.1, a, inside(d - 1.0, ew_));
@@ -162,21 +203,29 @@ double SynthTexture::urban(int64_t bi, int64_t bj, double lu, double lv, double 
   AlbedoMemo& mm = memo();
   double a = 0.33 + 0.05 * value_noise(noise_seed_[0], u * (1.0 / 3), v * (1.0 / 3), mm.pavement);
   const int64_t ki = bi * 8 + li, kj = bj * 8 + lj;
-  const uint64_t h = kept(mm.lot, seed_, ki, kj, [&] { return hash(seed_, 21, ki, kj); });
-  if (synth::unit(h) > 0.85) {
+  const Lot& lt = kept(mm.lot, seed_, ki, kj, block_, [&] {
+    Lot c;
+    const uint64_t h = hash(seed_, 21, ki, kj);
+    c.park = synth::unit(h) > 0.85;
+    const uint64_t h2 = synth::mix64(h);
+    c.cx = lot / 2 + 5 * (2 * b16(h2, 0) - 1);
+    c.cy = lot / 2 + 5 * (2 * b16(h2, 1) - 1);
+    c.hx = 6 + 10 * b16(h2, 2);
+    c.hy = 5 + 10 * b16(h2, 3);
+    c.bh = 3 + 5 * b16(h, 1);  // building height (m); shadow |sun| * bh <= 6 m
+    c.roof = 0.3 + 0.5 * b16(h, 2);
+    return c;
+  });
+  if (lt.park) {
     // A small park: trees.
     return lerp(a, woodland(u, v), inside(std::min(std::min(x, lot - x), std::min(y, lot - y)) - 3, ew_));
   }
-  const uint64_t h2 = synth::mix64(h);
-  const double cx = lot / 2 + 5 * (2 * b16(h2, 0) - 1);
-  const double cy = lot / 2 + 5 * (2 * b16(h2, 1) - 1);
-  const double hx = 6 + 10 * b16(h2, 2), hy = 5 + 10 * b16(h2, 3);
-  const double bh = 3 + 5 * b16(h, 1);  // building height (m); shadow |sun| * bh <= 6 m
+  const double cx = lt.cx, cy = lt.cy, hx = lt.hx, hy = lt.hy, bh = lt.bh;
   // Cast shadow: the footprint moved away from the sun, darkening the pavement.
   const double sd_shadow = rect_sd(x, y, cx - sun_u_ * bh, cy - sun_v_ * bh, hx, hy);
   a *= 1 - 0.55 * inside(sd_shadow, ew_);
   // Gabled roof: ridge along the longer side, the two halves lit differently.
-  const double roof = 0.3 + 0.5 * b16(h, 2);
+  const double roof = lt.roof;
   const bool along_x = hx > hy;
   const double across = along_x ? (y - cy) : (x - cx);
   const double facing = along_x ? sun_v_ : sun_u_;
@@ -202,7 +251,7 @@ double SynthTexture::albedo(double X, double Y) const {
   const int64_t bi = synth::floor_int(u * inv_block_), bj = synth::floor_int(v * inv_block_);
   const double lu = u - bi * block_, lv = v - bj * block_;
   AlbedoMemo& mm = memo();
-  const double type = synth::unit(kept(mm.type, seed_, bi, bj, [&] { return hash(seed_, 1, bi, bj); }));
+  const double type = synth::unit(kept(mm.type, seed_, bi, bj, 0, [&] { return hash(seed_, 1, bi, bj); }));
   double a;
   if (type < 0.55)
     a = farmland(bi, bj, lu, lv, u, v);
@@ -218,12 +267,19 @@ double SynthTexture::albedo(double X, double Y) const {
     const double l = axis == 0 ? lu : lv;
     const int64_t k = (axis == 0 ? bi : bj) + (l > block_ / 2 ? 1 : 0);
     const double dist = std::min(l, block_ - l);
-    const uint64_t rh = kept(mm.road[axis], seed_, k, 0, [&] { return hash(seed_, 40 + axis, k); });
-    if (synth::unit(rh) > 0.45) continue;
-    const double half = 3 + 3 * synth::unit(hash(rh, 1));
+    const Road& rd = kept(mm.road[axis], seed_, k, 0, 0, [&] {
+      Road c;
+      const uint64_t rh = hash(seed_, 40 + axis, k);
+      c.present = synth::unit(rh) <= 0.45;
+      c.half = 3 + 3 * synth::unit(hash(rh, 1));
+      c.asphalt = 0.2 + 0.25 * synth::unit(hash(rh, 2));
+      c.noise_seed = hash(rh, 3);
+      return c;
+    });
+    if (!rd.present) continue;
+    const double half = rd.half;
     if (dist > half + ew_) continue;
-    const double asphalt = 0.2 + 0.25 * synth::unit(hash(rh, 2));
-    double r = asphalt + 0.03 * value_noise(hash(rh, 3), u / 2, v / 2, mm.asphalt);
+    double r = rd.asphalt + 0.03 * value_noise(rd.noise_seed, u / 2, v / 2, mm.asphalt);
     // Dashed centre marking: 0.4 m wide (at least one edge width), 3 m dashes every 9 m.
     const double along = axis == 0 ? v : u;
     const double n9 = along * (1.0 / 9), phase = n9 - static_cast<double>(synth::floor_int(n9));
