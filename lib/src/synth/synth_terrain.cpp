@@ -331,15 +331,16 @@ std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Ei
   const long cxn = nx_ - 3, cyn = ny_ - 3;
   const double dxy = std::hypot(d.x(), d.y());
   // First root in [a, b] given f(a) > 0 and f(b) > 0, where |f'| <= K: a dip below zero needs
-  // (f(a) + f(b)) / 2 < K (b - a) / 2; otherwise split.
-  std::function<std::optional<double>(double, double, double, double, double, int)> dip =
-      [&](double a, double b, double fa, double fb, double K, int depth) -> std::optional<double> {
+  // (f(a) + f(b)) / 2 < K (b - a) / 2; otherwise split. (A lambda taking itself: a std::function here cost
+  // a heap allocation per cast.)
+  auto dip_rec = [&](auto& self, double a, double b, double fa, double fb, double K, int depth) -> std::optional<double> {
     if (fa + fb > K * (b - a) || depth > 40 || b - a < 1e-12 * (1 + std::abs(b))) return std::nullopt;
     const double m = 0.5 * (a + b), fm = f(m);
     if (fm <= 0) return solve(a, m, fa, fm);
-    if (auto r = dip(a, m, fa, fm, K, depth + 1)) return r;
-    return dip(m, b, fm, fb, K, depth + 1);
+    if (auto r = self(self, a, m, fa, fm, K, depth + 1)) return r;
+    return self(self, m, b, fm, fb, K, depth + 1);
   };
+  auto dip = [&](double a, double b, double fa, double fb, double K, int depth) { return dip_rec(dip_rec, a, b, fa, fb, K, depth); };
   double ta = t0;
   double fprev = f(t0), tprev = t0;
   if (fprev <= 0) return t0;
