@@ -155,15 +155,14 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
     // is the bilinear interpolation plus their linear extrapolation.
     double res1, res2;
   };
-  struct Hit {
-    double X, Y, gx, gy;  // ground point, terrain gradient; X = nan: the ray missed
-  };
   constexpr long kRowGroup = SynthTerrain::kLanes;
-  std::vector<Hit> hits(static_cast<size_t>(kRowGroup * NI));
+  // The group's ground points and terrain gradients, row k at k * NI; hx = nan: the ray missed.
+  std::vector<double> hx(static_cast<size_t>(kRowGroup * NI)), hy(hx.size()), hgx(hx.size()), hgy(hx.size());
   for (long Jg = J0; Jg <= J1; Jg += kRowGroup) {
     const long nk = std::min(kRowGroup, J1 - Jg + 1);
     Row rw[kRowGroup];
     SynthTerrain::Patch patch[kRowGroup];  // per row: the terrain cell of its last Newton step
+    bool missed = false;
     for (long k = 0; k < nk; ++k) {
       const long J = Jg + k, R = floor_div(J, kCoarse);
       rw[k].c0 = &tc[static_cast<size_t>((R - R0) * NC)];
@@ -202,11 +201,12 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
           w.res1 = w.res2 = nan;
         }
         // ... else an exact cast.
-        Hit& h = hits[static_cast<size_t>(k * NI + (I - I0))];
+        const size_t h = static_cast<size_t>(k * NI + (I - I0));
         if (std::isnan(t[k])) {
           const auto te = terrain_().intersect(o[k], d[k]);
           if (!te) {
-            h.X = nan;  // a ray that misses cannot happen inside the terrain grid: black
+            hx[h] = nan;  // a ray that misses cannot happen inside the terrain grid: black
+            missed = true;
             continue;
           }
           t[k] = *te;
@@ -214,20 +214,25 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
           terrain_().height(X.x(), X.y(), &grad[k]);
         }
         const Eigen::Vector3d X = o[k] + t[k] * d[k];
-        h = {X.x(), X.y(), grad[k].x(), grad[k].y()};
+        hx[h] = X.x();
+        hy[h] = X.y();
+        hgx[h] = grad[k].x();
+        hgy[h] = grad[k].y();
       }
     }
-    for (long k = 0; k < nk; ++k) {
-      double* out_row = &node[static_cast<size_t>((Jg + k - J0) * NI)];
-      const Hit* h = &hits[static_cast<size_t>(k * NI)];
-      for (long i = 0; i < NI; ++i) {
-        if (std::isnan(h[i].X)) {
-          out_row[i] = 0;
-          continue;
-        }
-        const Eigen::Vector2d g(h[i].gx, h[i].gy);
-        out_row[i] = conditions ? synth_condition_radiance(*this, view, h[i].X, h[i].Y, g) : radiance(h[i].X, h[i].Y, g);
+    double* out = &node[static_cast<size_t>((Jg - J0) * NI)];
+    if (!conditions && !missed) {
+      radiance_n(nk * NI, hx.data(), hy.data(), hgx.data(), hgy.data(), out);
+      continue;
+    }
+    for (long i = 0; i < nk * NI; ++i) {
+      const size_t h = static_cast<size_t>(i);
+      if (std::isnan(hx[h])) {
+        out[i] = 0;
+        continue;
       }
+      const Eigen::Vector2d g(hgx[h], hgy[h]);
+      out[i] = conditions ? synth_condition_radiance(*this, view, hx[h], hy[h], g) : radiance(hx[h], hy[h], g);
     }
   }
   // Stage 3: the pixel filter, rows then columns: pixel (x, y) = sum_ij w_i w_j node(m x + i, m y + j).

@@ -457,12 +457,19 @@ double SynthScene::radiance(double X, double Y) const {
   impl_->terrain.height(X, Y, &g);
   return radiance(X, Y, g);
 }
+namespace {
+// Ambient + Lambert: the cosine of the sun's angle to the normal (-g, 1) / |(-g, 1)|, one division.
+inline double shade(const Eigen::Vector3d& s, double gx, double gy) {
+  const double cosine = (s.z() - gx * s.x() - gy * s.y()) / std::sqrt(gx * gx + gy * gy + 1);
+  return 0.3 + 0.7 * std::max(0.0, cosine);
+}
+}  // namespace
 double SynthScene::radiance(double X, double Y, const Eigen::Vector2d& g) const {
-  // cosine of the sun's angle to the normal (-g, 1) / |(-g, 1)|, one division
-  const Eigen::Vector3d& s = impl_->sun;
-  const double cosine = (s.z() - g.x() * s.x() - g.y() * s.y()) / std::sqrt(g.x() * g.x() + g.y() * g.y() + 1);
-  const double shade = 0.3 + 0.7 * std::max(0.0, cosine);
-  return impl_->texture.albedo(X, Y) * shade;
+  return impl_->texture.albedo(X, Y) * shade(impl_->sun, g.x(), g.y());
+}
+void SynthScene::radiance_n(long n, const double* X, const double* Y, const double* gx, const double* gy, double* out) const {
+  impl_->texture.albedo_n(n, X, Y, out);
+  for (long i = 0; i < n; ++i) out[i] *= shade(impl_->sun, gx[i], gy[i]);
 }
 int SynthScene::views() const { return impl_->p.views; }
 bool SynthScene::is_block() const { return synth_is_block(impl_->p); }

@@ -261,7 +261,14 @@ double SynthTexture::woodland(double u, double v) const {
   return 0.07 + 0.2 * crown;
 }
 
-double SynthTexture::albedo(double X, double Y) const {
+double SynthTexture::albedo(double X, double Y) const { return modulate(layout(X, Y), X, Y); }
+
+void SynthTexture::albedo_n(long n, const double* X, const double* Y, double* out) const {
+  for (long i = 0; i < n; ++i) out[i] = layout(X[i], Y[i]);
+  for (long i = 0; i < n; ++i) out[i] = modulate(out[i], X[i], Y[i]);
+}
+
+double SynthTexture::layout(double X, double Y) const {
   const double u = ca_ * X + sa_ * Y + ou_, v = -sa_ * X + ca_ * Y + ov_;
   const int64_t bi = synth::floor_int(u * inv_block_), bj = synth::floor_int(v * inv_block_);
   const double lu = u - bi * block_, lv = v - bj * block_;
@@ -302,6 +309,11 @@ double SynthTexture::albedo(double X, double Y) const {
     r = lerp(r, 0.85, dash * inside(0.2 - dist, ew_) * (half > 4 ? 1 : 0));
     a = lerp(a, r, inside(half - dist, ew_));
   }
+  return a;
+}
+
+double SynthTexture::modulate(double a, double X, double Y) const {
+  AlbedoMemo& mm = memo();
   // Large-scale modulation and fine ground noise (wavelength >= 2 gsd).
   a *= 1 + 0.15 * value_noise(noise_seed_[3], X * (1.0 / 180), Y * (1.0 / 180), mm.large);
   a += 0.025 * value_noise(noise_seed_[4], X * inv_fine_, Y * inv_fine_, mm.fine);

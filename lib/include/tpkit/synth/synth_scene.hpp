@@ -130,6 +130,8 @@ class SynthScene {
   double radiance(double X, double Y) const;
   // The same with the terrain gradient at (X, Y) already known.
   double radiance(double X, double Y, const Eigen::Vector2d& grad) const;
+  // radiance(X[i], Y[i], (gx[i], gy[i])) into out[i], i < n: the same values, faster for many points.
+  void radiance_n(long n, const double* X, const double* Y, const double* gx, const double* gy, double* out) const;
   // Viewing ray of pixel (x, y) of `view`: a point on it above the terrain and the unit direction
   // towards the ground (ground frame, m).
   void ray(int view, double x, double y, Eigen::Vector3d& origin, Eigen::Vector3d& dir) const;

@@ -20,11 +20,16 @@ class SynthTexture {
   SynthTexture(uint64_t seed, double gsd, double sun_azimuth, double sun_elevation);
   // Albedo in [0.02, 0.98] at ground X, Y (m).
   double albedo(double X, double Y) const;
+  // albedo(X[i], Y[i]) into out[i], i < n (the same values): the layout point by point, then the two noises
+  // over (X, Y) in a pass of their own, short independent iterations that the CPU overlaps.
+  void albedo_n(long n, const double* X, const double* Y, double* out) const;
 
  private:
   double farmland(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const;
   double urban(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const;
   double woodland(double u, double v) const;
+  double layout(double X, double Y) const;                      // albedo before the two (X, Y) noises
+  double modulate(double a, double X, double Y) const;          // ... and after
   uint64_t seed_ = 1;
   uint64_t noise_seed_[5] = {};   // hash(seed_, k) of the value-noise streams k = 20, 30, 31, 50, 51
   double gsd_ = 0.5, ew_ = 0.5;   // ground sampling distance, edge width (m)
