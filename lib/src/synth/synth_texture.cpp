@@ -261,11 +261,24 @@ double SynthTexture::woodland(double u, double v) const {
   return 0.07 + 0.2 * crown;
 }
 
-double SynthTexture::albedo(double X, double Y) const { return modulate(layout(X, Y), X, Y); }
+namespace {
+// The albedo from its layout a: large-scale modulation and fine ground noise (wavelength >= 2 gsd), clamped.
+// large, fine: the seeds of their noises; inv_fine: 1 / the fine noise's wavelength.
+inline double modulate(double a, double X, double Y, uint64_t large, uint64_t fine, double inv_fine, AlbedoMemo& mm) {
+  a *= 1 + 0.15 * value_noise(large, X * (1.0 / 180), Y * (1.0 / 180), mm.large);
+  a += 0.025 * value_noise(fine, X * inv_fine, Y * inv_fine, mm.fine);
+  return std::clamp(a, 0.02, 0.98);
+}
+}  // namespace
+
+double SynthTexture::albedo(double X, double Y) const {
+  return modulate(layout(X, Y), X, Y, noise_seed_[3], noise_seed_[4], inv_fine_, memo());
+}
 
 void SynthTexture::albedo_n(long n, const double* X, const double* Y, double* out) const {
   for (long i = 0; i < n; ++i) out[i] = layout(X[i], Y[i]);
-  for (long i = 0; i < n; ++i) out[i] = modulate(out[i], X[i], Y[i]);
+  AlbedoMemo& mm = memo();
+  for (long i = 0; i < n; ++i) out[i] = modulate(out[i], X[i], Y[i], noise_seed_[3], noise_seed_[4], inv_fine_, mm);
 }
 
 double SynthTexture::layout(double X, double Y) const {
@@ -312,12 +325,5 @@ double SynthTexture::layout(double X, double Y) const {
   return a;
 }
 
-double SynthTexture::modulate(double a, double X, double Y) const {
-  AlbedoMemo& mm = memo();
-  // Large-scale modulation and fine ground noise (wavelength >= 2 gsd).
-  a *= 1 + 0.15 * value_noise(noise_seed_[3], X * (1.0 / 180), Y * (1.0 / 180), mm.large);
-  a += 0.025 * value_noise(noise_seed_[4], X * inv_fine_, Y * inv_fine_, mm.fine);
-  return std::clamp(a, 0.02, 0.98);
-}
 
 }  // namespace tpkit

@@ -28,8 +28,7 @@ class SynthTexture {
   double farmland(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const;
   double urban(int64_t bi, int64_t bj, double lu, double lv, double u, double v) const;
   double woodland(double u, double v) const;
-  double layout(double X, double Y) const;                      // albedo before the two (X, Y) noises
-  double modulate(double a, double X, double Y) const;          // ... and after
+  double layout(double X, double Y) const;  // albedo before its two (X, Y) noises (synth_texture.cpp: modulate)
   uint64_t seed_ = 1;
   uint64_t noise_seed_[5] = {};   // hash(seed_, k) of the value-noise streams k = 20, 30, 31, 50, 51
   double gsd_ = 0.5, ew_ = 0.5;   // ground sampling distance, edge width (m)
