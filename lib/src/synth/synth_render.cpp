@@ -20,12 +20,21 @@
 // (1.14 Newton steps a node on the default scene), every other node by an exact cast; an occluded sliver
 // narrower than the coarse cell can be missed. Each node row is computed left to right from the coarse
 // lattice only, so a pixel does not depend on strip or thread.
+// Where the time goes: each node's Newton start waits for its left neighbour's result, so the rows of a
+// group of four are stepped in lockstep (SynthTerrain::refine_lanes, on each terrain cell's power-basis
+// polynomial): four independent chains the CPU overlaps. The radiances of the group follow in one call
+// (SynthScene::radiance_n: layout, then noises and shading in passes); the texture keeps what it drew
+// for the last block, parcel, lot, road and noise cell (synth_texture.cpp). Both give the pixels of the
+// straightforward loop (bench_synth --compare: 0 DN), only faster.
 // Agreement, measured (bench_synth --agreement 1024 64, default scene, noise 0, the middle 64 rows of
 // each view): fast - exact reference 2.18 DN RMS (max 52 DN, at roof rims and hedges) at n = 4, 0.26 DN
 // at n = 8; the exact 4 x 4 and 8 x 8 renderings differ by 0.75 DN RMS, the sensor noise is 2 DN. The
 // interpolation smooths the finest texture a little; bench_match_accuracy's triplet errors on the
 // synthetic truth stay as they were (man/tp-synth.1, PERFORMANCE). Radiance evaluations a pixel: 4
-// nodes instead of 16 samples; 0.72 us instead of 3.5 us a pixel a view (bench_synth BM_RenderStrip).
+// nodes instead of 16 samples; 0.42 us a pixel a view (BM_RenderStrip/0: 13.7 ms for 32 x 1024 px;
+// 0.52 us with bench_synth --agreement, noise 0) against 3.5 us for the first renderer and 0.72 us
+// (23.6 ms; --agreement 0.77) before the lockstep rows and the texture's memory, back to back on the
+// shared 2-core machine.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
