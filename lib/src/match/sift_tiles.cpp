@@ -121,6 +121,8 @@ Keypoints ranked_tile(TileResult r, const Tile& t, const std::string& path) {
 }
 }  // namespace
 
+int concurrent_sift_calls(int threads) { return std::max(1, threads / 2); }
+
 std::vector<Tile> tiles_meeting(const std::vector<Tile>& grid, double x0, double y0, double x1, double y1) {
   std::vector<Tile> out;
   for (const Tile& t : grid)
@@ -156,7 +158,7 @@ std::vector<Keypoints> detect_tiles_ranked(const ImageSource& src, const SiftOpt
       ++r1;
     }
     const Raster band = read_valid_region(src, xa, ya, xb - xa, yb - ya);
-    const int workers = std::min<int>(threads, static_cast<int>(r1 - r0));
+    const int workers = std::min<int>(concurrent_sift_calls(threads), static_cast<int>(r1 - r0));
     // OpenCV parallelises inside each tile on its own pool, sized once per process (opencv_threads.hpp)
     parallel_for(r1 - r0, workers, [&](size_t k) {
       res[r0 + k] = ranked_tile(detect_tile(src, band, o, st, tiles[r0 + k]), tiles[r0 + k], src.path);
