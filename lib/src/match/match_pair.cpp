@@ -283,7 +283,7 @@ RelativeBlur choose_relative_blur(const ImageSource& a, const ImageSource& b, co
 }
 
 // 5b. The local-mean high-pass of both images (radiometric_highpass.hpp): o.highpass when given, else
-// chosen on up to 500 records spread evenly over the list (after the relative blur), each candidate a
+// chosen on up to 300 records spread evenly over the list (after the relative blur), each candidate a
 // refinement of that sample scored by the spread of its refined positions about their own affine
 // epipolar geometry. Needs the pair's epipolar geometry (F) and 50 records: otherwise none.
 HighpassChoice choose_pair_highpass(const ImageSource& a, const ImageSource& b, const std::vector<Rec>& recs,
@@ -295,7 +295,7 @@ HighpassChoice choose_pair_highpass(const ImageSource& a, const ImageSource& b, 
     return hc;
   }
   if (!F || recs.size() < 50) return hc;
-  const RecordSample sample = sample_records(recs, A0, 500);
+  const RecordSample sample = sample_records(recs, A0, 300);
   hc = choose_highpass([&](double sigma) {
     std::vector<Rec> s = sample.recs;
     refine_records(a, b, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false);

@@ -60,11 +60,10 @@ HighpassChoice choose_highpass(const std::function<double(double)>& spread, cons
     const double v = spread(s);
     c.tried.push_back(s);
     c.tried_spread.push_back(v);
-    if (std::isfinite(v) && v < best) {
-      best = v;
-      c.sigma = s;
-      c.spread = v;
-    }
+    if (!(std::isfinite(v) && v < best)) break;  // no better than the last: larger sigmas are not tried
+    best = v;
+    c.sigma = s;
+    c.spread = v;
   }
   return c;
 }

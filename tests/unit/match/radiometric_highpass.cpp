@@ -96,8 +96,13 @@ TEST(RadiometricHighpass, ChoosesTheLeastSpreadBeyondTheGain) {
   // a same-date pair: filtering adds noise; and a gain under 10% is not taken
   EXPECT_EQ(choose_highpass(table({{0, 0.023}, {1, 0.027}, {2, 0.026}})).sigma, 0);
   EXPECT_EQ(choose_highpass(table({{0, 0.050}, {1, 0.046}, {2, 0.047}})).sigma, 0);
-  EXPECT_EQ(choose_highpass(table({{0, 0.050}, {1, 0.046}, {2, 0.040}})).sigma, 2);
-  // nothing to judge by: none; a candidate that cannot be judged never wins
+  EXPECT_EQ(choose_highpass(table({{0, 0.050}, {1, 0.040}, {2, 0.030}})).sigma, 2);
+  // the search stops at the first candidate that does not improve: 2 is not tried after a poor 1
+  const HighpassChoice s = choose_highpass(table({{0, 0.050}, {1, 0.049}, {2, 0.030}}));
+  EXPECT_EQ(s.sigma, 0);
+  EXPECT_EQ(s.tried.size(), 1u);
+  // nothing to judge by: none; a candidate that cannot be judged stops the search
   EXPECT_EQ(choose_highpass(table({{0, kNan}, {1, 0.01}, {2, 0.01}})).sigma, 0);
-  EXPECT_EQ(choose_highpass(table({{0, 0.05}, {1, kNan}, {2, 0.03}})).sigma, 2);
+  EXPECT_EQ(choose_highpass(table({{0, 0.05}, {1, kNan}, {2, 0.03}})).sigma, 0);
+  EXPECT_EQ(choose_highpass(table({{0, 0.05}, {1, 0.03}, {2, kNan}})).sigma, 1);
 }

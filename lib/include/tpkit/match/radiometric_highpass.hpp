@@ -40,8 +40,9 @@ struct HighpassChoice {
   long samples = 0;          // matches in the sample (set by the caller)
 };
 
-// Evaluates spread(0) and spread(c) for each candidate c and keeps the candidate with the least spread
-// when it is below (1 - min_gain) times spread(0); otherwise 0. A NaN spread never wins.
+// Evaluates spread(0), then the candidates in order (increasing sigma) while each improves on the best
+// so far, the first by more than min_gain (relative): the last that did is chosen, 0 when none did. A
+// NaN spread stops the search. A same-date pair so costs two evaluations.
 HighpassChoice choose_highpass(const std::function<double(double)>& spread, const std::vector<double>& candidates = {1.0, 2.0},
                                double min_gain = 0.1);
 
