@@ -446,7 +446,9 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
 
 Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1, Keypoints K2, const PairMatchOptions& o,
                         PairMatchStats* stats) {
-  release_large_blocks();  // the detection's pyramids, kept for reuse, are not needed from here on
+  // The detection's pyramids, kept for reuse, are not needed from here on, unless detection goes on beside
+  // this pair (match_every_pair: live_threads set), whose next image reuses them.
+  if (!o.live_threads) release_large_blocks();
   PairMatchStats st;
   auto clock = std::chrono::steady_clock::now();
   auto lap = [&clock](double& out) {
@@ -464,6 +466,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   const std::vector<DescriptorMatch> put = putative_matches(a, K1, K2, o, cr, st);
   K1.desc.release();
   K2.desc.release();
+  if (!o.live_threads) release_large_blocks();  // the descriptors' blocks went back to the pool: refinement has no use for them
   lap(st.seconds[1]);
 
   AffineFundamentalResult rr;

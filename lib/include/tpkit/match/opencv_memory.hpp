@@ -17,8 +17,8 @@ namespace tpkit {
 // at start-up, before the first OpenCV call; later calls do nothing.
 void use_large_page_mat_allocator();
 
-// Returns the freed large blocks kept for reuse to the system (detection calls it when an image is done,
-// so that matching and refinement have that memory).
+// Returns the freed large blocks kept for reuse to the system. A pair's matching calls it when it starts
+// (the pyramids) and once its descriptors are freed, unless detection goes on beside it.
 void release_large_blocks();
 
 }  // namespace tpkit
