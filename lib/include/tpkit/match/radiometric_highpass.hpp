@@ -7,9 +7,9 @@
 // sample of the verified matches, and the one whose refined positions lie closest to their own epipolar
 // geometry wins (the spread across the epipolar lines is the part of the position error a pair can see;
 // along them it is parallax). tp-synth 1024² pairs, median error of the correct matches against the
-// truth, and the spread the choice sees: same date 0.052 px unfiltered, 0.063 at sigma 1 (spread 0.023
-// vs 0.027); second date 0.114 -> 0.073 (spread 0.065 -> 0.042); second date + clouds + blur 1.5 0.232
-// -> 0.114 (0.160 -> 0.095); blur 1.5 alone 0.105 -> 0.130 (0.043 -> 0.059).
+// truth unfiltered -> at sigma 1 px, and the spreads the choice sees: same date 0.052 -> 0.063 px (spread
+// 0.023 -> 0.027); second date 0.114 -> 0.073 (0.065 -> 0.042); second date + clouds + blur 1.5 0.232
+// -> 0.114 (0.160 -> 0.095; 2 px, chosen, 0.100); blur 1.5 alone 0.105 -> 0.130 (0.043 -> 0.059).
 //
 // Conventions: sigma in pixels of each image; 0 filters nothing. Spreads in pixels of image 2.
 #pragma once
