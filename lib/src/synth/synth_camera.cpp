@@ -30,20 +30,6 @@ void SynthCamera::prepare() {
   }
 }
 
-void SynthCamera::ray(double x, double y, double z_top, Eigen::Vector3d& o, Eigen::Vector3d& d) const {
-  if (affine) {
-    // Origin: the ray's point at height z_top.
-    const Eigen::Vector2d rhs(x - P(0, 3) - P(0, 2) * z_top, y - P(1, 3) - P(1, 2) * z_top);
-    const Eigen::Vector2d XY = inv_.topLeftCorner<2, 2>() * rhs;
-    o = Eigen::Vector3d(XY.x(), XY.y(), z_top);
-    d = dir_;
-  } else {
-    o = centre_;
-    d = (inv_ * Eigen::Vector3d(x, y, 1)).normalized();
-    if (d.z() > 0) d = -d;
-  }
-}
-
 SynthCamera make_synth_camera(bool affine, double along, double cross, double roll, double altitude, double focal,
                               const Eigen::Vector3d& centre, long size) {
   const Eigen::Vector3d to_sat = Eigen::Vector3d(std::tan(cross), std::tan(along), 1).normalized();

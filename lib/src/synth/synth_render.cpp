@@ -54,6 +54,7 @@
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
+#include "tpkit/synth/synth_camera.hpp"
 #include "tpkit/synth/synth_conditions.hpp"
 #include "tpkit/synth/synth_noise.hpp"
 #include "tpkit/synth/synth_render.hpp"
@@ -64,12 +65,32 @@
 namespace tpkit {
 
 namespace {
-// Standard normal deviate from a hash (Box-Muller on two 53-bit uniforms).
-double gauss(uint64_t h) {
-  const double u1 = (static_cast<double>(synth::mix64(h) >> 11) + 1) * (1.0 / 9007199254740993.0);
-  const double u2 = synth::unit(synth::mix64(h ^ 0xabcdef12345ULL));
-  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * 3.14159265358979323846 * u2);
-}
+// synth_finish_dn with what depends on the view only worked out once (a rendered row finishes its pixels
+// with one of these): the same values.
+class DnFinish {
+ public:
+  DnFinish(const SynthScene& scene, int view)
+      : p_(scene.params()), view_(view), gain_(scene.gain(view)), offset_(scene.offset(view)),
+        noise_seed_(synth::hash(p_.seed, 0x401e, view)), conditions_(synth_has_conditions(p_)) {}
+  double operator()(long x, long y, double radiance) const {
+    double dn = gain_ * radiance + offset_;
+    if (p_.noise > 0) dn += p_.noise * synth::normal(synth::hash(noise_seed_, y, x));
+    if (conditions_) dn = synth_condition_dn(p_, view_, x, dn);
+    // std::clamp(std::round(dn), 0, 4095) without round's library call: clamped first (the same result),
+    // then rounded half away from zero by its integer part (exact below 2^52); nan (never made) gives 0.
+    if (!(dn > 0)) return 0;
+    dn = std::min(dn, 4095.0);
+    const double whole = static_cast<double>(static_cast<long>(dn));
+    return whole + static_cast<double>(dn - whole >= 0.5);  // (no branch: half the pixels round up)
+  }
+
+ private:
+  const SynthParams& p_;
+  int view_;
+  double gain_, offset_;
+  uint64_t noise_seed_;
+  bool conditions_;
+};
 
 // Floor of a / b for b > 0.
 long floor_div(long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
@@ -98,11 +119,7 @@ SynthNodeFilter synth_node_filter(int n) {
 }
 
 double synth_finish_dn(const SynthScene& scene, int view, long x, long y, double radiance) {
-  const SynthParams& p = scene.params();
-  double dn = scene.gain(view) * radiance + scene.offset(view);
-  if (p.noise > 0) dn += p.noise * gauss(synth::hash(synth::hash(p.seed, 0x401e, view), y, x));
-  if (synth_has_conditions(p)) dn = synth_condition_dn(p, view, x, dn);
-  return std::clamp(std::round(dn), 0.0, 4095.0);
+  return DnFinish(scene, view)(x, y, radiance);
 }
 
 void synth_reference_rows(const SynthScene& scene, int view, long y0, long rows, uint16_t* out) {
@@ -135,12 +152,14 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
   const long C0 = floor_div(I0, kCoarse), C1 = floor_div(I1, kCoarse) + 1;  // coarse columns
   const long R0 = floor_div(J0, kCoarse), R1 = floor_div(J1, kCoarse) + 1;  // coarse rows
   const long NC = C1 - C0 + 1;
+  const SynthCamera& cam = camera_(view);  // rays as ray() gives them, inline
+  const double z_top = z_top_();
   Eigen::Vector3d o, d;
   // Stage 1: exact casts on the coarse lattice (1 mm is plenty for a starting guess and the smoothness test).
   std::vector<double> tc(static_cast<size_t>((R1 - R0 + 1) * NC));
   for (long R = R0; R <= R1; ++R)
     for (long C = C0; C <= C1; ++C) {
-      ray(view, static_cast<double>(C * kCoarse) / m, static_cast<double>(R * kCoarse) / m, o, d);
+      cam.ray(static_cast<double>(C * kCoarse) / m, static_cast<double>(R * kCoarse) / m, z_top, o, d);
       const auto t = terrain_().intersect(o, d, 1e-3);
       tc[static_cast<size_t>((R - R0) * NC + (C - C0))] = t ? *t : nan;
     }
@@ -179,19 +198,31 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
       rw[k].fy = static_cast<double>(J - R * kCoarse) / kCoarse;
       rw[k].res1 = rw[k].res2 = nan;
     }
+    // Coarse cell C of the rows' nodes I (its corners and whether it is smooth: per row, once a cell).
+    long C = floor_div(I0, kCoarse) - 1;
+    double corner[kRowGroup][4];
+    bool cell_smooth[kRowGroup];
     for (long I = I0; I <= I1; ++I) {
+      if (I >= (C + 1) * kCoarse) {
+        C = floor_div(I, kCoarse);
+        for (long k = 0; k < nk; ++k) {
+          const Row& w = rw[k];
+          double* q = corner[k];
+          q[0] = w.c0[C - C0], q[1] = w.c0[C - C0 + 1], q[2] = w.c1[C - C0], q[3] = w.c1[C - C0 + 1];
+          cell_smooth[k] = smooth(q[0], q[1], q[2], q[3]);
+        }
+      }
       // Node I of every row of the group: Newton from the start where the cell is smooth (t nan: not)...
       Eigen::Vector3d o[kRowGroup], d[kRowGroup];
       Eigen::Vector2d grad[kRowGroup];
       double t[kRowGroup], bil[kRowGroup];
-      const long C = floor_div(I, kCoarse);
       const double fx = static_cast<double>(I - C * kCoarse) / kCoarse;
       for (long k = 0; k < nk; ++k) {
         Row& w = rw[k];
-        const double t00 = w.c0[C - C0], t10 = w.c0[C - C0 + 1], t01 = w.c1[C - C0], t11 = w.c1[C - C0 + 1];
-        ray(view, static_cast<double>(I) / m, static_cast<double>(Jg + k) / m, o[k], d[k]);
+        cam.ray(static_cast<double>(I) / m, static_cast<double>(Jg + k) / m, z_top, o[k], d[k]);
         t[k] = bil[k] = nan;
-        if (smooth(t00, t10, t01, t11)) {
+        if (cell_smooth[k]) {
+          const double t00 = corner[k][0], t10 = corner[k][1], t01 = corner[k][2], t11 = corner[k][3];
           const double fy = w.fy;
           bil[k] = (1 - fy) * ((1 - fx) * t00 + fx * t10) + fy * ((1 - fx) * t01 + fx * t11);
           const double carry = std::isfinite(w.res2) ? 2 * w.res1 - w.res2 : std::isfinite(w.res1) ? w.res1 : 0;
@@ -253,11 +284,12 @@ void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const 
       for (long k = 0; k <= 2 * r; ++k) s += flt.w[static_cast<size_t>(k)] * p[k];
       hrow[static_cast<size_t>(J * W + x)] = s;
     }
+  const DnFinish finish(*this, view);
   for (long j = 0; j < rows; ++j)
     for (long x = 0; x < W; ++x) {
       double s = 0;
       for (long k = 0; k <= 2 * r; ++k) s += flt.w[static_cast<size_t>(k)] * hrow[static_cast<size_t>((m * j + k) * W + x)];
-      out[static_cast<size_t>(j) * W + x] = static_cast<uint16_t>(synth_finish_dn(*this, view, x, y0 + j, s));
+      out[static_cast<size_t>(j) * W + x] = static_cast<uint16_t>(finish(x, y0 + j, s));
     }
 }
 

@@ -443,6 +443,8 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
 
 const SynthTerrain& SynthScene::terrain_() const { return impl_->terrain; }
 const SynthScene* SynthScene::sharp_() const { return impl_->sharp.get(); }
+const SynthCamera& SynthScene::camera_(int view) const { return impl_->cam[static_cast<size_t>(view)]; }
+double SynthScene::z_top_() const { return impl_->z_top; }
 const SynthParams& SynthScene::params() const { return impl_->p; }
 double SynthScene::scene_size() const { return impl_->S; }
 double SynthScene::height(double X, double Y) const { return impl_->terrain.height(X, Y); }
@@ -458,18 +460,22 @@ double SynthScene::radiance(double X, double Y) const {
   return radiance(X, Y, g);
 }
 namespace {
-// Ambient + Lambert: the cosine of the sun's angle to the normal (-g, 1) / |(-g, 1)|, one division.
-inline double shade(const Eigen::Vector3d& s, double gx, double gy) {
-  const double cosine = (s.z() - gx * s.x() - gy * s.y()) / std::sqrt(gx * gx + gy * gy + 1);
+// Ambient + Lambert: the cosine of the sun's angle to the normal (-g, 1) / |(-g, 1)|, one division
+// (sx, sy, sz: the sun's direction).
+inline double shade(double sx, double sy, double sz, double gx, double gy) {
+  const double cosine = (sz - gx * sx - gy * sy) / std::sqrt(gx * gx + gy * gy + 1);
   return 0.3 + 0.7 * std::max(0.0, cosine);
 }
 }  // namespace
 double SynthScene::radiance(double X, double Y, const Eigen::Vector2d& g) const {
-  return impl_->texture.albedo(X, Y) * shade(impl_->sun, g.x(), g.y());
+  const Eigen::Vector3d& s = impl_->sun;
+  return impl_->texture.albedo(X, Y) * shade(s.x(), s.y(), s.z(), g.x(), g.y());
 }
 void SynthScene::radiance_n(long n, const double* X, const double* Y, const double* gx, const double* gy, double* out) const {
   impl_->texture.albedo_n(n, X, Y, out);
-  for (long i = 0; i < n; ++i) out[i] *= shade(impl_->sun, gx[i], gy[i]);
+  // the sun in locals: out cannot alias them, so the loop runs two points an instruction
+  const double sx = impl_->sun.x(), sy = impl_->sun.y(), sz = impl_->sun.z();
+  for (long i = 0; i < n; ++i) out[i] *= shade(sx, sy, sz, gx[i], gy[i]);
 }
 int SynthScene::views() const { return impl_->p.views; }
 bool SynthScene::is_block() const { return synth_is_block(impl_->p); }

@@ -194,7 +194,8 @@ SynthTerrain::SynthTerrain(uint64_t seed, double scene, double relief, double sp
   slope_max_ = *std::max_element(cslope_.begin(), cslope_.end());
 }
 
-double SynthTerrain::eval(double u, double v, double* du, double* dv) const {
+// Inline: the exact casts (intersect) evaluate the height through it at every step.
+[[gnu::always_inline]] inline double SynthTerrain::eval(double u, double v, double* du, double* dv) const {
   // std::max first: a nan position (a diverged Newton start) becomes the grid's edge instead of reaching
   // the integer conversion below, which it would overflow
   u = std::min(std::max(1.0, u), static_cast<double>(nx_ - 2));
@@ -292,7 +293,8 @@ void SynthTerrain::refine_lanes(int n, const Eigen::Vector3d* o, const Eigen::Ve
 
 std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tol_t) const {
   if (!(d.z() < 0)) return std::nullopt;
-  auto f = [&](double t) { return o.z() + t * d.z() - height(o.x() + t * d.x(), o.y() + t * d.y()); };
+  // ray height above the terrain: height() written out, with eval inline
+  auto f = [&](double t) { return o.z() + t * d.z() - eval((o.x() + t * d.x() - gx0_) / h_, (o.y() + t * d.y() - gy0_) / h_, nullptr, nullptr); };
   const double t0 = std::max(0.0, (o.z() - zmax_) / -d.z());
   const double t1 = (o.z() - zmin_) / -d.z();
   if (!(t1 >= t0)) return std::nullopt;

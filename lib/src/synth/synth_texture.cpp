@@ -10,6 +10,7 @@ namespace tpkit {
 
 using synth::hash;
 using synth::lerp;
+using synth::sin_turns;
 using synth::smoothstep;
 using synth::uniform;
 using synth::value_noise;
@@ -25,21 +26,6 @@ inline double rect_sd(double x, double y, double cx, double cy, double hx, doubl
   // the length of (ox, oy); sqrt(x * x) is x exactly, so the square root only where both are positive
   const double out = oy == 0 ? ox : ox == 0 ? oy : std::sqrt(ox * ox + oy * oy);
   return -(out + std::min(std::max(qx, qy), 0.0));
-}
-// sin(2 pi w) without the library call (the crop rows take one a sample): w less its nearest quarter turn
-// n / 4, then Cephes' sine and cosine polynomials on [-pi/4, pi/4] (error ~1e-16), the pair picked and
-// signed by n mod 4 without a branch. It differs from std::sin(2 pi w) by less than the rounding of 2 pi w
-// (2.6e-12 at w = 3000 turns, i.e. < 1e-9 DN after the crop rows' amplitude).
-inline double sin_turns(double w) {
-  const int64_t n = synth::floor_int(4 * w + 0.5);
-  const double x = 2 * kPi * (w - 0.25 * static_cast<double>(n)), z = x * x;
-  const double sn = x + x * z * (((((1.58962301576546568060E-10 * z - 2.50507477628578072866E-8) * z + 2.75573136213857245213E-6) * z -
-                                   1.98412698295895385996E-4) * z + 8.33333333332211858878E-3) * z - 1.66666666666666307295E-1);
-  const double cs = 1.0 - 0.5 * z + z * z * (((((-1.13585365213876817300E-11 * z + 2.08757008419747316778E-9) * z -
-                                                 2.75573141792967388112E-7) * z + 2.48015872888517045348E-5) * z -
-                                               1.38888888888730564116E-3) * z + 4.16666666666665929218E-2);
-  const double pick[2] = {sn, cs};
-  return pick[n & 1] * static_cast<double>(1 - (n & 2));
 }
 // Partition of [0, L) into n cells with seeded random widths; returns the cell of x and the distance
 // from x to the nearest cell boundary (0 and L included).

@@ -36,6 +36,7 @@
 #include "tpkit/synth/synth_rpc.hpp"
 
 namespace tpkit {
+struct SynthCamera;
 
 struct SynthParams {
   uint64_t seed = 1;
@@ -151,6 +152,9 @@ class SynthScene {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   const SynthTerrain& terrain_() const;
+  // The camera of `view` and the height of its ray origins (ray() is camera_(view).ray(x, y, z_top_(), ..)).
+  const SynthCamera& camera_(int view) const;
+  double z_top_() const;
   // With SynthParams::blur > 0: this scene seen by ideal sensors (no blur, no noise, no nodata band), the
   // rendering sensor_rows blurs; nullptr otherwise.
   const SynthScene* sharp_() const;
