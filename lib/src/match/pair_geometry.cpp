@@ -13,6 +13,7 @@
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/match/match_descriptors.hpp"
+#include "tpkit/match/root_sift.hpp"
 #include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
@@ -57,6 +58,7 @@ CoarseFeatures coarse_features(const ImageSource& src, const SiftOptions& o, con
   CoarseFeatures out;
   auto sift = cv::SIFT::create(g.max_keypoints, o.octave_layers, o.contrast, o.edge, o.sigma);
   sift->detectAndCompute(img, eroded, out.kp, out.desc);
+  out.desc = root_sift(out.desc);
   const double c = (static_cast<double>(f) - 1) / 2;
   for (auto& k : out.kp) {
     k.pt.x = static_cast<float>(f * k.pt.x + c);

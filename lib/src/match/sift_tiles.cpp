@@ -12,6 +12,7 @@
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
+#include "tpkit/match/root_sift.hpp"
 
 namespace tpkit {
 
@@ -19,7 +20,7 @@ std::string detector_tag(const SiftOptions& o, const ImageSource& src) {
   std::ostringstream s;
   s << "opencv-sift " << CV_VERSION << " band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
     << " max_per_tile=" << o.max_per_tile << " contrast=" << format_number(o.contrast) << " edge=" << format_number(o.edge)
-    << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " stretch=" << format_number(o.stretch_lo)
+    << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " descriptor=rootsift stretch=" << format_number(o.stretch_lo)
     << "," << format_number(o.stretch_hi) << " ids=tile-rank";
   if (src.nodata) s << " nodata=" << format_number(*src.nodata);
   if (!src.mask.empty()) s << " mask=" << src.mask;
@@ -61,6 +62,7 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
   std::vector<cv::KeyPoint> kp;
   cv::Mat desc;
   sift->detectAndCompute(img, any_invalid ? eroded : cv::Mat(), kp, desc);
+  desc = root_sift(desc);
   std::vector<int> keep;
   for (int i = 0; i < static_cast<int>(kp.size()); ++i) {
     double x = kp[i].pt.x + t.rx0, y = kp[i].pt.y + t.ry0;
@@ -84,7 +86,7 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
     k.pt.y += static_cast<float>(t.ry0);
     k.class_id = t.index;
     out.kp.push_back(k);
-    desc.row(keep[j]).convertTo(out.desc.row(static_cast<int>(j)), CV_8U);  // exact: integer values
+    desc.row(keep[j]).copyTo(out.desc.row(static_cast<int>(j)));
   }
   return out;
 }

@@ -1,0 +1,39 @@
+#include "tpkit/match/root_sift.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace tpkit {
+
+namespace {
+template <typename T>
+void root_row(const T* in, uint8_t* out, int n) {
+  double l1 = 0;
+  for (int k = 0; k < n; ++k) l1 += static_cast<double>(in[k]);
+  if (!(l1 > 0)) {
+    std::fill(out, out + n, uint8_t{0});
+    return;
+  }
+  for (int k = 0; k < n; ++k) {
+    const double v = std::max(0.0, static_cast<double>(in[k])) / l1;
+    out[k] = static_cast<uint8_t>(std::min(255.0, std::round(512.0 * std::sqrt(v))));
+  }
+}
+}  // namespace
+
+cv::Mat root_sift(const cv::Mat& sift) {
+  if (sift.empty()) return cv::Mat(0, sift.cols > 0 ? sift.cols : 128, CV_8U);
+  if (sift.channels() != 1 || (sift.depth() != CV_32F && sift.depth() != CV_8U))
+    throw std::invalid_argument("root_sift: descriptors must be one-channel CV_32F or CV_8U rows");
+  cv::Mat out(sift.rows, sift.cols, CV_8U);
+  for (int r = 0; r < sift.rows; ++r) {
+    if (sift.depth() == CV_32F)
+      root_row(sift.ptr<float>(r), out.ptr<uint8_t>(r), sift.cols);
+    else
+      root_row(sift.ptr<uint8_t>(r), out.ptr<uint8_t>(r), sift.cols);
+  }
+  return out;
+}
+
+}  // namespace tpkit
