@@ -61,6 +61,7 @@
 #include "tpkit/synth/synth_scene.hpp"
 #include "tpkit/synth/synth_terrain.hpp"
 #include "tpkit/core/tool_support.hpp"
+#include "synth_hot.hpp"
 
 namespace tpkit {
 
@@ -140,7 +141,7 @@ void synth_reference_rows(const SynthScene& scene, int view, long y0, long rows,
     }
 }
 
-void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const {
+TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const {
   const long W = params().size;
   const SynthNodeFilter flt = synth_node_filter(static_cast<int>(params().supersample));
   const long m = flt.m, r = flt.r;

@@ -19,6 +19,7 @@
 #include "tpkit/synth/synth_terrain.hpp"
 #include "tpkit/synth/synth_texture.hpp"
 #include "tpkit/core/text_table.hpp"
+#include "synth_hot.hpp"
 
 namespace tpkit {
 
@@ -471,7 +472,7 @@ double SynthScene::radiance(double X, double Y, const Eigen::Vector2d& g) const 
   const Eigen::Vector3d& s = impl_->sun;
   return impl_->texture.albedo(X, Y) * shade(s.x(), s.y(), s.z(), g.x(), g.y());
 }
-void SynthScene::radiance_n(long n, const double* X, const double* Y, const double* gx, const double* gy, double* out) const {
+TPKIT_SYNTH_HOT void SynthScene::radiance_n(long n, const double* X, const double* Y, const double* gx, const double* gy, double* out) const {
   impl_->texture.albedo_n(n, X, Y, out);
   // the sun in locals: out cannot alias them, so the loop runs two points an instruction
   const double sx = impl_->sun.x(), sy = impl_->sun.y(), sz = impl_->sun.z();
