@@ -111,13 +111,28 @@ struct Road {
   double half = 0, asphalt = 0;
   uint64_t noise_seed = 0;
 };
+// Road line k of axis 0 (u = k B) or 1 (v = k B), from the texture's seed.
+Road draw_road(uint64_t seed, int axis, int64_t k) {
+  Road c;
+  const uint64_t rh = hash(seed, 40 + axis, k);
+  c.present = synth::unit(rh) <= 0.45;
+  c.half = 3 + 3 * synth::unit(hash(rh, 1));
+  c.asphalt = 0.2 + 0.25 * synth::unit(hash(rh, 2));
+  c.noise_seed = hash(rh, 3);
+  return c;
+}
+// What layout() draws for a block (bi, bj): its type's hash and the four road lines along its sides
+// (road[axis][e]: line bi + e of axis 0, bj + e of axis 1), one memo test a point for all of them.
+struct BlockLines {
+  uint64_t type = 0;
+  Road road[2][2];
+};
 // What albedo() draws from hashes, kept per thread for the last block, parcel, lot, road and value-noise
 // cell it visited: neighbouring samples nearly always share them (the same values as drawing them afresh).
 struct AlbedoMemo {
   FarmBlock farm;
-  Kept<uint64_t> type;
+  Kept<BlockLines> block;
   Kept<Lot> lot;
-  Kept<Road> road[2];
   Kept<Parcel> parcel;
   synth::NoiseCell pavement, crown[2], field, asphalt, large, fine;
 };
@@ -265,7 +280,16 @@ inline double modulate(double a, double X, double Y, uint64_t large, uint64_t fi
   const int64_t bi = synth::floor_int(u * inv_block_), bj = synth::floor_int(v * inv_block_);
   const double lu = u - bi * block_, lv = v - bj * block_;
   AlbedoMemo& mm = memo();
-  const double type = synth::unit(kept(mm.type, seed_, bi, bj, 0, [&] { return hash(seed_, 1, bi, bj); }));
+  const BlockLines& bl = kept(mm.block, seed_, bi, bj, 0, [&] {
+    BlockLines c;
+    c.type = hash(seed_, 1, bi, bj);
+    for (int e = 0; e < 2; ++e) {
+      c.road[0][e] = draw_road(seed_, 0, bi + e);
+      c.road[1][e] = draw_road(seed_, 1, bj + e);
+    }
+    return c;
+  });
+  const double type = synth::unit(bl.type);
   double a;
   if (type < 0.55)
     a = farmland(bi, bj, lu, lv, u, v);
@@ -279,17 +303,8 @@ inline double modulate(double a, double X, double Y, uint64_t large, uint64_t fi
   // Roads on some whole block-grid lines (u = i B or v = j B), 6..12 m wide, with dashed centre lines.
   for (int axis = 0; axis < 2; ++axis) {
     const double l = axis == 0 ? lu : lv;
-    const int64_t k = (axis == 0 ? bi : bj) + (l > block_ / 2 ? 1 : 0);
     const double dist = std::min(l, block_ - l);
-    const Road& rd = kept(mm.road[axis], seed_, k, 0, 0, [&] {
-      Road c;
-      const uint64_t rh = hash(seed_, 40 + axis, k);
-      c.present = synth::unit(rh) <= 0.45;
-      c.half = 3 + 3 * synth::unit(hash(rh, 1));
-      c.asphalt = 0.2 + 0.25 * synth::unit(hash(rh, 2));
-      c.noise_seed = hash(rh, 3);
-      return c;
-    });
+    const Road& rd = bl.road[axis][l > block_ / 2 ? 1 : 0];  // line (axis == 0 ? bi : bj) + 0 or 1
     if (!rd.present) continue;
     const double half = rd.half;
     if (dist > half + ew_) continue;
