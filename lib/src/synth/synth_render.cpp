@@ -42,6 +42,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -175,7 +176,8 @@ TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint1
   // row left to right, the rows' Newton chains interleaved (they are independent: the CPU overlaps their
   // latencies), then the radiances of the group's nodes.
   const bool conditions = synth_has_conditions(params());
-  std::vector<double> node(static_cast<size_t>(NI * NJ));
+  // (buffers without the zeroing of a std::vector: every element is written before it is read)
+  const std::unique_ptr<double[]> node(new double[static_cast<size_t>(NI * NJ)]);
   struct Row {
     const double* c0;  // coarse parameters above and below the row
     const double* c1;
@@ -186,7 +188,8 @@ TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint1
   };
   constexpr long kRowGroup = SynthTerrain::kLanes;
   // The group's ground points and terrain gradients, row k at k * NI; hx = nan: the ray missed.
-  std::vector<double> hx(static_cast<size_t>(kRowGroup * NI)), hy(hx.size()), hgx(hx.size()), hgy(hx.size());
+  const size_t nh = static_cast<size_t>(kRowGroup * NI);
+  const std::unique_ptr<double[]> hx(new double[nh]), hy(new double[nh]), hgx(new double[nh]), hgy(new double[nh]);
   for (long Jg = J0; Jg <= J1; Jg += kRowGroup) {
     const long nk = std::min(kRowGroup, J1 - Jg + 1);
     Row rw[kRowGroup];
@@ -263,7 +266,7 @@ TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint1
     }
     double* out = &node[static_cast<size_t>((Jg - J0) * NI)];
     if (!conditions && !missed) {
-      radiance_n(nk * NI, hx.data(), hy.data(), hgx.data(), hgy.data(), out);
+      radiance_n(nk * NI, hx.get(), hy.get(), hgx.get(), hgy.get(), out);
       continue;
     }
     for (long i = 0; i < nk * NI; ++i) {
@@ -276,22 +279,30 @@ TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint1
       out[i] = conditions ? synth_condition_radiance(*this, view, hx[h], hy[h], g) : radiance(hx[h], hy[h], g);
     }
   }
-  // Stage 3: the pixel filter, rows then columns: pixel (x, y) = sum_ij w_i w_j node(m x + i, m y + j).
-  std::vector<double> hrow(static_cast<size_t>(NJ * W));
-  for (long J = 0; J < NJ; ++J)
-    for (long x = 0; x < W; ++x) {
-      const double* p = &node[static_cast<size_t>(J * NI + m * x)];  // node I = m x - r
-      double s = 0;
-      for (long k = 0; k <= 2 * r; ++k) s += flt.w[static_cast<size_t>(k)] * p[k];
-      hrow[static_cast<size_t>(J * W + x)] = s;
+  // Stage 3: the pixel filter, rows then columns: pixel (x, y) = sum_ij w_i w_j node(m x + i, m y + j), each
+  // sum from 0 in the order of k, tap by tap over a whole row (loops over x that vectorize).
+  const std::unique_ptr<double[]> hrow(new double[static_cast<size_t>(NJ * W)]);
+  for (long J = 0; J < NJ; ++J) {
+    double* h = &hrow[static_cast<size_t>(J * W)];
+    const double* p = &node[static_cast<size_t>(J * NI)];  // node I = m x - r at p[m x]
+    std::fill(h, h + W, 0.0);
+    for (long k = 0; k <= 2 * r; ++k) {
+      const double wk = flt.w[static_cast<size_t>(k)];
+      for (long x = 0; x < W; ++x) h[x] += wk * p[m * x + k];
     }
+  }
   const DnFinish finish(*this, view);
-  for (long j = 0; j < rows; ++j)
-    for (long x = 0; x < W; ++x) {
-      double s = 0;
-      for (long k = 0; k <= 2 * r; ++k) s += flt.w[static_cast<size_t>(k)] * hrow[static_cast<size_t>((m * j + k) * W + x)];
-      out[static_cast<size_t>(j) * W + x] = static_cast<uint16_t>(finish(x, y0 + j, s));
+  std::vector<double> col(static_cast<size_t>(W));
+  for (long j = 0; j < rows; ++j) {
+    std::fill(col.begin(), col.end(), 0.0);
+    for (long k = 0; k <= 2 * r; ++k) {
+      const double wk = flt.w[static_cast<size_t>(k)];
+      const double* h = &hrow[static_cast<size_t>((m * j + k) * W)];
+      for (long x = 0; x < W; ++x) col[static_cast<size_t>(x)] += wk * h[x];
     }
+    for (long x = 0; x < W; ++x)
+      out[static_cast<size_t>(j) * W + x] = static_cast<uint16_t>(finish(x, y0 + j, col[static_cast<size_t>(x)]));
+  }
 }
 
 namespace {

@@ -100,8 +100,23 @@ inline double value_noise(uint64_t seed, double x, double y, NoiseCell& cell) {
     // hash(seed, ix + a, iy + b) for a, b in {0, 1}, sharing the products (the same values as four hash calls)
     const uint64_t h00 = seed + static_cast<uint64_t>(ix) * 0xd1b54a32d192ed03ULL + static_cast<uint64_t>(iy) * 0xaef17502108ef2d9ULL;
     const uint64_t h10 = h00 + 0xd1b54a32d192ed03ULL, h01 = h00 + 0xaef17502108ef2d9ULL, h11 = h10 + 0xaef17502108ef2d9ULL;
-    cell = {true, seed, ix, iy, 2 * unit(mix64(h00)) - 1, 2 * unit(mix64(h10)) - 1, 2 * unit(mix64(h01)) - 1,
-            2 * unit(mix64(h11)) - 1};
+    const bool row = cell.valid && cell.seed == seed && cell.iy == iy;
+    if (row && ix == cell.ix + 1) {  // the next cell along x (a rendered row's usual step): two values are the last's
+      cell.v00 = cell.v10;
+      cell.v01 = cell.v11;
+      cell.v10 = 2 * unit(mix64(h10)) - 1;
+      cell.v11 = 2 * unit(mix64(h11)) - 1;
+      cell.ix = ix;
+    } else if (row && ix == cell.ix - 1) {
+      cell.v10 = cell.v00;
+      cell.v11 = cell.v01;
+      cell.v00 = 2 * unit(mix64(h00)) - 1;
+      cell.v01 = 2 * unit(mix64(h01)) - 1;
+      cell.ix = ix;
+    } else {
+      cell = {true, seed, ix, iy, 2 * unit(mix64(h00)) - 1, 2 * unit(mix64(h10)) - 1, 2 * unit(mix64(h01)) - 1,
+              2 * unit(mix64(h11)) - 1};
+    }
   }
   return lerp(lerp(cell.v00, cell.v10, sx), lerp(cell.v01, cell.v11, sx), sy);
 }
