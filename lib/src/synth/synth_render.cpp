@@ -75,8 +75,25 @@ class DnFinish {
       : p_(scene.params()), view_(view), gain_(scene.gain(view)), offset_(scene.offset(view)),
         noise_seed_(synth::hash(p_.seed, 0x401e, view)), conditions_(synth_has_conditions(p_)) {}
   double operator()(long x, long y, double radiance) const {
-    double dn = gain_ * radiance + offset_;
-    if (p_.noise > 0) dn += p_.noise * synth::normal(synth::hash(noise_seed_, y, x));
+    return finish(x, gain_ * radiance + offset_ + (p_.noise > 0 ? p_.noise * synth::normal(synth::hash(noise_seed_, y, x)) : 0.0));
+  }
+  // Row y, x < W: out[x] = (*this)(x, y, radiance[x]), the noise's stages each in a pass over the row
+  // (short independent iterations the CPU overlaps; a whole pixel's chain is too long for it to).
+  void row(long y, long W, const double* radiance, uint16_t* out) {
+    if (!(p_.noise > 0)) {
+      for (long x = 0; x < W; ++x) out[x] = static_cast<uint16_t>(finish(x, gain_ * radiance[x] + offset_));
+      return;
+    }
+    u1_.resize(static_cast<size_t>(W));
+    u2_.resize(static_cast<size_t>(W));
+    for (long x = 0; x < W; ++x) synth::normal_uniforms(synth::hash(noise_seed_, y, x), u1_[x], u2_[x]);
+    for (long x = 0; x < W; ++x) u1_[x] = synth::normal_from(u1_[x], u2_[x]);
+    for (long x = 0; x < W; ++x) out[x] = static_cast<uint16_t>(finish(x, gain_ * radiance[x] + offset_ + p_.noise * u1_[x]));
+  }
+
+ private:
+  // The DN from gain * radiance + offset + noise: the conditions, then rounded and clamped.
+  double finish(long x, double dn) const {
     if (conditions_) dn = synth_condition_dn(p_, view_, x, dn);
     // std::clamp(std::round(dn), 0, 4095) without round's library call: clamped first (the same result),
     // then rounded half away from zero by its integer part (exact below 2^52); nan (never made) gives 0.
@@ -86,12 +103,12 @@ class DnFinish {
     return whole + static_cast<double>(dn - whole >= 0.5);  // (no branch: half the pixels round up)
   }
 
- private:
   const SynthParams& p_;
   int view_;
   double gain_, offset_;
   uint64_t noise_seed_;
   bool conditions_;
+  std::vector<double> u1_, u2_;  // row()'s uniforms, then deviates
 };
 
 // Floor of a / b for b > 0.
@@ -291,7 +308,7 @@ TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint1
       for (long x = 0; x < W; ++x) h[x] += wk * p[m * x + k];
     }
   }
-  const DnFinish finish(*this, view);
+  DnFinish finish(*this, view);
   std::vector<double> col(static_cast<size_t>(W));
   for (long j = 0; j < rows; ++j) {
     std::fill(col.begin(), col.end(), 0.0);
@@ -300,8 +317,7 @@ TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint1
       const double* h = &hrow[static_cast<size_t>((m * j + k) * W)];
       for (long x = 0; x < W; ++x) col[static_cast<size_t>(x)] += wk * h[x];
     }
-    for (long x = 0; x < W; ++x)
-      out[static_cast<size_t>(j) * W + x] = static_cast<uint16_t>(finish(x, y0 + j, col[static_cast<size_t>(x)]));
+    finish.row(y0 + j, W, col.data(), out + static_cast<size_t>(j) * W);
   }
 }
 

@@ -62,10 +62,17 @@ inline double cos_turns(double w) {
 
 // Standard normal deviate from a hash (Box-Muller on two 53-bit uniforms, the first in (0, 1]); the cosine
 // by cos_turns (std::cos(2 pi u2) to ~1e-16: a sensor noise of a few DN moves by ~1e-15 DN).
+// normal(h) in two halves (a renderer's row runs each over its pixels in a pass): the two uniforms from the
+// hash, then the deviate from them.
+inline void normal_uniforms(uint64_t h, double& u1, double& u2) {
+  u1 = (static_cast<double>(mix64(h) >> 11) + 1) * (1.0 / 9007199254740993.0);
+  u2 = unit(mix64(h ^ 0xabcdef12345ULL));
+}
+inline double normal_from(double u1, double u2) { return std::sqrt(-2 * std::log(u1)) * cos_turns(u2); }
 inline double normal(uint64_t h) {
-  const double u1 = (static_cast<double>(mix64(h) >> 11) + 1) * (1.0 / 9007199254740993.0);
-  const double u2 = unit(mix64(h ^ 0xabcdef12345ULL));
-  return std::sqrt(-2 * std::log(u1)) * cos_turns(u2);
+  double u1, u2;
+  normal_uniforms(h, u1, u2);
+  return normal_from(u1, u2);
 }
 
 // 0 below e0, 1 above e1 (e0 < e1), the cubic smoothstep between; outside the ramp, where most samples
