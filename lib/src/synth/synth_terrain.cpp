@@ -61,12 +61,19 @@ inline void bspline_power(const double p[4], double q[4]) {
   P.ku = ku;
   P.kv = kv;
 }
-[[gnu::always_inline]] inline double eval_patch(const float* c, long nx, long ny, double u, double v, SynthTerrain::Patch& P, double& gu,
-                         double& gv) {
+// near: another ray's patch (or nullptr), copied where it is the cell's (the four rows of a renderer's group
+// are 0.25 px apart, mostly in one cell: a copy instead of filling).
+[[gnu::always_inline]] inline double eval_patch(const float* c, long nx, long ny, double u, double v, SynthTerrain::Patch& P,
+                                                const SynthTerrain::Patch* near, double& gu, double& gv) {
   u = std::min(std::max(1.0, u), static_cast<double>(nx - 2));
   v = std::min(std::max(1.0, v), static_cast<double>(ny - 2));
   const long ku = std::min(static_cast<long>(u), nx - 3), kv = std::min(static_cast<long>(v), ny - 3);
-  if (ku != P.ku || kv != P.kv) fill_patch(c, nx, ku, kv, P);
+  if (ku != P.ku || kv != P.kv) {
+    if (near && near->ku == ku && near->kv == kv)
+      P = *near;
+    else
+      fill_patch(c, nx, ku, kv, P);
+  }
   const double s = u - static_cast<double>(ku), r = v - static_cast<double>(kv);
   // Horner in r for every power of s, the lanes holding r^0, r^1 and r^2, r^3 coefficients
   v2d col[4][2];
@@ -267,7 +274,7 @@ TPKIT_SYNTH_HOT void SynthTerrain::refine_lanes(int n, const Eigen::Vector3d* o,
       } else {
         const double u = (ox + tk * dx - gx0_) * ih, v = (oy + tk * dy - gy0_) * ih;
         double gu = 0, gv = 0;
-        const double z = eval_patch(c_.data(), nx_, ny_, u, v, patch[k], gu, gv);
+        const double z = eval_patch(c_.data(), nx_, ny_, u, v, patch[k], k > 0 ? &patch[k - 1] : nullptr, gu, gv);
         const double gx = u > 1 && u < umax ? gu * ih : 0.0, gy = v > 1 && v < vmax ? gv * ih : 0.0;
         const double f = oz + tk * dz - z;
         const double fp = dz - (gx * dx + gy * dy);
