@@ -22,19 +22,23 @@
 // lattice only, so a pixel does not depend on strip or thread.
 // Where the time goes: each node's Newton start waits for its left neighbour's result, so the rows of a
 // group of four are stepped in lockstep (SynthTerrain::refine_lanes, on each terrain cell's power-basis
-// polynomial): four independent chains the CPU overlaps. The radiances of the group follow in one call
-// (SynthScene::radiance_n: layout, then noises and shading in passes); the texture keeps what it drew
-// for the last block, parcel, lot, road and noise cell (synth_texture.cpp). Both give the pixels of the
-// straightforward loop (bench_synth --compare: 0 DN), only faster.
+// polynomial, shared between the group's rays): four independent chains the CPU overlaps. The radiances
+// of the group follow in one call (SynthScene::radiance_n: layout, then noises and shading in passes);
+// the texture keeps what it drew for the last block (its type and road lines), parcel, lot and noise
+// cell, inline in one loop (synth_texture.cpp); a row's sensor noise goes in passes too (DnFinish::row).
+// These inner loops are compiled for the x86-64 baseline and for AVX2, the loader picking one
+// (synth_hot.hpp: the same IEEE operations, no FMA). All of it gives the pixels of the straightforward
+// loop (bench_synth --compare: 0 DN), only faster.
 // Agreement, measured (bench_synth --agreement 1024 64, default scene, noise 0, the middle 64 rows of
 // each view): fast - exact reference 2.18 DN RMS (max 52 DN, at roof rims and hedges) at n = 4, 0.26 DN
 // at n = 8; the exact 4 x 4 and 8 x 8 renderings differ by 0.75 DN RMS, the sensor noise is 2 DN. The
 // interpolation smooths the finest texture a little; bench_match_accuracy's triplet errors on the
 // synthetic truth stay as they were (man/tp-synth.1, PERFORMANCE). Radiance evaluations a pixel: 4
-// nodes instead of 16 samples; 0.42 us a pixel a view (BM_RenderStrip/0: 13.7 ms for 32 x 1024 px;
-// 0.52 us with bench_synth --agreement, noise 0) against 3.5 us for the first renderer and 0.72 us
-// (23.6 ms; --agreement 0.77) before the lockstep rows and the texture's memory, back to back on the
-// shared 2-core machine.
+// nodes instead of 16 samples. Speed, each renderer against the one before it back to back on the shared
+// 2-core machine: the first renderer 3.5 us a pixel a view; 0.72 us (BM_RenderStrip/0, 32 x 1024 px:
+// 23.6 ms); 0.42 us (13.7 ms, the lockstep rows and the texture's memory); 0.34 us, 0.82 times that
+// (12.7 ms against 15.5 at a heavier load; bench_synth --agreement, noise 0: 372 against 448 ms a
+// megapixel a view), i.e. 10 times the first renderer.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
