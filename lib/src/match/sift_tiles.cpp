@@ -62,7 +62,6 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
   std::vector<cv::KeyPoint> kp;
   cv::Mat desc;
   sift->detectAndCompute(img, any_invalid ? eroded : cv::Mat(), kp, desc);
-  desc = root_sift(desc);
   std::vector<int> keep;
   for (int i = 0; i < static_cast<int>(kp.size()); ++i) {
     double x = kp[i].pt.x + t.rx0, y = kp[i].pt.y + t.ry0;
@@ -86,7 +85,7 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
     k.pt.y += static_cast<float>(t.ry0);
     k.class_id = t.index;
     out.kp.push_back(k);
-    desc.row(keep[j]).copyTo(out.desc.row(static_cast<int>(j)));
+    root_sift_row(desc, keep[j], out.desc.ptr<uint8_t>(static_cast<int>(j)));
   }
   return out;
 }

@@ -64,3 +64,14 @@ TEST(RootSift, DistancesAreHellingerDistances) {
     EXPECT_NEAR(cv::norm(ra.row(r), cv::NORM_L2) / 512, 1.0, 0.5 * std::sqrt(128.0) / 512);  // unit vectors
   }
 }
+
+TEST(RootSift, RowByRowAsWhole) {
+  // root_sift_row writes the row root_sift gives, into a caller's buffer
+  cv::Mat a = random_sift_rows(5, 4);
+  cv::Mat whole = root_sift(a);
+  for (int r = 0; r < a.rows; ++r) {
+    uint8_t row[128];
+    root_sift_row(a, r, row);
+    for (int k = 0; k < 128; ++k) EXPECT_EQ(row[k], whole.at<uint8_t>(r, k)) << r << " " << k;
+  }
+}

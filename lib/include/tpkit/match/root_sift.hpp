@@ -20,5 +20,8 @@ namespace tpkit {
 
 // The RootSIFT form of SIFT descriptor rows (see above).
 cv::Mat root_sift(const cv::Mat& sift);
+// The RootSIFT form of row `row` of `sift`, written to out[0 .. sift.cols): for a detector that copies
+// the rows it keeps into its own matrix, with no matrix of them all in between.
+void root_sift_row(const cv::Mat& sift, int row, uint8_t* out);
 
 }  // namespace tpkit
