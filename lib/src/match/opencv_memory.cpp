@@ -61,28 +61,13 @@ class LargeBlocks {
         free_.erase(big);
       }
     }
-    const bool huge = on_huge_pages(n);
-    const size_t len = huge ? size + kLargePage : size;
-    void* p = ::mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) return nullptr;
-    if (!huge) {
-      std::lock_guard<std::mutex> lock(m_);
-      mapped_[p] = size;
-      in_use_ += size;
-      high_ = std::max(high_, in_use_);
-      return p;
-    }
-    // keep the 2 MiB-aligned part, give back the rest
-    const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kLargePage - 1) & ~(uintptr_t(kLargePage) - 1);
-    const size_t head = aligned - start, tail = len - head - size;
-    if (head) ::munmap(p, head);
-    if (tail) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
-    ::madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);  // advice only: without huge pages, ordinary memory
+    void* p = map_block(size, on_huge_pages(n));
+    if (!p) return nullptr;
     std::lock_guard<std::mutex> lock(m_);
-    mapped_[reinterpret_cast<void*>(aligned)] = size;
+    mapped_[p] = size;
     in_use_ += size;
     high_ = std::max(high_, in_use_);
-    return reinterpret_cast<void*>(aligned);
+    return p;
   }
   void give(void* p) {
     std::lock_guard<std::mutex> lock(m_);
@@ -106,6 +91,21 @@ class LargeBlocks {
   }
 
  private:
+  // `size` bytes of fresh memory: 2 MiB-aligned and advised for huge pages when `huge`, else page-aligned.
+  static void* map_block(size_t size, bool huge) {
+    const size_t len = huge ? size + kLargePage : size;
+    void* p = ::mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) return nullptr;
+    if (!huge) return p;
+    // keep the 2 MiB-aligned part, give back the rest
+    const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kLargePage - 1) & ~(uintptr_t(kLargePage) - 1);
+    const size_t head = aligned - start, tail = len - head - size;
+    if (head) ::munmap(p, head);
+    if (tail) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
+    ::madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);  // advice only: without huge pages, ordinary memory
+    return reinterpret_cast<void*>(aligned);
+  }
+
   std::mutex m_;
   std::multimap<size_t, void*> free_;        // size -> block, free
   std::unordered_map<void*, size_t> mapped_;  // block in use -> its mapped size

@@ -1,6 +1,6 @@
 // SIFT keypoints of one image band, found tile by tile on an 8-bit percentile-stretched rendering
-// (image_tiles.hpp), with stable ids and RootSIFT descriptors (root_sift.hpp). Positions are in the full image's pixels (x = column, y = row,
-// (0, 0) the centre of the top-left pixel). Memory is bounded by one band of tiles (a tile row, full width) and one tile per worker plus the
+// (image_tiles.hpp), with stable ids and RootSIFT descriptors (root_sift.hpp). Positions are in the full
+// image's pixels (x = column, y = row, (0, 0) the centre of the top-left pixel). Memory is bounded by one band of tiles (a tile row, full width) and one tile per worker plus the
 // keypoints and their 128-byte descriptors.
 //
 // Ids: id = t * kIdsPerTile + r, t the index of the detection tile (tile_grid over the whole image,
