@@ -27,7 +27,7 @@
 // the texture keeps what it drew for the last block (its type and road lines), parcel, lot and noise
 // cell, inline in one loop (synth_texture.cpp); a row's sensor noise goes in passes too (DnFinish::row).
 // These inner loops are compiled for the x86-64 baseline and for AVX2, the loader picking one
-// (synth_hot.hpp: the same IEEE operations, no FMA). All of it gives the pixels of the straightforward
+// (core/cpu_dispatch.hpp: the same IEEE operations, no FMA). All of it gives the pixels of the straightforward
 // loop (bench_synth --compare: 0 DN), only faster.
 // Agreement, measured (bench_synth --agreement 1024 64, default scene, noise 0, the middle 64 rows of
 // each view): fast - exact reference 2.18 DN RMS (max 52 DN, at roof rims and hedges) at n = 4, 0.26 DN
@@ -53,10 +53,12 @@
 #include <vector>
 
 #include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/cpu_dispatch.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/formats.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/core/parallel_for.hpp"
+#include "tpkit/core/tool_support.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/synth/synth_camera.hpp"
@@ -65,8 +67,6 @@
 #include "tpkit/synth/synth_render.hpp"
 #include "tpkit/synth/synth_scene.hpp"
 #include "tpkit/synth/synth_terrain.hpp"
-#include "tpkit/core/tool_support.hpp"
-#include "synth_hot.hpp"
 
 namespace tpkit {
 
@@ -163,7 +163,7 @@ void synth_reference_rows(const SynthScene& scene, int view, long y0, long rows,
     }
 }
 
-TPKIT_SYNTH_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const {
+TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const {
   const long W = params().size;
   const SynthNodeFilter flt = synth_node_filter(static_cast<int>(params().supersample));
   const long m = flt.m, r = flt.r;

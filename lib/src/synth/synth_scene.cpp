@@ -15,15 +15,15 @@
 #include <sstream>
 
 #include "tpkit/core/atomic_output.hpp"
+#include "tpkit/core/cpu_dispatch.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/input_file.hpp"
+#include "tpkit/core/text_table.hpp"
 #include "tpkit/core/version.hpp"
 #include "tpkit/synth/synth_camera.hpp"
 #include "tpkit/synth/synth_noise.hpp"
 #include "tpkit/synth/synth_terrain.hpp"
 #include "tpkit/synth/synth_texture.hpp"
-#include "tpkit/core/text_table.hpp"
-#include "synth_hot.hpp"
 
 namespace tpkit {
 
@@ -476,7 +476,7 @@ double SynthScene::radiance(double X, double Y, const Eigen::Vector2d& g) const 
   const Eigen::Vector3d& s = impl_->sun;
   return impl_->texture.albedo(X, Y) * shade(s.x(), s.y(), s.z(), g.x(), g.y());
 }
-TPKIT_SYNTH_HOT void SynthScene::radiance_n(long n, const double* X, const double* Y, const double* gx, const double* gy, double* out) const {
+TPKIT_HOT void SynthScene::radiance_n(long n, const double* X, const double* Y, const double* gx, const double* gy, double* out) const {
   impl_->texture.albedo_n(n, X, Y, out);
   const double sx = impl_->sun.x(), sy = impl_->sun.y(), sz = impl_->sun.z();
   long i = 0;

@@ -6,9 +6,9 @@
 #include <functional>
 #include <limits>
 
+#include "tpkit/core/cpu_dispatch.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/synth/synth_noise.hpp"
-#include "synth_hot.hpp"
 
 namespace tpkit {
 
@@ -46,7 +46,7 @@ inline void bspline_power(const double p[4], double q[4]) {
   q[3] = (3 * (p[1] - p[2]) + p[3] - p[0]) * (1.0 / 6);
 }
 // The power-basis coefficients of cell (ku, kv) (out of line: a cell serves ~8 Newton steps).
-[[gnu::noinline]] TPKIT_SYNTH_HOT void fill_patch(const float* c, long nx, long ku, long kv, SynthTerrain::Patch& P) {
+[[gnu::noinline]] TPKIT_HOT void fill_patch(const float* c, long nx, long ku, long kv, SynthTerrain::Patch& P) {
   // rows (knots v) to the power basis in s, then each power of s to the power basis in r
   double rows[4][4];
   for (int b = 0; b < 4; ++b) {
@@ -253,7 +253,7 @@ double SynthTerrain::refine(const Eigen::Vector3d& o, const Eigen::Vector3d& d, 
   return t;
 }
 
-TPKIT_SYNTH_HOT void SynthTerrain::refine_lanes(int n, const Eigen::Vector3d* o, const Eigen::Vector3d* d, double* t, double tol,
+TPKIT_HOT void SynthTerrain::refine_lanes(int n, const Eigen::Vector3d* o, const Eigen::Vector3d* d, double* t, double tol,
                                 Eigen::Vector2d* grad, Patch* patch) const {
   // height(X, Y, &g) written out, multiplying by 1 / h instead of dividing, with eval_patch (this loop is the
   // renderer's inner loop: one call a node; a last-bit difference from height() is immaterial at its 1 cm
@@ -299,7 +299,7 @@ TPKIT_SYNTH_HOT void SynthTerrain::refine_lanes(int n, const Eigen::Vector3d* o,
     if (open[k]) t[k] = nan;  // no convergence in 8 steps
 }
 
-TPKIT_SYNTH_HOT std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tol_t) const {
+TPKIT_HOT std::optional<double> SynthTerrain::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tol_t) const {
   if (!(d.z() < 0)) return std::nullopt;
   // ray height above the terrain: height() written out, with eval inline
   auto f = [&](double t) { return o.z() + t * d.z() - eval((o.x() + t * d.x() - gx0_) / h_, (o.y() + t * d.y() - gy0_) / h_, nullptr, nullptr); };

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tpkit/core/cpu_dispatch.hpp"
 #include "tpkit/synth/synth_noise.hpp"
-#include "synth_hot.hpp"
 
 namespace tpkit {
 
@@ -323,7 +323,7 @@ double SynthTexture::albedo(double X, double Y) const {
   return modulate(layout(X, Y), X, Y, noise_seed_[3], noise_seed_[4], inv_fine_, memo());
 }
 
-TPKIT_SYNTH_HOT void SynthTexture::albedo_n(long n, const double* X, const double* Y, double* out) const {
+TPKIT_HOT void SynthTexture::albedo_n(long n, const double* X, const double* Y, double* out) const {
   for (long i = 0; i < n; ++i) out[i] = layout(X[i], Y[i]);
   AlbedoMemo& mm = memo();
   for (long i = 0; i < n; ++i) out[i] = modulate(out[i], X[i], Y[i], noise_seed_[3], noise_seed_[4], inv_fine_, mm);
