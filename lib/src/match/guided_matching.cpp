@@ -1,5 +1,6 @@
 #include "tpkit/match/guided_matching.hpp"
 
+#include "tpkit/core/cpu_dispatch.hpp"
 #include "tpkit/core/parallel_for.hpp"
 
 #include <Eigen/Dense>
@@ -21,16 +22,13 @@ cv::Mat rows_of(const cv::Mat& m, const std::vector<int>& idx) {
   return out;
 }
 
-// Squared L2 distance of two 128-byte descriptors, or some value > bound as soon as the partial sum
-// over whole 32-byte blocks exceeds `bound` (the rest cannot bring it back).
-inline int dist2_u8(const uint8_t* a, const uint8_t* b, int bound) {
+// Squared L2 distance of two 128-byte descriptors (whole: a loop the compiler vectorizes, cheaper than
+// the branches of an early exit).
+inline int dist2_u8(const uint8_t* a, const uint8_t* b) {
   int s = 0;
-  for (int blk = 0; blk < 128; blk += 32) {
-    for (int k = blk; k < blk + 32; ++k) {
-      const int d = static_cast<int>(a[k]) - static_cast<int>(b[k]);
-      s += d * d;
-    }
-    if (s > bound) return s;
+  for (int k = 0; k < 128; ++k) {
+    const int d = static_cast<int>(a[k]) - static_cast<int>(b[k]);
+    s += d * d;
   }
   return s;
 }
@@ -76,6 +74,61 @@ struct Best {
   int dist = std::numeric_limits<int>::max();
   int idx = -1;
 };
+
+// Compares descriptor q (image-1 keypoint i) with the image-2 keypoints in region R and in the region
+// `ratio_margin` wider (bx, by: their positions in bucket order): acc the nearest in R, m1 and m2 the two
+// nearest in the wider one; bk[j] the nearest image-1 keypoint of j so far (the mutual check).
+TPKIT_HOT void search_region(const Buckets& B, const double* bx, const double* by, const SearchRegion& R, const uint8_t* q,
+                             const cv::Mat& desc2, double ratio_margin, int i, std::vector<Best>& bk, std::vector<int>& cand,
+                             long long& cmp, Best& acc, Best& m1, Best& m2) {
+  const Eigen::Vector2d nr(R.u.y(), -R.u.x());
+  const double rd = R.band + ratio_margin, ws_lo = -ratio_margin, ws_hi = R.length + ratio_margin;
+  // the wider rectangle's corners in the buckets' frame -> the buckets to visit
+  double dlo = 1e300, dhi = -1e300, slo = 1e300, shi = -1e300;
+  for (double sa : {ws_lo, ws_hi})
+    for (double da : {-rd, rd}) {
+      const Eigen::Vector2d c = R.a + sa * R.u + da * nr;
+      const double dv = B.n.dot(c), sv = B.u.dot(c);
+      dlo = std::min(dlo, dv), dhi = std::max(dhi, dv), slo = std::min(slo, sv), shi = std::max(shi, sv);
+    }
+  const int da = B.d_index(dlo), db = B.d_index(dhi), sa = B.s_index(slo), sb = B.s_index(shi);
+  const double ax = R.a.x(), ay = R.a.y(), nx = nr.x(), ny = nr.y(), ux = R.u.x(), uy = R.u.y(), band = R.band, len = R.length;
+  for (int a = da; a <= db; ++a) {
+    // the buckets of one row are contiguous in bucket order
+    const int t0 = B.start[static_cast<size_t>(a) * B.ns + sa], t1 = B.start[static_cast<size_t>(a) * B.ns + sb + 1];
+    cand.resize(static_cast<size_t>(t1 - t0));
+    int nc = 0;
+    for (int t = t0; t < t1; ++t) {  // without branches: whether a keypoint is inside is hard to predict
+      const double vx = bx[t] - ax, vy = by[t] - ay;
+      const double dd = nx * vx + ny * vy, ss = ux * vx + uy * vy;
+      const bool wide = (std::abs(dd) <= rd) & (ss >= ws_lo) & (ss <= ws_hi);
+      const bool inner = (std::abs(dd) <= band) & (ss >= 0) & (ss <= len);
+      cand[static_cast<size_t>(nc)] = 2 * t + static_cast<int>(inner);
+      nc += static_cast<int>(wide);
+    }
+    for (int c = 0; c < nc; ++c) {
+      if (c + 4 < nc) {  // the rows are scattered over the matrix: ask for one a few candidates ahead
+        const uint8_t* ahead = desc2.ptr<uint8_t>(B.items[static_cast<size_t>(cand[static_cast<size_t>(c + 4)] >> 1)]);
+        __builtin_prefetch(ahead);
+        __builtin_prefetch(ahead + 64);
+      }
+      const int t = cand[static_cast<size_t>(c)] >> 1, j = B.items[static_cast<size_t>(t)];
+      // a pair farther than both i's second best and j's best so far changes nothing
+      Best& r = bk[static_cast<size_t>(j)];
+      const int d2 = dist2_u8(q, desc2.ptr<uint8_t>(j));
+      ++cmp;
+      if (d2 > m2.dist && d2 > r.dist) continue;
+      if (d2 < m1.dist || (d2 == m1.dist && j < m1.idx)) {
+        m2 = m1;
+        m1 = {d2, j};
+      } else if (d2 < m2.dist || (d2 == m2.dist && j < m2.idx)) {
+        m2 = {d2, j};
+      }
+      if ((cand[static_cast<size_t>(c)] & 1) && (d2 < acc.dist || (d2 == acc.dist && j < acc.idx))) acc = {d2, j};
+      if (d2 < r.dist || (d2 == r.dist && i < r.idx)) r = {d2, i};
+    }
+  }
+}
 
 }  // namespace
 
@@ -230,8 +283,12 @@ RegionMatchResult match_in_regions(const Keypoints& K1, const Keypoints& K2, con
     B.bd = std::max(4.0, widths[widths.size() / 2]);
   }
   B.build(K2.kp);
-  std::vector<double> px(static_cast<size_t>(n2k)), py(static_cast<size_t>(n2k));
-  for (int j = 0; j < n2k; ++j) px[static_cast<size_t>(j)] = K2.kp[static_cast<size_t>(j)].pt.x, py[static_cast<size_t>(j)] = K2.kp[static_cast<size_t>(j)].pt.y;
+  // image-2 positions in bucket order, so that a bucket's keypoints are read from contiguous memory
+  std::vector<double> bx(static_cast<size_t>(n2k)), by(static_cast<size_t>(n2k));
+  for (size_t t = 0; t < B.items.size(); ++t) {
+    const cv::Point2f p = K2.kp[static_cast<size_t>(B.items[t])].pt;
+    bx[t] = p.x, by[t] = p.y;
+  }
   const float ratio2 = static_cast<float>(desc.ratio * desc.ratio);
   std::vector<DescriptorMatch> fwd(static_cast<size_t>(n1), DescriptorMatch{-1, -1, 0.f, 0.f});
   const int W = std::max(1, std::min(threads, 64));
@@ -241,6 +298,7 @@ RegionMatchResult match_in_regions(const Keypoints& K1, const Keypoints& K2, con
   std::atomic<int> next{0};
   auto work = [&](int w) {
     std::vector<Best>& bk = back[static_cast<size_t>(w)];
+    std::vector<int> cand;  // a bucket row's keypoints in the wider region: bucket position * 2 + (1 if in the region)
     long long cmp = 0;
     for (;;) {
       const int b0 = next.fetch_add(chunk);
@@ -248,43 +306,8 @@ RegionMatchResult match_in_regions(const Keypoints& K1, const Keypoints& K2, con
       for (int i = b0; i < std::min(n1, b0 + chunk); ++i) {
         const SearchRegion& R = regions[static_cast<size_t>(i)];
         if (!(R.length >= 0)) continue;
-        const Eigen::Vector2d nr(R.u.y(), -R.u.x());
-        const double rd = R.band + ratio_margin, ws_lo = -ratio_margin, ws_hi = R.length + ratio_margin;
-        // the wider rectangle's corners in the buckets' frame -> the buckets to visit
-        double dlo = 1e300, dhi = -1e300, slo = 1e300, shi = -1e300;
-        for (double sa : {ws_lo, ws_hi})
-          for (double da : {-rd, rd}) {
-            const Eigen::Vector2d c = R.a + sa * R.u + da * nr;
-            const double dv = B.n.dot(c), sv = B.u.dot(c);
-            dlo = std::min(dlo, dv), dhi = std::max(dhi, dv), slo = std::min(slo, sv), shi = std::max(shi, sv);
-          }
-        const int da = B.d_index(dlo), db = B.d_index(dhi), sa = B.s_index(slo), sb = B.s_index(shi);
-        const uint8_t* q = K1.desc.ptr<uint8_t>(i);
         Best acc, m1, m2;  // best in the region; two best in the wider region
-        for (int a = da; a <= db; ++a)
-          for (int b = sa; b <= sb; ++b) {
-            const size_t cb = static_cast<size_t>(a) * B.ns + b;
-            for (int t = B.start[cb]; t < B.start[cb + 1]; ++t) {
-              const int j = B.items[static_cast<size_t>(t)];
-              const double vx = px[static_cast<size_t>(j)] - R.a.x(), vy = py[static_cast<size_t>(j)] - R.a.y();
-              const double dd = nr.x() * vx + nr.y() * vy, ss = R.u.x() * vx + R.u.y() * vy;
-              if (std::abs(dd) > rd || ss < ws_lo || ss > ws_hi) continue;
-              // a pair farther than both i's second best and j's best so far changes nothing
-              Best& r = bk[static_cast<size_t>(j)];
-              const int d2 = dist2_u8(q, K2.desc.ptr<uint8_t>(j), std::max(m2.dist, r.dist));
-              ++cmp;
-              if (d2 > m2.dist && d2 > r.dist) continue;
-              if (d2 < m1.dist || (d2 == m1.dist && j < m1.idx)) {
-                m2 = m1;
-                m1 = {d2, j};
-              } else if (d2 < m2.dist || (d2 == m2.dist && j < m2.idx)) {
-                m2 = {d2, j};
-              }
-              if (std::abs(dd) <= R.band && ss >= 0 && ss <= R.length && (d2 < acc.dist || (d2 == acc.dist && j < acc.idx)))
-                acc = {d2, j};
-              if (d2 < r.dist || (d2 == r.dist && i < r.idx)) r = {d2, i};
-            }
-          }
+        search_region(B, bx.data(), by.data(), R, K1.desc.ptr<uint8_t>(i), K2.desc, ratio_margin, i, bk, cand, cmp, acc, m1, m2);
         if (acc.idx < 0) continue;
         const Best second = m1.idx == acc.idx ? m2 : m1;
         float ratio = 0.f;
