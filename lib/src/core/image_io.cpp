@@ -55,6 +55,19 @@ Raster clipped_raster(const std::string& path, long width, long height, int band
   return r;
 }
 
+Raster crop_region(const Raster& r, long x0, long y0, long w, long h) {
+  Raster out;
+  out.x0 = std::max(r.x0, x0);
+  out.y0 = std::max(r.y0, y0);
+  out.width = std::max(0L, std::min(r.x0 + r.width, x0 + w) - out.x0);
+  out.height = std::max(0L, std::min(r.y0 + r.height, y0 + h) - out.y0);
+  out.data.resize(static_cast<size_t>(out.width) * static_cast<size_t>(out.height));
+  for (long y = 0; y < out.height; ++y)
+    std::copy_n(&r.data[static_cast<size_t>(out.y0 - r.y0 + y) * static_cast<size_t>(r.width) + static_cast<size_t>(out.x0 - r.x0)],
+                out.width, &out.data[static_cast<size_t>(y) * static_cast<size_t>(out.width)]);
+  return out;
+}
+
 Raster read_band(const std::string& path, int band) {
   ImageInfo info = image_info(path);
   return read_region(path, band, 0, 0, info.width, info.height);

@@ -33,22 +33,8 @@ struct TileResult {
   cv::Mat desc;
 };
 
-// The part [x0, x0 + w) x [y0, y0 + h) of a raster that holds it.
-Raster crop(const Raster& band, long x0, long y0, long w, long h) {
-  Raster r;
-  r.x0 = x0;
-  r.y0 = y0;
-  r.width = w;
-  r.height = h;
-  r.data.resize(static_cast<size_t>(w) * h);
-  for (long y = 0; y < h; ++y)
-    std::memcpy(r.data.data() + static_cast<size_t>(y) * w, &band.data[static_cast<size_t>(y0 - band.y0 + y) * band.width + (x0 - band.x0)],
-                static_cast<size_t>(w) * sizeof(float));
-  return r;
-}
-
 TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOptions& o, const Stretch& st, const Tile& t) {
-  Raster r = crop(band, t.rx0, t.ry0, t.rx1 - t.rx0, t.ry1 - t.ry0);
+  Raster r = crop_region(band, t.rx0, t.ry0, t.rx1 - t.rx0, t.ry1 - t.ry0);
   std::vector<uint8_t> valid;
   std::vector<uint8_t> u8 = render_u8(r, st, &valid);
   cv::Mat img(static_cast<int>(r.height), static_cast<int>(r.width), CV_8U, u8.data());

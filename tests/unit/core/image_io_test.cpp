@@ -54,6 +54,37 @@ TEST(ImageIo, WriteStripsThenReadRegions) {
   }
 }
 
+TEST(ImageIo, CropOfTheWholeBandIsTheRegionRead) {
+  const long W = 300, H = 170;
+  auto p = scratch("ramp-crop.tif").string();
+  {
+    TiffWriterU16 w(p, W, H);
+    std::vector<uint16_t> rows(W * H);
+    for (long y = 0; y < H; ++y)
+      for (long x = 0; x < W; ++x) rows[y * W + x] = static_cast<uint16_t>(3 * x + 11 * y);
+    w.write_rows(0, H, rows.data());
+    w.close();
+  }
+  const Raster whole = read_band(p, 0);
+  // inside, over each border, over a corner, around the whole image, and outside it
+  const long regions[][4] = {{40, 30, 64, 20}, {-5, 10, 30, 30}, {280, 150, 40, 40}, {-3, -4, 400, 300}, {310, 10, 5, 5}, {0, 169, 300, 1}};
+  for (const auto& q : regions) {
+    const Raster a = crop_region(whole, q[0], q[1], q[2], q[3]), b = read_region(p, 0, q[0], q[1], q[2], q[3]);
+    EXPECT_EQ(a.x0, b.x0);
+    EXPECT_EQ(a.y0, b.y0);
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.height, b.height);
+    EXPECT_EQ(a.data, b.data) << "region " << q[0] << " " << q[1] << " " << q[2] << " " << q[3];
+  }
+  // a crop of a crop is the crop: positions stay in full-image pixels
+  const Raster part = crop_region(whole, 100, 50, 120, 80), sub = crop_region(part, 90, 40, 50, 30);
+  EXPECT_EQ(sub.x0, 100);
+  EXPECT_EQ(sub.y0, 50);
+  EXPECT_EQ(sub.width, 40);
+  EXPECT_EQ(sub.height, 20);
+  EXPECT_EQ(sub.at(5, 7), 3 * 105 + 11 * 57);
+}
+
 TEST(ImageIo, NotAnImage) {
   auto p = scratch("text.tif").string();
   { std::ofstream(p) << "hello, not a tiff\n"; }

@@ -34,6 +34,10 @@ struct Raster {
   float& at(long x, long y) { return data[static_cast<size_t>(y) * width + x]; }
 };
 
+// The part of `r` in the region [x0, x0 + w) x [y0, y0 + h) (full-image pixels), clipped to r's extent:
+// cut from a whole band, the raster read_region would return for the region.
+Raster crop_region(const Raster& r, long x0, long y0, long w, long h);
+
 // Reads band `band` (0-based) of the region, clipped to the image; values as float in the image's own
 // radiometry (no scaling). Throws InputError for an unreadable file or a band that does not exist.
 Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h);
