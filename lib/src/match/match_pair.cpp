@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <future>
 #include <memory>
 #include <opencv2/calib3d.hpp>
 
@@ -166,80 +167,198 @@ struct Rec {
   LsmStatus status;  // why not, when refined
 };
 
+// The pixels the refinement reads. The blur and high-pass estimates refine samples of the records a few
+// times over, then every record is refined, each pass band by band. An image of at most
+// o.whole_image_pixels (4096²: 64 MiB as float) is read once, whole, and its bands are cut from memory;
+// a larger one is read band by band on every pass (bounded memory), but a sample's passes read only the
+// windows of its records, all of them once (windows(): on a 10000² pair the refinement stage, whose two
+// estimates took 9.7 s of its 39.4, now takes 32.2 s).
+struct PixelRect {
+  long x0, y0, w, h;
+};
+class RefinePixels {
+ public:
+  RefinePixels(const ImageSource& a, const ImageSource& b, long whole_pixels) : src_{&a, &b} {
+    for (int i = 0; i < 2; ++i)
+      if (src_[i]->info.width * src_[i]->info.height <= whole_pixels)
+        whole_[i] = read_valid_region(*src_[i], 0, 0, src_[i]->info.width, src_[i]->info.height);
+  }
+  bool whole() const { return whole_[0] && whole_[1]; }
+  const ImageSource& source(int i) const { return *src_[i]; }
+  // The same images, holding the regions rects[i] of image i (read band by band of `rows` rows, each
+  // band once): regions inside one of them are cut from memory, others read from the file.
+  RefinePixels windows(const std::vector<PixelRect> (&rects)[2], long rows) const {
+    RefinePixels w(*this, 0);
+    for (int i = 0; i < 2; ++i) {
+      if (whole_[i]) {
+        w.whole_[i] = whole_[i];
+        continue;
+      }
+      std::vector<PixelRect> r = rects[i];
+      std::sort(r.begin(), r.end(), [](const PixelRect& p, const PixelRect& q) { return p.y0 < q.y0; });
+      for (size_t k0 = 0; k0 < r.size();) {
+        size_t k1 = k0;
+        long x0 = r[k0].x0, x1 = r[k0].x0 + r[k0].w, y1 = r[k0].y0 + r[k0].h;
+        while (k1 < r.size() && r[k1].y0 < r[k0].y0 + rows) {
+          x0 = std::min(x0, r[k1].x0), x1 = std::max(x1, r[k1].x0 + r[k1].w), y1 = std::max(y1, r[k1].y0 + r[k1].h);
+          ++k1;
+        }
+        const Raster band = read_valid_region(*src_[i], x0, r[k0].y0, x1 - x0, y1 - r[k0].y0);
+        for (size_t k = k0; k < k1; ++k) w.windows_[i].push_back(crop_region(band, r[k].x0, r[k].y0, r[k].w, r[k].h));
+        k0 = k1;
+      }
+    }
+    return w;
+  }
+  // read_valid_region of image i (0: a, 1: b)
+  Raster region(int i, long x0, long y0, long w, long h) const {
+    if (whole_[i]) return crop_region(*whole_[i], x0, y0, w, h);
+    // the part inside the image, as read_valid_region clips it
+    const long cx0 = std::max(0L, x0), cy0 = std::max(0L, y0);
+    const long cx1 = std::min(src_[i]->info.width, x0 + w), cy1 = std::min(src_[i]->info.height, y0 + h);
+    for (const Raster& r : windows_[i])
+      if (r.x0 <= cx0 && r.y0 <= cy0 && r.x0 + r.width >= cx1 && r.y0 + r.height >= cy1) return crop_region(r, x0, y0, w, h);
+    return read_valid_region(*src_[i], x0, y0, w, h);
+  }
+
+ private:
+  RefinePixels(const RefinePixels& o, int) : src_{o.src_[0], o.src_[1]} {}
+  const ImageSource* src_[2];
+  std::optional<Raster> whole_[2];
+  std::vector<Raster> windows_[2];
+};
+
+// Records refined together, and the image regions that hold their windows (plus the interpolation
+// support, the allowed drift and the filters' 3-sigma supports e1, e2 in images 1 and 2).
+struct RefineGroup {
+  std::vector<size_t> js;
+  PixelRect a, b;
+};
+RefineGroup refine_group(std::vector<size_t> js, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
+                         const PairMatchOptions& o, double e1, double e2) {
+  const int h = o.lsm.window / 2;
+  double ax0 = 1e300, ay0 = 1e300, ax1 = -1e300, ay1 = -1e300, bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
+  for (size_t j : js) {
+    const Rec& r = recs[j];
+    const double ext1 = h * std::sqrt(2.0) + 3;
+    const double ext2 = h * std::sqrt(2.0) * A0[j].norm() * 1.5 + o.lsm.max_shift * 3 + 6;
+    ax0 = std::min(ax0, r.x1 - ext1), ax1 = std::max(ax1, r.x1 + ext1);
+    ay0 = std::min(ay0, r.y1 - ext1), ay1 = std::max(ay1, r.y1 + ext1);
+    bx0 = std::min(bx0, r.kx2 - ext2), bx1 = std::max(bx1, r.kx2 + ext2);
+    by0 = std::min(by0, r.ky2 - ext2), by1 = std::max(by1, r.ky2 + ext2);
+  }
+  ax0 -= e1, ay0 -= e1, ax1 += e1, ay1 += e1, bx0 -= e2, by0 -= e2, bx1 += e2, by1 += e2;
+  auto rect = [](double x0, double y0, double x1, double y1) {
+    return PixelRect{static_cast<long>(std::floor(x0)), static_cast<long>(std::floor(y0)), static_cast<long>(std::ceil(x1 - x0)) + 2,
+                     static_cast<long>(std::ceil(y1 - y0)) + 2};
+  };
+  return {std::move(js), rect(ax0, ay0, ax1, ay1), rect(bx0, by0, bx1, by1)};
+}
+
 // 5. Least-squares matching of every record, image 1 in bands of refine_tile rows, one after the
 // other: each band's region of image 1 and the region of image 2 its windows reach are read once (a
-// strip-stored file is decoded about once in all), and the band's points are refined in parallel. A
-// band whose image-2 region would be too large (strong rotation between the images) is split along x
-// until it fits. A0 holds each record's initial local map (keypoint_affine). With `F`, a refined position
-// farther than `max_residual` pixels (R^4) from the verified pair model is rejected (OffEpipolar): the
-// keypoint match passed that test, so the refinement moved it off the geometry.
-void refine_records(const ImageSource& a, const ImageSource& b, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
+// strip-stored file is decoded about once in all), and the band's points are refined in parallel while
+// the next band's regions are read. A band whose image-2 region would be too large (strong rotation
+// between the images) is split along x until it fits. With `per_record`, each record is a group of its
+// own and the groups are refined in parallel (a sample of a large image's records, whose pixels
+// px.windows() holds: filtering whole bands for a few windows each would cost more than the
+// refinement). A0 holds each record's initial local map (keypoint_affine). With `F`, a refined
+// position farther than `max_residual` pixels (R^4) from the verified pair model is rejected
+// (OffEpipolar): the keypoint match passed that test, so the refinement moved it off the geometry.
+void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                     const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual,
-                    double blur, double highpass, bool progress) {
-  const long B = std::max(16L, o.refine_tile);
-  std::vector<std::vector<size_t>> bands(static_cast<size_t>((a.info.height + B - 1) / B) + 1);
-  for (size_t j = 0; j < recs.size(); ++j)
-    bands[std::clamp<size_t>(static_cast<size_t>(std::max(0.0, recs[j].y1 + 0.5) / B), 0, bands.size() - 1)].push_back(j);
+                    double blur, double highpass, bool progress, bool per_record = false) {
+  // the blur's and the local mean's support (3 sigma) join the regions so that the windows see full kernels
+  const double eh = highpass > 0 ? std::ceil(3 * highpass) : 0;
+  const double e1 = (blur > 0 ? std::ceil(3 * blur) : 0) + eh, e2 = (blur < 0 ? std::ceil(-3 * blur) : 0) + eh;
+  // live_threads: what the refinement may use now (read again for every band)
+  auto threads = [&] { return o.live_threads ? std::max(1, o.live_threads->load()) : o.threads; };
+  // the records of a group, refined on the group's pixels
+  auto refine = [&](const RefineGroup& G, const std::pair<Raster, Raster>& R, size_t q0, size_t q1) {
+    for (size_t q = q0; q < q1; ++q) {
+      Rec& r = recs[G.js[q]];
+      LsmResult L = lsm_refine(R.first, R.second, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[G.js[q]], lsm);
+      if (L.ok() && F && !(std::abs(F->residual(r.x1, r.y1, L.p2.x(), L.p2.y())) <= max_residual))
+        L.status = LsmStatus::OffEpipolar;
+      r.ok = L.ok();
+      r.status = L.status;
+      r.corr = std::isfinite(L.corr) ? L.corr : 0;
+      if (r.ok) {
+        r.x2 = L.p2.x();
+        r.y2 = L.p2.y();
+        r.sigma = L.sigma;
+      }
+    }
+  };
+  // a group's regions, read and filtered
+  auto load = [&](const RefineGroup& G) {
+    std::pair<Raster, Raster> R{px.region(0, G.a.x0, G.a.y0, G.a.w, G.a.h), px.region(1, G.b.x0, G.b.y0, G.b.w, G.b.h)};
+    if (blur > 0) blur_raster(R.first, blur);
+    if (blur < 0) blur_raster(R.second, -blur);
+    highpass_raster(R.first, highpass);
+    highpass_raster(R.second, highpass);
+    return R;
+  };
   std::unique_ptr<Progress> pr;
   if (progress) pr = std::make_unique<Progress>("refine", static_cast<long>(recs.size()));
-  const int h = o.lsm.window / 2;
+  if (per_record) {
+    parallel_for(recs.size(), threads(), [&](size_t j) {
+      const RefineGroup G = refine_group({j}, recs, A0, o, e1, e2);
+      refine(G, load(G), 0, 1);
+    });
+    if (pr) pr->done();
+    return;
+  }
+  const long B = std::max(16L, o.refine_tile);
+  std::vector<std::vector<size_t>> bands(static_cast<size_t>((px.source(0).info.height + B - 1) / B) + 1);
+  for (size_t j = 0; j < recs.size(); ++j)
+    bands[std::clamp<size_t>(static_cast<size_t>(std::max(0.0, recs[j].y1 + 0.5) / B), 0, bands.size() - 1)].push_back(j);
   const double max_area = 64.0 * 1024 * 1024;  // pixels of an image-2 region (256 MB as float)
-  std::function<void(std::vector<size_t>&)> refine_group = [&](std::vector<size_t>& js) {
+  // the groups: the bands, split along x where image 2's region would be too large
+  std::vector<RefineGroup> groups;
+  std::function<void(std::vector<size_t>&)> plan = [&](std::vector<size_t>& js) {
     if (js.empty()) return;
-    // regions that hold every window (plus the interpolation support and the allowed drift)
-    double ax0 = 1e300, ay0 = 1e300, ax1 = -1e300, ay1 = -1e300, bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
-    for (size_t j : js) {
-      const Rec& r = recs[j];
-      const double ext1 = h * std::sqrt(2.0) + 3;
-      const double ext2 = h * std::sqrt(2.0) * A0[j].norm() * 1.5 + o.lsm.max_shift * 3 + 6;
-      ax0 = std::min(ax0, r.x1 - ext1), ax1 = std::max(ax1, r.x1 + ext1);
-      ay0 = std::min(ay0, r.y1 - ext1), ay1 = std::max(ay1, r.y1 + ext1);
-      bx0 = std::min(bx0, r.kx2 - ext2), bx1 = std::max(bx1, r.kx2 + ext2);
-      by0 = std::min(by0, r.ky2 - ext2), by1 = std::max(by1, r.ky2 + ext2);
-    }
-    if ((bx1 - bx0) * (by1 - by0) > max_area && js.size() > 1) {
+    RefineGroup G = refine_group(js, recs, A0, o, 0, 0);
+    if (static_cast<double>(G.b.w) * static_cast<double>(G.b.h) > max_area && js.size() > 1) {
       std::sort(js.begin(), js.end(), [&](size_t p, size_t q) { return recs[p].x1 < recs[q].x1 || (recs[p].x1 == recs[q].x1 && p < q); });
       std::vector<size_t> lo(js.begin(), js.begin() + static_cast<long>(js.size() / 2)), hi(js.begin() + static_cast<long>(js.size() / 2), js.end());
-      refine_group(lo);
-      refine_group(hi);
+      plan(lo);
+      plan(hi);
       return;
     }
-    // the blur's and the local mean's support (3 sigma) join the regions so that the windows see full kernels
-    const double eh = highpass > 0 ? std::ceil(3 * highpass) : 0;
-    const double e1 = (blur > 0 ? std::ceil(3 * blur) : 0) + eh, e2 = (blur < 0 ? std::ceil(-3 * blur) : 0) + eh;
-    ax0 -= e1, ay0 -= e1, ax1 += e1, ay1 += e1, bx0 -= e2, by0 -= e2, bx1 += e2, by1 += e2;
-    Raster R1 = read_valid_region(a, (long)std::floor(ax0), (long)std::floor(ay0), (long)std::ceil(ax1 - ax0) + 2,
-                                  (long)std::ceil(ay1 - ay0) + 2);
-    Raster R2 = read_valid_region(b, (long)std::floor(bx0), (long)std::floor(by0), (long)std::ceil(bx1 - bx0) + 2,
-                                  (long)std::ceil(by1 - by0) + 2);
-    if (blur > 0) blur_raster(R1, blur);
-    if (blur < 0) blur_raster(R2, -blur);
-    highpass_raster(R1, highpass);
-    highpass_raster(R2, highpass);
-    const int threads = o.live_threads ? std::max(1, o.live_threads->load()) : o.threads;
-    // chunks of up to 64 points, at least four per thread: a group of a few dozen (the blur estimate's
-    // sample, about 50 points a band) would otherwise run on one thread
-    const size_t chunk = std::clamp<size_t>(js.size() / (4 * static_cast<size_t>(std::max(1, threads))), 1, 64);
-    parallel_for((js.size() + chunk - 1) / chunk, threads, [&](size_t c) {
-      for (size_t q = c * chunk; q < std::min(js.size(), (c + 1) * chunk); ++q) {
-        Rec& r = recs[js[q]];
-        LsmResult L = lsm_refine(R1, R2, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[js[q]], lsm);
-        if (L.ok() && F && !(std::abs(F->residual(r.x1, r.y1, L.p2.x(), L.p2.y())) <= max_residual))
-          L.status = LsmStatus::OffEpipolar;
-        r.ok = L.ok();
-        r.status = L.status;
-        r.corr = std::isfinite(L.corr) ? L.corr : 0;
-        if (r.ok) {
-          r.x2 = L.p2.x();
-          r.y2 = L.p2.y();
-          r.sigma = L.sigma;
-        }
-      }
-    });
-    if (pr) pr->add(static_cast<long>(js.size()));
+    groups.push_back(refine_group(std::move(js), recs, A0, o, e1, e2));
   };
-  for (auto& js : bands) refine_group(js);
+  for (auto& js : bands) plan(js);
+  // the next group's regions are read on their own thread (or, where none can start, when they are needed)
+  std::future<std::pair<Raster, Raster>> next;
+  if (!groups.empty()) next = std::async(std::launch::async | std::launch::deferred, load, std::cref(groups[0]));
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const std::pair<Raster, Raster> R = next.get();
+    if (g + 1 < groups.size()) next = std::async(std::launch::async | std::launch::deferred, load, std::cref(groups[g + 1]));
+    const size_t n = groups[g].js.size();
+    const int t = threads();
+    // chunks of up to 64 points, at least four per thread: a group of a few dozen would otherwise run on
+    // one thread
+    const size_t chunk = std::clamp<size_t>(n / (4 * static_cast<size_t>(t)), 1, 64);
+    parallel_for((n + chunk - 1) / chunk, t, [&](size_t c) { refine(groups[g], R, c * chunk, std::min(n, (c + 1) * chunk)); });
+    if (pr) pr->add(static_cast<long>(n));
+  }
   if (pr) pr->done();
+}
+
+// The windows a sample's passes read (refine_group of each record with the widest filter supports the
+// estimates try: blur up to 3 px in either image and high-pass up to 2 px, 3-sigma supports 9 and 6 px),
+// read once: the pixels of the sample's passes in an image too large to be held whole (none when both are).
+std::optional<RefinePixels> sample_pixels(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
+                                          const PairMatchOptions& o) {
+  if (px.whole()) return std::nullopt;  // px serves them from memory already
+  std::vector<PixelRect> rects[2];
+  for (size_t j = 0; j < recs.size(); ++j) {
+    const RefineGroup G = refine_group({j}, recs, A0, o, 15, 15);
+    rects[0].push_back(G.a);
+    rects[1].push_back(G.b);
+  }
+  return px.windows(rects, std::max(16L, o.refine_tile));
 }
 
 // A sample of up to `want` records spread evenly over the list (every k-th), with their initial maps.
@@ -261,7 +380,7 @@ RecordSample sample_records(const std::vector<Rec>& recs, const std::vector<Eige
 // 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
 // 200 records spread evenly over the list, each candidate a refinement of that sample scored by the
 // median final correlation (a failed refinement counts its correlation too, 0 when none).
-RelativeBlur choose_relative_blur(const ImageSource& a, const ImageSource& b, const std::vector<Rec>& recs,
+RelativeBlur choose_relative_blur(const RefinePixels& px, const std::vector<Rec>& recs,
                                   const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
                                   const AffineFundamental* F) {
   RelativeBlur rb;
@@ -271,9 +390,11 @@ RelativeBlur choose_relative_blur(const ImageSource& a, const ImageSource& b, co
   }
   if (recs.size() < 50) return rb;  // too few to judge: none
   const RecordSample sample = sample_records(recs, A0, 200);
+  const std::optional<RefinePixels> windows = sample_pixels(px, sample.recs, sample.A0, o);
+  const RefinePixels& spx = windows ? *windows : px;
   auto score = [&](double sigma) {
     std::vector<Rec> s = sample.recs;
-    refine_records(a, b, s, sample.A0, lsm, o, F, o.ransac_threshold, sigma, 0, false);
+    refine_records(spx, s, sample.A0, lsm, o, F, o.ransac_threshold, sigma, 0, false, windows.has_value());
     std::vector<double> c;
     for (const Rec& r : s) c.push_back(r.corr);
     std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
@@ -286,7 +407,7 @@ RelativeBlur choose_relative_blur(const ImageSource& a, const ImageSource& b, co
 // chosen on up to 300 records spread evenly over the list (after the relative blur), each candidate a
 // refinement of that sample scored by the spread of its refined positions about their own affine
 // epipolar geometry. Needs the pair's epipolar geometry (F) and 50 records: otherwise none.
-HighpassChoice choose_pair_highpass(const ImageSource& a, const ImageSource& b, const std::vector<Rec>& recs,
+HighpassChoice choose_pair_highpass(const RefinePixels& px, const std::vector<Rec>& recs,
                                const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
                                const AffineFundamental* F, double blur) {
   HighpassChoice hc;
@@ -296,9 +417,11 @@ HighpassChoice choose_pair_highpass(const ImageSource& a, const ImageSource& b, 
   }
   if (!F || recs.size() < 50) return hc;
   const RecordSample sample = sample_records(recs, A0, 300);
+  const std::optional<RefinePixels> windows = sample_pixels(px, sample.recs, sample.A0, o);
+  const RefinePixels& spx = windows ? *windows : px;
   hc = choose_highpass([&](double sigma) {
     std::vector<Rec> s = sample.recs;
-    refine_records(a, b, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false);
+    refine_records(spx, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false, windows.has_value());
     std::vector<int> ok;
     for (size_t k = 0; k < s.size(); ++k)
       if (s[k].ok) ok.push_back(static_cast<int>(k));
@@ -497,9 +620,10 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     // one holds only for views without parallax, which the LSM may still refine within max_shift)
     const bool with_f = rr.ok && !st.no_parallax;
     const AffineFundamental* F = with_f ? &rr.F : nullptr;
-    st.blur = choose_relative_blur(a, b, recs, A0, lsm, o, F);
-    st.highpass = choose_pair_highpass(a, b, recs, A0, lsm, o, F, st.blur.sigma);
-    refine_records(a, b, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);
+    const RefinePixels px(a, b, o.whole_image_pixels);
+    st.blur = choose_relative_blur(px, recs, A0, lsm, o, F);
+    st.highpass = choose_pair_highpass(px, recs, A0, lsm, o, F, st.blur.sigma);
+    refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);
   }
   lap(st.seconds[3]);
 
