@@ -249,8 +249,10 @@ void accumulate8_fast(const Scratch& s, int m, double r1, Normal<8>& ne) {
     const v4f ax = r1f * f4(gx), ay = r1f * f4(gy);
     const v4f j[8] = {ax, ay, ax * U, ax * V, ay * U, ay * V, v4f{1, 1, 1, 1}, G};
     int e = 0;
+#pragma GCC unroll 8
     for (int a = 0; a < 8; ++a) {
       const v4f wa = W * j[a];
+#pragma GCC unroll 8
       for (int c = 0; c <= a; ++c) N[e++] += wa * j[c];
     }
   };
