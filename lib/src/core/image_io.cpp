@@ -62,9 +62,10 @@ Raster crop_region(const Raster& r, long x0, long y0, long w, long h) {
   out.width = std::max(0L, std::min(r.x0 + r.width, x0 + w) - out.x0);
   out.height = std::max(0L, std::min(r.y0 + r.height, y0 + h) - out.y0);
   out.data.resize(static_cast<size_t>(out.width) * static_cast<size_t>(out.height));
+  if (out.data.empty()) return out;  // nothing of r in the region (a zero width or height, as read_region gives)
   for (long y = 0; y < out.height; ++y)
-    std::copy_n(&r.data[static_cast<size_t>(out.y0 - r.y0 + y) * static_cast<size_t>(r.width) + static_cast<size_t>(out.x0 - r.x0)],
-                out.width, &out.data[static_cast<size_t>(y) * static_cast<size_t>(out.width)]);
+    std::copy_n(r.data.data() + static_cast<size_t>(out.y0 - r.y0 + y) * static_cast<size_t>(r.width) + static_cast<size_t>(out.x0 - r.x0),
+                out.width, out.data.data() + static_cast<size_t>(y) * static_cast<size_t>(out.width));
   return out;
 }
 
