@@ -6,6 +6,7 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <numeric>
 #include <opencv2/calib3d.hpp>
 
 #include "tpkit/match/affine_fundamental.hpp"
@@ -168,32 +169,37 @@ struct Rec {
 };
 
 // The pixels the refinement reads. The blur and high-pass estimates refine samples of the records a few
-// times over, then every record is refined, each pass band by band. An image of at most
-// o.whole_image_pixels (4096²: 64 MiB as float) is read once, whole, and its bands are cut from memory;
-// a larger one is read band by band on every pass (bounded memory), but a sample's passes read only the
-// windows of its records, all of them once (windows(): on a 10000² pair the refinement stage, whose two
-// estimates took 9.7 s of its 39.4, now takes 32.2 s).
+// times over, then every record is refined, each pass band by band. Where the part of an image that the
+// records reach (the whole image in a whole run, about the window in a region run) has at most
+// o.refine_hold_pixels (4096²: 64 MiB as float), it is read once and every pass cuts its bands from
+// memory; a larger one is read band by band on every pass (bounded memory), but a sample's passes read
+// only the windows of its records, all of them once (windows(): on a 10000² pair the refinement stage,
+// whose two estimates took 9.7 s of its 39.4, now takes 32.2 s).
 struct PixelRect {
   long x0, y0, w, h;
 };
 class RefinePixels {
  public:
-  RefinePixels(const ImageSource& a, const ImageSource& b, long whole_pixels) : src_{&a, &b} {
-    for (int i = 0; i < 2; ++i)
-      if (src_[i]->info.width * src_[i]->info.height <= whole_pixels)
-        whole_[i] = read_valid_region(*src_[i], 0, 0, src_[i]->info.width, src_[i]->info.height);
-  }
-  bool whole() const { return whole_[0] && whole_[1]; }
-  const ImageSource& source(int i) const { return *src_[i]; }
-  // The same images, holding the regions rects[i] of image i (read band by band of `rows` rows, each
-  // band once): regions inside one of them are cut from memory, others read from the file.
-  RefinePixels windows(const std::vector<PixelRect> (&rects)[2], long rows) const {
-    RefinePixels w(*this, 0);
+  // Holds need[i] of image i when it has at most max_pixels pixels.
+  RefinePixels(const ImageSource& a, const ImageSource& b, const PixelRect (&need)[2], long max_pixels) : src_{&a, &b} {
+    held_all_ = true;
     for (int i = 0; i < 2; ++i) {
-      if (whole_[i]) {
-        w.whole_[i] = whole_[i];
-        continue;
-      }
+      const PixelRect& r = need[i];
+      if (static_cast<double>(r.w) * static_cast<double>(r.h) <= static_cast<double>(max_pixels))
+        held_[i].push_back(read_valid_region(*src_[i], r.x0, r.y0, r.w, r.h));
+      else
+        held_all_ = false;
+    }
+  }
+  // Whether every region the refinement asks for is in memory.
+  bool held() const { return held_all_; }
+  const ImageSource& source(int i) const { return *src_[i]; }
+  // The same pixels plus the regions rects[i] of each image not held (read band by band of `rows` rows,
+  // each band once).
+  RefinePixels windows(const std::vector<PixelRect> (&rects)[2], long rows) const {
+    RefinePixels w = *this;
+    for (int i = 0; i < 2; ++i) {
+      if (!held_[i].empty()) continue;
       std::vector<PixelRect> r = rects[i];
       std::sort(r.begin(), r.end(), [](const PixelRect& p, const PixelRect& q) { return p.y0 < q.y0; });
       for (size_t k0 = 0; k0 < r.size();) {
@@ -204,29 +210,31 @@ class RefinePixels {
           ++k1;
         }
         const Raster band = read_valid_region(*src_[i], x0, r[k0].y0, x1 - x0, y1 - r[k0].y0);
-        for (size_t k = k0; k < k1; ++k) w.windows_[i].push_back(crop_region(band, r[k].x0, r[k].y0, r[k].w, r[k].h));
+        for (size_t k = k0; k < k1; ++k) w.held_[i].push_back(crop_region(band, r[k].x0, r[k].y0, r[k].w, r[k].h));
         k0 = k1;
       }
     }
     return w;
   }
-  // read_valid_region of image i (0: a, 1: b)
+  // read_valid_region of image i (0: a, 1: b): cut from a held raster that holds it, else read
   Raster region(int i, long x0, long y0, long w, long h) const {
-    if (whole_[i]) return crop_region(*whole_[i], x0, y0, w, h);
     // the part inside the image, as read_valid_region clips it
     const long cx0 = std::max(0L, x0), cy0 = std::max(0L, y0);
     const long cx1 = std::min(src_[i]->info.width, x0 + w), cy1 = std::min(src_[i]->info.height, y0 + h);
-    for (const Raster& r : windows_[i])
+    for (const Raster& r : held_[i])
       if (r.x0 <= cx0 && r.y0 <= cy0 && r.x0 + r.width >= cx1 && r.y0 + r.height >= cy1) return crop_region(r, x0, y0, w, h);
     return read_valid_region(*src_[i], x0, y0, w, h);
   }
 
  private:
-  RefinePixels(const RefinePixels& o, int) : src_{o.src_[0], o.src_[1]} {}
   const ImageSource* src_[2];
-  std::optional<Raster> whole_[2];
-  std::vector<Raster> windows_[2];
+  std::vector<Raster> held_[2];
+  bool held_all_ = false;
 };
+
+// The widest filter support the estimates try, pixels: blur up to 3 px in either image and high-pass up
+// to 2 px (relative_blur.hpp, radiometric_highpass.hpp), 3-sigma supports 9 and 6 px.
+constexpr double kWidestFilterSupport = 15;
 
 // Records refined together, and the image regions that hold their windows (plus the interpolation
 // support, the allowed drift and the filters' 3-sigma supports e1, e2 in images 1 and 2).
@@ -346,15 +354,14 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
   if (pr) pr->done();
 }
 
-// The windows a sample's passes read (refine_group of each record with the widest filter supports the
-// estimates try: blur up to 3 px in either image and high-pass up to 2 px, 3-sigma supports 9 and 6 px),
-// read once: the pixels of the sample's passes in an image too large to be held whole (none when both are).
+// The windows a sample's passes read (refine_group of each record with the widest filter supports),
+// read once: the pixels of the sample's passes where px does not hold them (none when it does).
 std::optional<RefinePixels> sample_pixels(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                                           const PairMatchOptions& o) {
-  if (px.whole()) return std::nullopt;  // px serves them from memory already
+  if (px.held()) return std::nullopt;  // px serves them from memory already
   std::vector<PixelRect> rects[2];
   for (size_t j = 0; j < recs.size(); ++j) {
-    const RefineGroup G = refine_group({j}, recs, A0, o, 15, 15);
+    const RefineGroup G = refine_group({j}, recs, A0, o, kWidestFilterSupport, kWidestFilterSupport);
     rects[0].push_back(G.a);
     rects[1].push_back(G.b);
   }
@@ -620,7 +627,11 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     // one holds only for views without parallax, which the LSM may still refine within max_shift)
     const bool with_f = rr.ok && !st.no_parallax;
     const AffineFundamental* F = with_f ? &rr.F : nullptr;
-    const RefinePixels px(a, b, o.whole_image_pixels);
+    // the parts of the images the records reach (with the widest filter supports the estimates try)
+    std::vector<size_t> all(recs.size());
+    std::iota(all.begin(), all.end(), size_t(0));
+    const RefineGroup reach = refine_group(std::move(all), recs, A0, o, kWidestFilterSupport, kWidestFilterSupport);
+    const RefinePixels px(a, b, {reach.a, reach.b}, o.refine_hold_pixels);
     st.blur = choose_relative_blur(px, recs, A0, lsm, o, F);
     st.highpass = choose_pair_highpass(px, recs, A0, lsm, o, F, st.blur.sigma);
     refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);

@@ -69,9 +69,10 @@ struct PairMatchOptions {
   // them their context (ratio test, mutual check, RANSAC) and are dropped before refinement.
   std::optional<std::array<double, 4>> window;
   long refine_tile = 256;         // rows of the image-1 bands refined one after the other (bounded memory)
-  // Images of at most this many pixels are read once and held whole during refinement (4096²: 64 MiB
-  // each as float); larger ones band by band on every pass, the estimates' samples window by window.
-  long whole_image_pixels = 4096L * 4096L;
+  // The part of each image the refinement reaches (all of it in a whole run, about the window in a region
+  // run) is read once and held when it has at most this many pixels (4096²: 64 MiB as float); a larger
+  // one is read band by band on every pass, the estimates' samples window by window.
+  long refine_hold_pixels = 4096L * 4096L;
   int threads = 1;
   // When set, refinement takes its current value for each band instead of `threads`: a pair matched
   // beside another job (match_every_pair) gets back the threads that job frees.
