@@ -7,8 +7,8 @@
 # Prints: the whole run's wall / CPU time and peak memory, with the plan's detection tile (tp-plan
 # --detect-tile, default 768: keypoint ids depend on it) and with tp-match's default (1024); per job
 # of the plan (geometry, detection, regions, and the merge, chain, rpc-adjust and tp-ground jobs) peak
-# memory and CPU time; total CPU of all jobs against
-# the whole run's; the array's wall time; the share of the whole run's matches found with the same ids
+# memory and CPU time; CPU of the matching jobs (geometry, detection, regions, tp-merge) against the whole
+# tp-match run's, and of the jobs after them; the array's wall time; the share of the whole run's matches found with the same ids
 # and positions (1e-6 px); and for regions of 2000 and 4000 pixels in each scene given, the memory and
 # time of a detection job on such a block, of a region job that detects its own tiles, and of the same
 # region job once the cache holds them (as in a plan); these with --no-rpc, so that a scene with RPC
@@ -84,7 +84,11 @@ awk -v wu="$wu" -v ws="$wsys" '
   END {
     for (k in n) printf "%-9s jobs %3d: cpu %7.1f s (largest job %.1f s), peak memory %4.0f MB\n", k, n[k], c[k], mx[k], rss[k] / 1024
     printf "peak memory of any job %.0f MB\n", peak / 1024
-    printf "total cpu of the tiled run %.1f s, whole run %.1f s: %+.1f%%\n", total, wu + ws, 100 * (total / (wu + ws) - 1)
+    # the whole run is tp-match alone: it compares with the matching jobs of the plan; the jobs after them
+    # (tp-chain, rpc-adjust, tp-ground) have no counterpart in it
+    m = c["geometry"] + c["detect"] + c["region"] + c["tp-merge"]
+    printf "matching jobs (geometry, detection, regions, tp-merge) cpu %.1f s, whole tp-match run %.1f s: %+.1f%%\n", m, wu + ws, 100 * (m / (wu + ws) - 1)
+    printf "jobs after the matching (tp-chain, rpc-adjust, tp-ground) cpu %.1f s; every job %.1f s\n", total - m, total
   }' "$T/all.times"
 awk 'FNR == 1 { f++ } /^#/ { next }
   f == 1 { w[$1 " " $4] = $2 " " $3 " " $5 " " $6; n++; next }
