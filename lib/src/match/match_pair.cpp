@@ -172,8 +172,8 @@ struct Rec {
 // times over, then every record is refined, each pass band by band. Where the part of an image that the
 // records reach (the whole image in a whole run, about the window in a region run) has at most
 // o.refine_hold_pixels (4096²: 64 MiB as float), it is read once and every pass cuts its bands from
-// memory; a larger one is read band by band on every pass (bounded memory), but a sample's passes read
-// only the windows of its records, all of them once (windows(): on a 10000² pair the refinement stage,
+// memory; a larger one is read band by band on every pass (bounded memory), but the estimates' passes
+// read only the windows of their samples' records, all once (windows(): on a 10000² pair the refinement stage,
 // whose two estimates took 9.7 s of its 39.4, now takes 32.2 s).
 struct PixelRect {
   long x0, y0, w, h;
@@ -326,7 +326,7 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
   std::vector<RefineGroup> groups;
   std::function<void(std::vector<size_t>&)> plan = [&](std::vector<size_t>& js) {
     if (js.empty()) return;
-    RefineGroup G = refine_group(js, recs, A0, o, 0, 0);
+    RefineGroup G = refine_group(js, recs, A0, o, e1, e2);
     if (static_cast<double>(G.b.w) * static_cast<double>(G.b.h) > max_area && js.size() > 1) {
       std::sort(js.begin(), js.end(), [&](size_t p, size_t q) { return recs[p].x1 < recs[q].x1 || (recs[p].x1 == recs[q].x1 && p < q); });
       std::vector<size_t> lo(js.begin(), js.begin() + static_cast<long>(js.size() / 2)), hi(js.begin() + static_cast<long>(js.size() / 2), js.end());
@@ -334,7 +334,7 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
       plan(hi);
       return;
     }
-    groups.push_back(refine_group(std::move(js), recs, A0, o, e1, e2));
+    groups.push_back(std::move(G));
   };
   for (auto& js : bands) plan(js);
   // the next group's regions are read on their own thread (or, where none can start, when they are needed)
@@ -354,13 +354,41 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
   if (pr) pr->done();
 }
 
-// The windows a sample's passes read (refine_group of each record with the widest filter supports),
-// read once: the pixels of the sample's passes where px does not hold them (none when it does).
-std::optional<RefinePixels> sample_pixels(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
-                                          const PairMatchOptions& o) {
-  if (px.held()) return std::nullopt;  // px serves them from memory already
+// The records the estimates refine: up to `want` spread evenly over the list (every k-th).
+std::vector<size_t> sample_indices(size_t n, size_t want) {
+  std::vector<size_t> idx;
+  const size_t m = std::min(n, want);
+  for (size_t k = 0; k < m; ++k) idx.push_back(k * n / m);
+  return idx;
+}
+constexpr size_t kBlurSample = 200, kHighpassSample = 300;
+
+// A sample of the records, with their initial maps.
+struct RecordSample {
+  std::vector<Rec> recs;
+  std::vector<Eigen::Matrix2d> A0;
+};
+RecordSample sample_records(const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0, size_t want) {
+  RecordSample s;
+  for (size_t j : sample_indices(recs.size(), want)) {
+    s.recs.push_back(recs[j]);
+    s.A0.push_back(A0[j]);
+  }
+  return s;
+}
+
+// The pixels of both estimates' samples where px does not hold them (none when it does, or when neither
+// estimate runs): the windows of their records (refine_group with the widest filter supports), read
+// once for both.
+std::optional<RefinePixels> estimate_pixels(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
+                                            const PairMatchOptions& o) {
+  if (px.held() || (o.blur && o.highpass) || recs.size() < 50) return std::nullopt;
+  std::vector<size_t> idx = sample_indices(recs.size(), kBlurSample), more = sample_indices(recs.size(), kHighpassSample);
+  idx.insert(idx.end(), more.begin(), more.end());
+  std::sort(idx.begin(), idx.end());
+  idx.erase(std::unique(idx.begin(), idx.end()), idx.end());
   std::vector<PixelRect> rects[2];
-  for (size_t j = 0; j < recs.size(); ++j) {
+  for (size_t j : idx) {
     const RefineGroup G = refine_group({j}, recs, A0, o, kWidestFilterSupport, kWidestFilterSupport);
     rects[0].push_back(G.a);
     rects[1].push_back(G.b);
@@ -368,26 +396,11 @@ std::optional<RefinePixels> sample_pixels(const RefinePixels& px, const std::vec
   return px.windows(rects, std::max(16L, o.refine_tile));
 }
 
-// A sample of up to `want` records spread evenly over the list (every k-th), with their initial maps.
-struct RecordSample {
-  std::vector<Rec> recs;
-  std::vector<Eigen::Matrix2d> A0;
-};
-RecordSample sample_records(const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0, size_t want) {
-  RecordSample s;
-  const size_t n = recs.size(), m = std::min(n, want);
-  for (size_t k = 0; k < m; ++k) {
-    const size_t j = k * n / m;
-    s.recs.push_back(recs[j]);
-    s.A0.push_back(A0[j]);
-  }
-  return s;
-}
-
 // 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
 // 200 records spread evenly over the list, each candidate a refinement of that sample scored by the
 // median final correlation (a failed refinement counts its correlation too, 0 when none).
-RelativeBlur choose_relative_blur(const RefinePixels& px, const std::vector<Rec>& recs,
+// px: the pixels of its sample (estimate_pixels when per_record: refined window by window).
+RelativeBlur choose_relative_blur(const RefinePixels& px, bool per_record, const std::vector<Rec>& recs,
                                   const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
                                   const AffineFundamental* F) {
   RelativeBlur rb;
@@ -396,12 +409,10 @@ RelativeBlur choose_relative_blur(const RefinePixels& px, const std::vector<Rec>
     return rb;
   }
   if (recs.size() < 50) return rb;  // too few to judge: none
-  const RecordSample sample = sample_records(recs, A0, 200);
-  const std::optional<RefinePixels> windows = sample_pixels(px, sample.recs, sample.A0, o);
-  const RefinePixels& spx = windows ? *windows : px;
+  const RecordSample sample = sample_records(recs, A0, kBlurSample);
   auto score = [&](double sigma) {
     std::vector<Rec> s = sample.recs;
-    refine_records(spx, s, sample.A0, lsm, o, F, o.ransac_threshold, sigma, 0, false, windows.has_value());
+    refine_records(px, s, sample.A0, lsm, o, F, o.ransac_threshold, sigma, 0, false, per_record);
     std::vector<double> c;
     for (const Rec& r : s) c.push_back(r.corr);
     std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
@@ -414,7 +425,8 @@ RelativeBlur choose_relative_blur(const RefinePixels& px, const std::vector<Rec>
 // chosen on up to 300 records spread evenly over the list (after the relative blur), each candidate a
 // refinement of that sample scored by the spread of its refined positions about their own affine
 // epipolar geometry. Needs the pair's epipolar geometry (F) and 50 records: otherwise none.
-HighpassChoice choose_pair_highpass(const RefinePixels& px, const std::vector<Rec>& recs,
+// px, per_record: as for choose_relative_blur.
+HighpassChoice choose_pair_highpass(const RefinePixels& px, bool per_record, const std::vector<Rec>& recs,
                                const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
                                const AffineFundamental* F, double blur) {
   HighpassChoice hc;
@@ -423,12 +435,10 @@ HighpassChoice choose_pair_highpass(const RefinePixels& px, const std::vector<Re
     return hc;
   }
   if (!F || recs.size() < 50) return hc;
-  const RecordSample sample = sample_records(recs, A0, 300);
-  const std::optional<RefinePixels> windows = sample_pixels(px, sample.recs, sample.A0, o);
-  const RefinePixels& spx = windows ? *windows : px;
+  const RecordSample sample = sample_records(recs, A0, kHighpassSample);
   hc = choose_highpass([&](double sigma) {
     std::vector<Rec> s = sample.recs;
-    refine_records(spx, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false, windows.has_value());
+    refine_records(px, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false, per_record);
     std::vector<int> ok;
     for (size_t k = 0; k < s.size(); ++k)
       if (s[k].ok) ok.push_back(static_cast<int>(k));
@@ -632,8 +642,10 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     std::iota(all.begin(), all.end(), size_t(0));
     const RefineGroup reach = refine_group(std::move(all), recs, A0, o, kWidestFilterSupport, kWidestFilterSupport);
     const RefinePixels px(a, b, {reach.a, reach.b}, o.refine_hold_pixels);
-    st.blur = choose_relative_blur(px, recs, A0, lsm, o, F);
-    st.highpass = choose_pair_highpass(px, recs, A0, lsm, o, F, st.blur.sigma);
+    const std::optional<RefinePixels> windows = estimate_pixels(px, recs, A0, o);
+    const RefinePixels& epx = windows ? *windows : px;
+    st.blur = choose_relative_blur(epx, windows.has_value(), recs, A0, lsm, o, F);
+    st.highpass = choose_pair_highpass(epx, windows.has_value(), recs, A0, lsm, o, F, st.blur.sigma);
     refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);
   }
   lap(st.seconds[3]);
