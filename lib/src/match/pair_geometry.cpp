@@ -4,8 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
-#include <opencv2/features2d.hpp>
+#include <numeric>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -14,6 +15,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/match/match_descriptors.hpp"
 #include "tpkit/match/root_sift.hpp"
+#include "tpkit/match/sift_scale_space.hpp"
 #include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
@@ -56,9 +58,25 @@ CoarseFeatures coarse_features(const ImageSource& src, const SiftOptions& o, con
   cv::Mat eroded;
   cv::erode(mask, eroded, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(9, 9)));
   CoarseFeatures out;
-  auto sift = cv::SIFT::create(g.max_keypoints, o.octave_layers, o.contrast, o.edge, o.sigma);
-  sift->detectAndCompute(img, eroded, out.kp, out.desc);
-  out.desc = root_sift(out.desc);
+  cv::Mat desc;
+  detect_sift_scale_space(img, eroded, scale_space_options(o), out.kp, desc);
+  // the strongest max_keypoints (all those as strong as the last kept), in detection order
+  std::vector<int> keep(out.kp.size());
+  std::iota(keep.begin(), keep.end(), 0);
+  if (g.max_keypoints > 0 && static_cast<int>(keep.size()) > g.max_keypoints) {
+    std::vector<float> r;
+    for (const auto& k : out.kp) r.push_back(k.response);
+    std::nth_element(r.begin(), r.begin() + (g.max_keypoints - 1), r.end(), std::greater<float>());
+    const float least = r[g.max_keypoints - 1];
+    keep.erase(std::remove_if(keep.begin(), keep.end(), [&](int i) { return out.kp[i].response < least; }), keep.end());
+  }
+  std::vector<cv::KeyPoint> kept;
+  out.desc.create(static_cast<int>(keep.size()), 128, CV_8U);
+  for (size_t j = 0; j < keep.size(); ++j) {
+    kept.push_back(out.kp[keep[j]]);
+    root_sift_row(desc, keep[j], out.desc.ptr<uint8_t>(static_cast<int>(j)));
+  }
+  out.kp = std::move(kept);
   const double c = (static_cast<double>(f) - 1) / 2;
   for (auto& k : out.kp) {
     k.pt.x = static_cast<float>(f * k.pt.x + c);

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
-#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -13,18 +12,28 @@
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
 #include "tpkit/match/root_sift.hpp"
+#include "tpkit/match/sift_scale_space.hpp"
 
 namespace tpkit {
 
 std::string detector_tag(const SiftOptions& o, const ImageSource& src) {
   std::ostringstream s;
-  s << "opencv-sift " << CV_VERSION << " band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
+  s << "sift tpkit-1 band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
     << " max_per_tile=" << o.max_per_tile << " contrast=" << format_number(o.contrast) << " edge=" << format_number(o.edge)
     << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " descriptor=rootsift stretch=" << format_number(o.stretch_lo)
     << "," << format_number(o.stretch_hi) << " ids=tile-rank";
   if (src.nodata) s << " nodata=" << format_number(*src.nodata);
   if (!src.mask.empty()) s << " mask=" << src.mask;
   return s.str();
+}
+
+ScaleSpaceOptions scale_space_options(const SiftOptions& o) {
+  ScaleSpaceOptions s;
+  s.octave_layers = o.octave_layers;
+  s.contrast = o.contrast;
+  s.edge = o.edge;
+  s.sigma = o.sigma;
+  return s;
 }
 
 namespace {
@@ -43,11 +52,10 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
   cv::Mat eroded;
   bool any_invalid = std::find(valid.begin(), valid.end(), 0) != valid.end();
   if (any_invalid) cv::erode(mask, eroded, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(9, 9)));
-  auto sift = cv::SIFT::create(0, o.octave_layers, o.contrast, o.edge, o.sigma);
   TileResult out;
   std::vector<cv::KeyPoint> kp;
   cv::Mat desc;
-  sift->detectAndCompute(img, any_invalid ? eroded : cv::Mat(), kp, desc);
+  detect_sift_scale_space(img, any_invalid ? eroded : cv::Mat(), scale_space_options(o), kp, desc);
   std::vector<int> keep;
   for (int i = 0; i < static_cast<int>(kp.size()); ++i) {
     double x = kp[i].pt.x + t.rx0, y = kp[i].pt.y + t.ry0;

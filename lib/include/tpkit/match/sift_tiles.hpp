@@ -1,5 +1,5 @@
-// SIFT keypoints of one image band, found tile by tile on an 8-bit percentile-stretched rendering
-// (image_tiles.hpp), with stable ids and RootSIFT descriptors (root_sift.hpp). Positions are in the full
+// SIFT keypoints of one image band, found tile by tile (sift_scale_space.hpp) on an 8-bit
+// percentile-stretched rendering (image_tiles.hpp), with stable ids and RootSIFT descriptors (root_sift.hpp). Positions are in the full
 // image's pixels (x = column, y = row, (0, 0) the centre of the top-left pixel). Memory is bounded by one band of tiles (a tile row, full width) and one tile per worker plus the
 // keypoints and their 128-byte descriptors.
 //
@@ -42,6 +42,10 @@ struct Keypoints {
   Stretch stretch;
   long tiles = 0;
 };
+
+// The scale-space options of the detector (sift_scale_space.hpp) that SiftOptions sets.
+struct ScaleSpaceOptions;
+ScaleSpaceOptions scale_space_options(const SiftOptions& o);
 
 // Text for the matches header naming the detector and every option that changes the ids.
 std::string detector_tag(const SiftOptions& o, const ImageSource& src);

@@ -1,0 +1,504 @@
+#include "tpkit/match/sift_scale_space.hpp"
+
+#include <algorithm>
+#include <cfloat>
+#include <climits>
+#include <cmath>
+#include <numeric>
+#include <opencv2/core/hal/hal.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace tpkit {
+
+// Conventions: an octave's planes are CV_32F grey levels (0..255 of the 8-bit input); octave k (k = 0
+// the upsampled one) has pixels 2^k upsampled pixels wide, and its pixel (c, r) is the input's
+// (c 2^(k-1) - 0.25, r 2^(k-1) - 0.25). Layer l of an octave has the blur sigma 2^(l / layers) in
+// octave pixels; D[l] = G[l + 1] - G[l]. Angles are in degrees; a gradient's orientation is
+// atan2(I(y - 1) - I(y + 1), I(x + 1) - I(x - 1)) (y up, as OpenCV measures it), a keypoint's angle
+// 360 minus its dominant orientation (OpenCV's KeyPoint::angle).
+namespace {
+constexpr int kBorder = 5;          // octave pixels at each edge where no extremum is sought
+constexpr int kInterpSteps = 5;     // sub-pixel steps of an extremum before it is given up
+constexpr double kInputBlur = 0.5;  // blur assumed in the input image, pixels
+constexpr int kOriBins = 36;
+constexpr float kOriSigma = 1.5f;   // orientation window: Gaussian of 1.5 scales, radius 3 of its sigmas
+constexpr float kOriRadius = 3 * kOriSigma;
+constexpr float kOriPeak = 0.8f;    // further orientations: local peaks above 0.8 x the highest
+constexpr int kCells = 4, kBins = 8;  // descriptor: kCells x kCells cells of kBins orientations
+constexpr float kCellWidth = 3.f;     // a cell's width, in scales
+constexpr float kClamp = 0.2f;        // entries clamped at 0.2 x the descriptor's norm, then renormalised
+constexpr float kDescriptorNorm = 512.f;
+constexpr float kGrey = 1.f / 255;    // D and its derivatives on grey levels / 255
+
+// f(strip, first row, end row) over rows [0, rows) in a number of strips fixed by the size (so results do
+// not depend on threads), on OpenCV's pool.
+template <class F>
+void by_strips(int rows, F&& f) {
+  const int n = std::max(1, std::min(64, rows / 32));
+  cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& R) {
+    for (int s = R.start; s < R.end; ++s)
+      f(s, static_cast<int>(static_cast<long>(rows) * s / n), static_cast<int>(static_cast<long>(rows) * (s + 1) / n));
+  });
+}
+
+int strip_count(int rows) { return std::max(1, std::min(64, rows / 32)); }
+
+cv::Mat blurred(const cv::Mat& src, double sigma) {
+  cv::Mat dst(src.size(), CV_32F);
+  // a strip of the output from the input rows around it: OpenCV's filters read past a submatrix into
+  // its parent (no BORDER_ISOLATED), so the strips give the plane blurred whole
+  by_strips(src.rows, [&](int, int a, int b) {
+    cv::Mat d = dst.rowRange(a, b);
+    cv::GaussianBlur(src.rowRange(a, b), d, cv::Size(), sigma, sigma, cv::BORDER_REFLECT_101);
+  });
+  return dst;
+}
+
+// every second pixel of every second row: the next octave's first layer
+cv::Mat decimated(const cv::Mat& g) {
+  cv::Mat d(g.rows / 2, g.cols / 2, CV_32F);
+  for (int r = 0; r < d.rows; ++r) {
+    const float* s = g.ptr<float>(2 * r);
+    float* o = d.ptr<float>(r);
+    for (int c = 0; c < d.cols; ++c) o[c] = s[2 * c];
+  }
+  return d;
+}
+
+struct Extremum {
+  int layer, r, c;      // octave pixel and layer after the sub-pixel steps
+  float xc, xr, xi;     // sub-pixel offsets (columns, rows, layers), each below 0.5
+  float contrast;       // |D| at the interpolated extremum (grey levels / 255)
+};
+
+// Lowe's interpolation of a scale-space extremum: Newton steps on the quadratic fit of D, moving to the
+// neighbouring sample while an offset exceeds half a sample; then the contrast and edge tests.
+bool interpolate(const std::vector<cv::Mat>& G, int layers, const ScaleSpaceOptions& o, int layer, int r, int c, Extremum& e) {
+  const int rows = G[0].rows, cols = G[0].cols;
+  float xi = 0, xr = 0, xc = 0;
+  int step = 0;
+  auto at = [&](int l, int y, int x) { return G[l + 1].ptr<float>(y)[x] - G[l].ptr<float>(y)[x]; };  // D[l]
+  for (; step < kInterpSteps; ++step) {
+    const float v = at(layer, r, c);
+    const float dx = (at(layer, r, c + 1) - at(layer, r, c - 1)) * 0.5f * kGrey;
+    const float dy = (at(layer, r + 1, c) - at(layer, r - 1, c)) * 0.5f * kGrey;
+    const float ds = (at(layer + 1, r, c) - at(layer - 1, r, c)) * 0.5f * kGrey;
+    const float dxx = (at(layer, r, c + 1) + at(layer, r, c - 1) - 2 * v) * kGrey;
+    const float dyy = (at(layer, r + 1, c) + at(layer, r - 1, c) - 2 * v) * kGrey;
+    const float dss = (at(layer + 1, r, c) + at(layer - 1, r, c) - 2 * v) * kGrey;
+    const float dxy = (at(layer, r + 1, c + 1) - at(layer, r + 1, c - 1) - at(layer, r - 1, c + 1) + at(layer, r - 1, c - 1)) * 0.25f * kGrey;
+    const float dxs = (at(layer + 1, r, c + 1) - at(layer + 1, r, c - 1) - at(layer - 1, r, c + 1) + at(layer - 1, r, c - 1)) * 0.25f * kGrey;
+    const float dys = (at(layer + 1, r + 1, c) - at(layer + 1, r - 1, c) - at(layer - 1, r + 1, c) + at(layer - 1, r - 1, c)) * 0.25f * kGrey;
+    // offset X = -H^-1 dD by Cramer's rule (H symmetric); a singular H gives no step
+    const double a = dxx, b = dxy, cc = dxs, d = dyy, f = dys, g = dss;
+    const double det = a * (d * g - f * f) - b * (b * g - f * cc) + cc * (b * f - d * cc);
+    if (det != 0 && std::isfinite(det)) {
+      const double i00 = d * g - f * f, i01 = cc * f - b * g, i02 = b * f - cc * d;
+      const double i11 = a * g - cc * cc, i12 = b * cc - a * f, i22 = a * d - b * b;
+      xc = static_cast<float>(-(i00 * dx + i01 * dy + i02 * ds) / det);
+      xr = static_cast<float>(-(i01 * dx + i11 * dy + i12 * ds) / det);
+      xi = static_cast<float>(-(i02 * dx + i12 * dy + i22 * ds) / det);
+    } else {
+      xc = xr = xi = 0;
+    }
+    if (std::abs(xi) < 0.5f && std::abs(xr) < 0.5f && std::abs(xc) < 0.5f) break;
+    if (!(std::abs(xi) < INT_MAX / 3.f && std::abs(xr) < INT_MAX / 3.f && std::abs(xc) < INT_MAX / 3.f)) return false;
+    c += cvRound(xc);
+    r += cvRound(xr);
+    layer += cvRound(xi);
+    if (layer < 1 || layer > layers || c < kBorder || c >= cols - kBorder || r < kBorder || r >= rows - kBorder) return false;
+  }
+  if (step >= kInterpSteps) return false;
+  const float v = at(layer, r, c);
+  const float dx = (at(layer, r, c + 1) - at(layer, r, c - 1)) * 0.5f * kGrey;
+  const float dy = (at(layer, r + 1, c) - at(layer, r - 1, c)) * 0.5f * kGrey;
+  const float ds = (at(layer + 1, r, c) - at(layer - 1, r, c)) * 0.5f * kGrey;
+  const float contr = v * kGrey + 0.5f * (dx * xc + dy * xr + ds * xi);
+  if (std::abs(contr) * layers < o.contrast) return false;
+  // edges: the ratio of the principal curvatures from the trace and determinant of the 2 x 2 Hessian
+  const float dxx = (at(layer, r, c + 1) + at(layer, r, c - 1) - 2 * v) * kGrey;
+  const float dyy = (at(layer, r + 1, c) + at(layer, r - 1, c) - 2 * v) * kGrey;
+  const float dxy = (at(layer, r + 1, c + 1) - at(layer, r + 1, c - 1) - at(layer, r - 1, c + 1) + at(layer, r - 1, c - 1)) * 0.25f * kGrey;
+  const float tr = dxx + dyy, det = dxx * dyy - dxy * dxy;
+  const float edge = static_cast<float>(o.edge);
+  if (det <= 0 || tr * tr * edge >= (edge + 1) * (edge + 1) * det) return false;
+  e = {layer, r, c, xc, xr, xi, std::abs(contr)};
+  return true;
+}
+
+// cand[c] = 1 where D (row q, with the rows above and below) is an extremum of its 3 x 3 neighbourhood
+// beyond the pre-threshold, for c in [kBorder, cols - kBorder): a branch-free loop the compiler
+// vectorises, so that the 26-neighbour test runs on the few candidates only.
+void row_candidates(const float* qu, const float* q, const float* qd, int cols, float threshold, uint8_t* cand) {
+  for (int c = kBorder; c < cols - kBorder; ++c) {
+    const float v = q[c];
+    const float hi = std::max(std::max(std::max(qu[c - 1], qu[c]), std::max(qu[c + 1], qd[c - 1])),
+                              std::max(std::max(qd[c], qd[c + 1]), std::max(q[c - 1], q[c + 1])));
+    const float lo = std::min(std::min(std::min(qu[c - 1], qu[c]), std::min(qu[c + 1], qd[c - 1])),
+                              std::min(std::min(qd[c], qd[c + 1]), std::min(q[c - 1], q[c + 1])));
+    const bool up = (v > threshold) & (v > 0.f) & (v >= hi), down = (v < -threshold) & (v < 0.f) & (v <= lo);
+    cand[c] = static_cast<uint8_t>(up | down);
+  }
+}
+
+// Extrema of D over its 26 neighbours in layers 1..layers (D from the Gaussian layers G), interpolated;
+// in row order, layer by layer.
+std::vector<Extremum> extrema(const std::vector<cv::Mat>& G, int layers, const ScaleSpaceOptions& o) {
+  const int rows = G[0].rows, cols = G[0].cols;
+  std::vector<Extremum> out;
+  if (rows <= 2 * kBorder || cols <= 2 * kBorder) return out;
+  // OpenCV's pre-threshold on |D| (grey levels; 0 for contrast thresholds below 0.06 with 3 layers)
+  const float threshold = static_cast<float>(std::floor(0.5 * o.contrast / layers * 255));
+  for (int l = 1; l <= layers; ++l) {
+    std::vector<std::vector<Extremum>> found(strip_count(rows));
+    by_strips(rows, [&](int s, int a, int b) {
+      const int r0 = std::max(a, kBorder), r1 = std::min(b, rows - kBorder);
+      if (r0 >= r1) return;
+      // rows r - 1, r, r + 1 of D[l], each computed once as the scan moves down
+      std::vector<float> ring(3 * static_cast<size_t>(cols));
+      std::vector<uint8_t> cand(cols);
+      float* d[3] = {ring.data(), ring.data() + cols, ring.data() + 2 * cols};
+      auto d_row = [&](int y, float* to) {
+        const float *hi = G[l + 1].ptr<float>(y), *lo = G[l].ptr<float>(y);
+        for (int c = 0; c < cols; ++c) to[c] = hi[c] - lo[c];
+      };
+      d_row(r0 - 1, d[0]);
+      d_row(r0, d[1]);
+      for (int r = r0; r < r1; ++r) {
+        d_row(r + 1, d[2]);
+        row_candidates(d[0], d[1], d[2], cols, threshold, cand.data());
+        for (int c = kBorder; c < cols - kBorder; ++c) {
+          if (!cand[c]) continue;
+          const float v = d[1][c];
+          bool ok = true;
+          for (int n = l - 1; n <= l + 1 && ok; n += 2)
+            for (int y = r - 1; y <= r + 1 && ok; ++y) {
+              const float *hi = G[n + 1].ptr<float>(y) + c, *lo = G[n].ptr<float>(y) + c;
+              const float p0 = hi[-1] - lo[-1], p1 = hi[0] - lo[0], p2 = hi[1] - lo[1];
+              ok = v > 0 ? (v >= p0 && v >= p1 && v >= p2) : (v <= p0 && v <= p1 && v <= p2);
+            }
+          if (!ok) continue;
+          Extremum e;
+          if (interpolate(G, layers, o, l, r, c, e)) found[s].push_back(e);
+        }
+        std::rotate(d, d + 1, d + 3);
+      }
+    });
+    for (auto& f : found) out.insert(out.end(), f.begin(), f.end());
+  }
+  return out;
+}
+
+// Gradient magnitude and orientation of every pixel of a Gaussian layer (zero on the one-pixel border).
+struct Gradients {
+  cv::Mat mag, ori;
+};
+
+Gradients gradients(const cv::Mat& g) {
+  const int rows = g.rows, cols = g.cols;
+  Gradients out{cv::Mat(g.size(), CV_32F), cv::Mat(g.size(), CV_32F)};
+  by_strips(rows, [&](int, int a, int b) {
+    std::vector<float> dx(cols), dy(cols);
+    for (int y = a; y < b; ++y) {
+      float *m = out.mag.ptr<float>(y), *t = out.ori.ptr<float>(y);
+      if (y == 0 || y == rows - 1 || cols < 3) {
+        std::fill(m, m + cols, 0.f);
+        std::fill(t, t + cols, 0.f);
+        continue;
+      }
+      const float *p = g.ptr<float>(y), *up = g.ptr<float>(y - 1), *dn = g.ptr<float>(y + 1);
+      for (int x = 1; x < cols - 1; ++x) {
+        dx[x] = p[x + 1] - p[x - 1];
+        dy[x] = up[x] - dn[x];
+      }
+      cv::hal::magnitude32f(dx.data() + 1, dy.data() + 1, m + 1, cols - 2);
+      cv::hal::fastAtan32f(dy.data() + 1, dx.data() + 1, t + 1, cols - 2, true);
+      m[0] = m[cols - 1] = t[0] = t[cols - 1] = 0.f;
+    }
+  });
+  return out;
+}
+
+// Dominant orientations (degrees) at octave pixel (px, py) of scale `scl`: the peaks of the smoothed
+// 36-bin histogram of gradient orientations weighted by magnitude and a Gaussian of 1.5 scales, each
+// refined by a parabola through its bin and the two beside it.
+int orientations(const Gradients& G, int px, int py, float scl, float* peaks) {
+  const int rows = G.mag.rows, cols = G.mag.cols;
+  const int R = cvRound(kOriRadius * scl);
+  const float sig = kOriSigma * scl, k = -1.f / (2 * sig * sig);
+  float wt[64 + 1];
+  float* w = wt + 32;
+  if (R > 32) return 0;  // scales this large do not fit a tile's octaves
+  for (int i = -R; i <= R; ++i) w[i] = std::exp(static_cast<float>(i * i) * k);
+  float raw[kOriBins + 4] = {};
+  float* h = raw + 2;
+  const int x0 = std::max(1, px - R), x1 = std::min(cols - 2, px + R);
+  for (int i = -R; i <= R; ++i) {
+    const int y = py + i;
+    if (y <= 0 || y >= rows - 1) continue;
+    const float *m = G.mag.ptr<float>(y), *t = G.ori.ptr<float>(y);
+    for (int x = x0; x <= x1; ++x) {
+      int bin = cvRound(t[x] * (kOriBins / 360.f));
+      if (bin >= kOriBins) bin -= kOriBins;
+      if (bin < 0) bin += kOriBins;
+      h[bin] += w[i] * w[x - px] * m[x];
+    }
+  }
+  h[-1] = h[kOriBins - 1];
+  h[-2] = h[kOriBins - 2];
+  h[kOriBins] = h[0];
+  h[kOriBins + 1] = h[1];
+  float s[kOriBins];
+  for (int i = 0; i < kOriBins; ++i) s[i] = (h[i - 2] + h[i + 2]) * (1.f / 16) + (h[i - 1] + h[i + 1]) * (4.f / 16) + h[i] * (6.f / 16);
+  const float top = *std::max_element(s, s + kOriBins), thr = top * kOriPeak;
+  int n = 0;
+  for (int j = 0; j < kOriBins; ++j) {
+    const int l = j > 0 ? j - 1 : kOriBins - 1, r = j < kOriBins - 1 ? j + 1 : 0;
+    if (s[j] > s[l] && s[j] > s[r] && s[j] >= thr) {
+      float bin = j + 0.5f * (s[l] - s[r]) / (s[l] - 2 * s[j] + s[r]);
+      bin = bin < 0 ? kOriBins + bin : bin >= kOriBins ? bin - kOriBins : bin;
+      peaks[n++] = bin * (360.f / kOriBins);
+    }
+  }
+  return n;
+}
+
+// The interval of u where a u + b lies in (-1, kCells), intersected with [lo, hi]; false when empty.
+bool cell_span(float a, float b, float& lo, float& hi) {
+  if (std::abs(a) < 1e-12f) return b > -1 && b < kCells;
+  float u0 = (-1 - b) / a, u1 = (kCells - b) / a;
+  if (u0 > u1) std::swap(u0, u1);
+  lo = std::max(lo, u0);
+  hi = std::min(hi, u1);
+  return lo <= hi;
+}
+
+constexpr int kRow = kCells + 2, kHist = kRow * kRow * (kBins + 2);  // descriptor histogram with a border cell
+
+// One row of a descriptor window, samples k = 0..n-1 at every S-th pixel from the row's first: the
+// sample's cell coordinates (column, row), orientation bin and weighted magnitude.
+template <int S>
+void row_bins(const float* m, const float* t, const float* wx, int n, float ca, float sa, float c0, float r0, float ori,
+              float per_degree, float wy, float* cb, float* rb, float* ob, float* mg) {
+  for (int k = 0; k < n; ++k) {
+    const float u = static_cast<float>(S * k);
+    cb[k] = c0 + u * ca;
+    rb[k] = r0 + u * sa;
+    ob[k] = (t[S * k] - ori) * per_degree;
+    mg[k] = m[S * k] * wx[S * k] * wy;
+  }
+}
+
+// The 4 x 4 x 8 descriptor at octave position (x, y) of scale `scl` and orientation `ori` (degrees):
+// magnitudes weighted by a Gaussian of half the window's width, spread trilinearly over the cells and
+// orientation bins; clamped at 0.2 of the norm, renormalised, scaled to 512 and saturated at 255.
+void descriptor(const Gradients& G, float x, float y, float ori, float scl, int stride, float* out) {
+  const int rows = G.mag.rows, cols = G.mag.cols;
+  const float width = kCellWidth * scl;
+  int R = cvRound(width * 1.4142135623730951f * (kCells + 1) * 0.5f);
+  R = std::min(R, static_cast<int>(std::sqrt(static_cast<double>(rows) * rows + static_cast<double>(cols) * cols)));
+  const int px = cvRound(x), py = cvRound(y);
+  const float fx = x - px, fy = y - py;
+  const float ca = std::cos(ori * static_cast<float>(CV_PI / 180)) / width, sa = std::sin(ori * static_cast<float>(CV_PI / 180)) / width;
+  // weight exp(-|rotated offset / width|^2 / (d^2 / 2)): separable in the unrotated offsets
+  const float k = -1.f / (0.5f * kCells * kCells * width * width);
+  thread_local std::vector<float> wxs, wys;
+  wxs.resize(2 * R + 1);
+  wys.resize(2 * R + 1);
+  for (int i = -R; i <= R; ++i) {
+    wxs[i + R] = std::exp((i - fx) * (i - fx) * k);
+    wys[i + R] = std::exp((i - fy) * (i - fy) * k);
+  }
+  float hist[kHist] = {};
+  const float half = kCells / 2.f - 0.5f, per_degree = kBins / 360.f;
+  thread_local std::vector<float> buf;
+  buf.resize(4 * static_cast<size_t>(2 * R + 1));
+  float *cb = buf.data(), *rb = cb + (2 * R + 1), *ob = rb + (2 * R + 1), *mg = ob + (2 * R + 1);
+  for (int i = -R; i <= R; i += stride) {
+    const int yy = py + i;
+    if (yy <= 0 || yy >= rows - 1) continue;
+    const float v = i - fy;
+    // columns whose rotated position lies in the cells: cbin = u ca - v sa + half, rbin = u sa + v ca + half
+    float lo = static_cast<float>(std::max(-R, 1 - px)) - fx, hi = static_cast<float>(std::min(R, cols - 2 - px)) - fx;
+    if (!cell_span(ca, half - v * sa, lo, hi) || !cell_span(sa, half + v * ca, lo, hi)) continue;
+    const int j0 = std::max(std::max(-R, 1 - px), static_cast<int>(std::floor(lo + fx))),
+              j1 = std::min(std::min(R, cols - 2 - px), static_cast<int>(std::ceil(hi + fx)));
+    const int js = stride == 2 ? (j0 + 1) & ~1 : j0;
+    if (j1 < js) continue;
+    const int n = (j1 - js) / stride + 1;
+    const float *m = G.mag.ptr<float>(yy) + px + js, *t = G.ori.ptr<float>(yy) + px + js, *wx = wxs.data() + R + js;
+    // the row's bins and weighted magnitudes, in a loop the compiler vectorises; then the scatter
+    const float wy = wys[i + R], c0v = (js - fx) * ca - v * sa + half, r0v = (js - fx) * sa + v * ca + half;
+    if (stride == 2)
+      row_bins<2>(m, t, wx, n, ca, sa, c0v, r0v, ori, per_degree, wy, cb, rb, ob, mg);
+    else
+      row_bins<1>(m, t, wx, n, ca, sa, c0v, r0v, ori, per_degree, wy, cb, rb, ob, mg);
+    for (int k = 0; k < n; ++k) {
+      const float rbin = rb[k], cbin = cb[k], obin = ob[k];
+      if (!(rbin > -1 && rbin < kCells && cbin > -1 && cbin < kCells)) continue;
+      const int r0 = cvFloor(rbin), c0 = cvFloor(cbin);
+      int o0 = cvFloor(obin);
+      const float dr = rbin - r0, dc = cbin - c0, dob = obin - o0;
+      if (o0 < 0) o0 += kBins;
+      if (o0 >= kBins) o0 -= kBins;
+      const float mag = mg[k];
+      const float v1 = mag * dr, v0 = mag - v1;
+      const float v11 = v1 * dc, v10 = v1 - v11, v01 = v0 * dc, v00 = v0 - v01;
+      const float v111 = v11 * dob, v110 = v11 - v111, v101 = v10 * dob, v100 = v10 - v101;
+      const float v011 = v01 * dob, v010 = v01 - v011, v001 = v00 * dob, v000 = v00 - v001;
+      float* p = hist + ((r0 + 1) * kRow + c0 + 1) * (kBins + 2) + o0;
+      p[0] += v000;
+      p[1] += v001;
+      p[kBins + 2] += v010;
+      p[kBins + 3] += v011;
+      p[kRow * (kBins + 2)] += v100;
+      p[kRow * (kBins + 2) + 1] += v101;
+      p[(kRow + 1) * (kBins + 2)] += v110;
+      p[(kRow + 1) * (kBins + 2) + 1] += v111;
+    }
+  }
+  // fold the orientation wrap-around, keep the inner cells
+  for (int i = 0; i < kCells; ++i)
+    for (int j = 0; j < kCells; ++j) {
+      float* p = hist + ((i + 1) * kRow + j + 1) * (kBins + 2);
+      p[0] += p[kBins];
+      p[1] += p[kBins + 1];
+      for (int b = 0; b < kBins; ++b) out[(i * kCells + j) * kBins + b] = p[b];
+    }
+  constexpr int kLen = kCells * kCells * kBins;
+  float n2 = 0;
+  for (int b = 0; b < kLen; ++b) n2 += out[b] * out[b];
+  const float cap = std::sqrt(n2) * kClamp;
+  n2 = 0;
+  for (int b = 0; b < kLen; ++b) {
+    out[b] = std::min(out[b], cap);
+    n2 += out[b] * out[b];
+  }
+  const float scale = kDescriptorNorm / std::max(std::sqrt(n2), FLT_EPSILON);
+  for (int b = 0; b < kLen; ++b) out[b] = static_cast<float>(cv::saturate_cast<uint8_t>(out[b] * scale));
+}
+
+// A keypoint of one octave before its descriptor: where to sample (octave pixels) and the output fields.
+struct Oriented {
+  cv::KeyPoint kp;
+  float x, y, scl, ori;  // octave position, scale (octave pixels), descriptor orientation (degrees)
+};
+
+bool same_keypoint(const cv::KeyPoint& a, const cv::KeyPoint& b) {
+  return a.pt.x == b.pt.x && a.pt.y == b.pt.y && a.size == b.size && a.angle == b.angle;
+}
+}  // namespace
+
+void detect_sift_scale_space(const cv::Mat& image, const cv::Mat& mask, const ScaleSpaceOptions& o,
+                             std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
+  if (image.type() != CV_8UC1) throw std::invalid_argument("detect_sift_scale_space: the image must be CV_8UC1");
+  if (!mask.empty() && (mask.type() != CV_8UC1 || mask.size() != image.size()))
+    throw std::invalid_argument("detect_sift_scale_space: the mask must be CV_8UC1 of the image's size");
+  if (o.octave_layers < 1) throw std::invalid_argument("detect_sift_scale_space: octave_layers must be at least 1");
+  keypoints.clear();
+  std::vector<float> desc;
+  const int L = o.octave_layers;
+  if (image.empty()) {
+    descriptors.create(0, 128, CV_32F);
+    return;
+  }
+  // the blur added from layer i - 1 to layer i (total blur sigma 2^(i / L) in octave pixels)
+  std::vector<double> step(L + 3);
+  const double k = std::pow(2.0, 1.0 / L);
+  for (int i = 1; i < L + 3; ++i) {
+    const double prev = std::pow(k, i - 1) * o.sigma, total = prev * k;
+    step[i] = std::sqrt(total * total - prev * prev);
+  }
+  // first octave: the image upsampled twice (its blur then 2 x 0.5 upsampled pixels), blurred to sigma
+  cv::Mat base;
+  {
+    cv::Mat f, up;
+    image.convertTo(f, CV_32F);
+    cv::resize(f, up, cv::Size(image.cols * 2, image.rows * 2), 0, 0, cv::INTER_LINEAR);
+    base = blurred(up, std::sqrt(std::max(o.sigma * o.sigma - 4 * kInputBlur * kInputBlur, 0.01)));
+  }
+  const int octaves = std::max(1, cvRound(std::log2(static_cast<double>(std::min(base.cols, base.rows))) - 2) + 1);
+  for (int oc = 0; oc < octaves; ++oc) {
+    if (oc > 0) base = decimated(base);
+    if (base.rows <= 2 * kBorder || base.cols <= 2 * kBorder) break;
+    // the octave's Gaussian layers; the differences D[l] = G[l + 1] - G[l] are taken where they are read,
+    // never stored (so the octave holds L + 3 planes at its peak, not 2 L + 5)
+    std::vector<cv::Mat> G(L + 3);
+    G[0] = base;
+    base.release();
+    for (int i = 1; i < L + 3; ++i) G[i] = blurred(G[i - 1], step[i]);
+    const std::vector<Extremum> ext = extrema(G, L, o);
+    G[0].release();
+    G[L + 1].release();
+    G[L + 2].release();
+    const float to_image = std::ldexp(1.f, oc - 1);  // octave pixels -> input pixels
+    for (int l = 1; l <= L; ++l) {
+      std::vector<int> at;
+      for (int e = 0; e < static_cast<int>(ext.size()); ++e)
+        if (ext[e].layer == l) at.push_back(e);
+      if (at.empty()) continue;
+      const Gradients grad = gradients(G[l]);
+      // the upsampled octave's pixels are half the input's: its descriptor windows sample every second
+      // one (the input's own sampling), a quarter of the samples for most keypoints
+      const int stride = oc == 0 ? 2 : 1;
+      // orientations: each extremum gives one keypoint per dominant orientation
+      std::vector<std::vector<Oriented>> per(at.size());
+      cv::parallel_for_(cv::Range(0, static_cast<int>(at.size())), [&](const cv::Range& R) {
+        for (int q = R.start; q < R.end; ++q) {
+          const Extremum& e = ext[at[q]];
+          const float scl = static_cast<float>(o.sigma * std::pow(2.0, (e.layer + e.xi) / L));
+          cv::KeyPoint kp;
+          kp.pt.x = (e.c + e.xc) * to_image - 0.25f;
+          kp.pt.y = (e.r + e.xr) * to_image - 0.25f;
+          const int mx = std::clamp(cvRound(kp.pt.x), 0, image.cols - 1), my = std::clamp(cvRound(kp.pt.y), 0, image.rows - 1);
+          if (!mask.empty() && mask.at<uint8_t>(my, mx) == 0) continue;
+          kp.size = 2 * scl * to_image;
+          kp.response = e.contrast;
+          kp.octave = ((oc - 1) & 255) | (e.layer << 8) | (cvRound((e.xi + 0.5f) * 255) << 16);
+          float peaks[kOriBins];
+          const int n = orientations(grad, e.c, e.r, scl, peaks);
+          for (int p = 0; p < n; ++p) {
+            float angle = 360.f - peaks[p];
+            if (std::abs(angle - 360.f) < FLT_EPSILON) angle = 0.f;
+            kp.angle = angle;
+            // the descriptor's orientation, as OpenCV derives it from the angle
+            float ori = 360.f - angle;
+            if (std::abs(ori - 360.f) < FLT_EPSILON) ori = 0.f;
+            per[q].push_back({kp, e.c + e.xc, e.r + e.xr, scl, ori});
+          }
+        }
+      });
+      std::vector<Oriented> ks;
+      for (auto& v : per) ks.insert(ks.end(), v.begin(), v.end());
+      // duplicates (two samples interpolated to the same extremum) once
+      std::vector<int> order(ks.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+        const cv::KeyPoint &p = ks[a].kp, &q = ks[b].kp;
+        if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;  // row order: neighbouring windows share cache lines
+        if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
+        if (p.size != q.size) return p.size > q.size;
+        return p.angle < q.angle;
+      });
+      std::vector<int> keep;
+      for (int i : order)
+        if (keep.empty() || !same_keypoint(ks[keep.back()].kp, ks[i].kp)) keep.push_back(i);
+      const size_t first = keypoints.size();
+      keypoints.resize(first + keep.size());
+      desc.resize(keypoints.size() * 128);
+      cv::parallel_for_(cv::Range(0, static_cast<int>(keep.size())), [&](const cv::Range& R) {
+        for (int q = R.start; q < R.end; ++q) {
+          const Oriented& s = ks[keep[q]];
+          keypoints[first + q] = s.kp;
+          descriptor(grad, s.x, s.y, s.ori, s.scl, stride, desc.data() + (first + q) * 128);
+        }
+      });
+    }
+    base = G[L];
+  }
+  descriptors.create(static_cast<int>(keypoints.size()), 128, CV_32F);
+  if (!keypoints.empty()) std::copy(desc.begin(), desc.end(), descriptors.ptr<float>(0));
+}
+
+}  // namespace tpkit
