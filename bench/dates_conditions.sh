@@ -17,15 +17,20 @@
 # camera, loaded from scene.params) of x1 y1's ground point; correct = error < 1 px of view 2 (so at a
 # resolution ratio R, below R pixels of view 1's size).
 # COLMAP is a benchmark peer only (as in bench/match_speed_colmap.sh), never a build or CI dependency.
-# Measured with RootSIFT descriptors and edge threshold 14 (sift_tiles.hpp, root_sift.hpp) and the
-# local-mean high-pass chosen per pair (radiometric_highpass.hpp), SIZE=1024 (matches, correct; median px
-# of the correct; tpkit | COLMAP 3.8):
-#   none 8313, 8215, 0.052 | 6082, 5792, 0.151          second-date 867, 852, 0.072 | 430, 416, 0.171
-#   clouds 3066, 3034, 0.057 | 1824, 1777, 0.119        water 6291, 6164, 0.056 | 6267, 6029, 0.125
-#   nodata 5170, 5112, 0.055 | 3281, 3158, 0.142        second-date+clouds 442, 437, 0.077 | 198, 195, 0.162
-#   blur-1.5 2663, 2537, 0.103 | 2433, 2108, 0.339      ratio-2 4416, 4385, 0.056 | 3068, 2973, 0.147
-#   ratio-3 2121, 2106, 0.054 | 866, 843, 0.205         rotation-30 6097, 5959, 0.049 | 4996, 4739, 0.150
-#   rotation-90 8337, 8188, 0.053 | 6043, 5813, 0.137   date+clouds+blur 90, 83, 0.099 | 34, 28, 0.260
+# Measured with tpkit's SIFT scale space (sift_scale_space.hpp), RootSIFT descriptors and edge
+# threshold 14 (sift_tiles.hpp, root_sift.hpp) and the local-mean high-pass chosen per pair
+# (radiometric_highpass.hpp), SIZE=1024 (matches, correct; median px of the correct; tpkit | COLMAP 3.8):
+#   none 8259, 8166, 0.052 | 6082, 5792, 0.151          second-date 873, 860, 0.073 | 430, 416, 0.171
+#   clouds 3072, 3041, 0.056 | 1824, 1777, 0.119        water 6289, 6168, 0.055 | 6267, 6029, 0.125
+#   nodata 5134, 5078, 0.055 | 3281, 3158, 0.142        second-date+clouds 457, 450, 0.076 | 198, 195, 0.162
+#   blur-1.5 2670, 2539, 0.103 | 2433, 2108, 0.339      ratio-2 4436, 4409, 0.056 | 3068, 2973, 0.147
+#   ratio-3 2119, 2103, 0.055 | 866, 843, 0.205         rotation-30 6090, 5962, 0.049 | 4996, 4739, 0.150
+#   rotation-90 8294, 8190, 0.053 | 6043, 5813, 0.137   date+clouds+blur 91, 82, 0.105 | 34, 28, 0.260
+# With OpenCV's SIFT (before 92f8ab6) the tpkit side read: none 8313, 8215, 0.052; second-date
+# 867, 852, 0.072; clouds 3066, 3034, 0.057; water 6291, 6164, 0.056; nodata 5170, 5112, 0.055;
+# second-date+clouds 442, 437, 0.077; blur-1.5 2663, 2537, 0.103; ratio-2 4416, 4385, 0.056; ratio-3
+# 2121, 2106, 0.054; rotation-30 6097, 5959, 0.049; rotation-90 8337, 8188, 0.053; date+clouds+blur 90,
+# 83, 0.099: within 1% in correct matches, the same errors.
 # Every family: more correct matches than COLMAP at under half its median error. Before RootSIFT and
 # edge 14 (SIFT descriptors, edge 10) water was short, 5289 correct against COLMAP's 5941-6029; they
 # brought 6-27% more correct matches to every family at the same error. Before the high-pass:
