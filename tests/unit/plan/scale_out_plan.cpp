@@ -29,8 +29,8 @@ TEST(ScaleOutPlan, RegionsCoverTheImage) {
 }
 
 TEST(ScaleOutPlan, PairsFromFootprints) {
-  PlanImage a{"/a", 10, 10, std::nullopt}, b{"/b", 10, 10, Footprint{{{{0, 0}}, {{1, 1}}}}},
-      c{"/c", 10, 10, Footprint{{{{2, 2}}, {{3, 3}}}}}, d{"/d", 10, 10, Footprint{{{{0.5, 0.5}}, {{2.5, 2.5}}}}};
+  PlanImage a{"/a", 10, 10, std::nullopt}, b{"/b", 10, 10, Footprint{{{{0, 0}}, {{1, 1}}}, {}}},
+      c{"/c", 10, 10, Footprint{{{{2, 2}}, {{3, 3}}}, {}}}, d{"/d", 10, 10, Footprint{{{{0.5, 0.5}}, {{2.5, 2.5}}}, {}}};
   EXPECT_TRUE(footprints_may_overlap(a, b));  // unknown footprint: paired
   EXPECT_FALSE(footprints_may_overlap(b, c));
   EXPECT_TRUE(footprints_may_overlap(b, d));
@@ -125,8 +125,8 @@ std::vector<std::string> stage_names(const Plan& p) {
 
 TEST(ScaleOutPlan, AdjustAndGroundJobs) {
   // c overlaps neither: left out of the chain and so of the adjustment
-  const PlanImage a = with_model("/i/a.tif", Footprint{{{{0, 0}}, {{1, 1}}}}), b = with_model("/i/b 2.tif", Footprint{{{{0.5, 0.5}}, {{2, 2}}}}),
-                  c = with_model("/j/a.tif", Footprint{{{{5, 5}}, {{6, 6}}}});
+  const PlanImage a = with_model("/i/a.tif", Footprint{{{{0, 0}}, {{1, 1}}}, {}}), b = with_model("/i/b 2.tif", Footprint{{{{0.5, 0.5}}, {{2, 2}}}, {}}),
+                  c = with_model("/j/a.tif", Footprint{{{{5, 5}}, {{6, 6}}}, {}});
   PlanOptions o;
   o.work = "/w d";
   o.threads = 3;
@@ -203,8 +203,8 @@ TEST(ScaleOutPlan, AdjustmentThatCannotBeMade) {
   o.adjust_model = "shift";
   o.fixed = {"/i/z.tif"};
   EXPECT_THROW(make_plan({a, b}, o), UsageError);
-  const PlanImage far = with_model("/i/far.tif", Footprint{{{{5, 5}}, {{6, 6}}}}), a1 = with_model("/i/a.tif", Footprint{{{{0, 0}}, {{1, 1}}}}),
-                  b1 = with_model("/i/b.tif", Footprint{{{{0, 0}}, {{1, 1}}}});
+  const PlanImage far = with_model("/i/far.tif", Footprint{{{{5, 5}}, {{6, 6}}}, {}}), a1 = with_model("/i/a.tif", Footprint{{{{0, 0}}, {{1, 1}}}, {}}),
+                  b1 = with_model("/i/b.tif", Footprint{{{{0, 0}}, {{1, 1}}}, {}});
   o.fixed = {"/i/far.tif"};  // left out of the plan: not in the chain
   EXPECT_THROW(make_plan({a1, b1, far}, o), UsageError);
   o.fixed = {"/i/b.tif"};
