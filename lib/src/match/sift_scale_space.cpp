@@ -227,9 +227,9 @@ int orientations(const Gradients& G, int px, int py, float scl, float* peaks) {
   const int rows = G.mag.rows, cols = G.mag.cols;
   const int R = cvRound(kOriRadius * scl);
   const float sig = kOriSigma * scl, k = -1.f / (2 * sig * sig);
-  float wt[64 + 1];
-  float* w = wt + 32;
-  if (R > 32) return 0;  // scales this large do not fit a tile's octaves
+  thread_local std::vector<float> wt;
+  wt.resize(2 * static_cast<size_t>(R) + 1);
+  float* w = wt.data() + R;
   for (int i = -R; i <= R; ++i) w[i] = std::exp(static_cast<float>(i * i) * k);
   float raw[kOriBins + 4] = {};
   float* h = raw + 2;

@@ -135,3 +135,23 @@ TEST(SiftScaleSpace, MaskAndBadInput) {
   EXPECT_TRUE(kp.empty());
   EXPECT_EQ(desc.cols, 128);
 }
+
+TEST(SiftScaleSpace, LargeSigmaKeepsItsKeypoints) {
+  // a first-layer blur of 6 px: orientation windows of radius 34 px and more, all of them kept
+  const double x0 = 100.4, y0 = 99.6, s = 10.0;
+  cv::Mat f(200, 200, CV_32F);
+  for (int y = 0; y < 200; ++y)
+    for (int x = 0; x < 200; ++x)
+      f.at<float>(y, x) = static_cast<float>(40 + 180 * std::exp(-((x - x0) * (x - x0) + (y - y0) * (y - y0)) / (2 * s * s)));
+  cv::Mat u8;
+  f.convertTo(u8, CV_8U);
+  ScaleSpaceOptions o = tpkit_defaults();
+  o.sigma = 6;
+  std::vector<cv::KeyPoint> kp;
+  cv::Mat desc;
+  detect_sift_scale_space(u8, cv::Mat(), o, kp, desc);
+  ASSERT_FALSE(kp.empty());
+  const cv::KeyPoint& k = *std::max_element(kp.begin(), kp.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response < b.response; });
+  EXPECT_NEAR(k.pt.x, x0, 0.2);
+  EXPECT_NEAR(k.pt.y, y0, 0.2);
+}
