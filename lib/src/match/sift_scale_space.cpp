@@ -388,6 +388,91 @@ struct Oriented {
 bool same_keypoint(const cv::KeyPoint& a, const cv::KeyPoint& b) {
   return a.pt.x == b.pt.x && a.pt.y == b.pt.y && a.size == b.size && a.angle == b.angle;
 }
+
+// The blur added from layer i - 1 to layer i of an octave (i >= 1; total blur sigma 2^(i / L)).
+std::vector<double> layer_steps(const ScaleSpaceOptions& o) {
+  const int L = o.octave_layers;
+  std::vector<double> step(L + 3);
+  const double k = std::pow(2.0, 1.0 / L);
+  for (int i = 1; i < L + 3; ++i) {
+    const double prev = std::pow(k, i - 1) * o.sigma, total = prev * k;
+    step[i] = std::sqrt(total * total - prev * prev);
+  }
+  return step;
+}
+
+// The first octave's first layer: the image upsampled twice (its blur then 2 x 0.5 upsampled pixels),
+// blurred to sigma.
+cv::Mat first_octave(const cv::Mat& image, double sigma) {
+  cv::Mat f, up;
+  image.convertTo(f, CV_32F);
+  cv::resize(f, up, cv::Size(image.cols * 2, image.rows * 2), 0, 0, cv::INTER_LINEAR);
+  return blurred(up, std::sqrt(std::max(sigma * sigma - 4 * kInputBlur * kInputBlur, 0.01)));
+}
+
+// The keypoints of the extrema `at` of one layer of octave `oc` (in the image's pixels, where `mask`
+// allows them), one per dominant orientation, in row order, duplicates once.
+std::vector<Oriented> oriented_keypoints(const std::vector<Extremum>& ext, const std::vector<int>& at, const Gradients& grad,
+                                         const cv::Size& image, const cv::Mat& mask, const ScaleSpaceOptions& o, int oc) {
+  const float to_image = std::ldexp(1.f, oc - 1);  // octave pixels -> input pixels
+  std::vector<std::vector<Oriented>> per(at.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(at.size())), [&](const cv::Range& R) {
+    for (int q = R.start; q < R.end; ++q) {
+      const Extremum& e = ext[at[q]];
+      const float scl = static_cast<float>(o.sigma * std::pow(2.0, (e.layer + e.xi) / o.octave_layers));
+      cv::KeyPoint kp;
+      kp.pt.x = (e.c + e.xc) * to_image - 0.25f;
+      kp.pt.y = (e.r + e.xr) * to_image - 0.25f;
+      const int mx = std::clamp(cvRound(kp.pt.x), 0, image.width - 1), my = std::clamp(cvRound(kp.pt.y), 0, image.height - 1);
+      if (!mask.empty() && mask.at<uint8_t>(my, mx) == 0) continue;
+      kp.size = 2 * scl * to_image;
+      kp.response = e.contrast;
+      kp.octave = ((oc - 1) & 255) | (e.layer << 8) | (cvRound((e.xi + 0.5f) * 255) << 16);
+      float peaks[kOriBins];
+      const int n = orientations(grad, e.c, e.r, scl, peaks);
+      for (int p = 0; p < n; ++p) {
+        float angle = 360.f - peaks[p];
+        if (std::abs(angle - 360.f) < FLT_EPSILON) angle = 0.f;
+        kp.angle = angle;
+        // the descriptor's orientation, as OpenCV derives it from the angle
+        float ori = 360.f - angle;
+        if (std::abs(ori - 360.f) < FLT_EPSILON) ori = 0.f;
+        per[q].push_back({kp, e.c + e.xc, e.r + e.xr, scl, ori});
+      }
+    }
+  });
+  std::vector<Oriented> ks;
+  for (auto& v : per) ks.insert(ks.end(), v.begin(), v.end());
+  // duplicates (two samples interpolated to the same extremum) once
+  std::vector<int> order(ks.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    const cv::KeyPoint &p = ks[a].kp, &q = ks[b].kp;
+    if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;  // row order: neighbouring windows share cache lines
+    if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
+    if (p.size != q.size) return p.size > q.size;
+    return p.angle < q.angle;
+  });
+  std::vector<Oriented> out;
+  for (int i : order)
+    if (out.empty() || !same_keypoint(out.back().kp, ks[i].kp)) out.push_back(ks[i]);
+  return out;
+}
+
+// Appends the keypoints `ks` and their descriptors (128 floats each) to `keypoints` and `desc`.
+void describe(const std::vector<Oriented>& ks, const Gradients& grad, int stride, std::vector<cv::KeyPoint>& keypoints,
+              std::vector<float>& desc) {
+  const size_t first = keypoints.size();
+  keypoints.resize(first + ks.size());
+  desc.resize(keypoints.size() * 128);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(ks.size())), [&](const cv::Range& R) {
+    for (int q = R.start; q < R.end; ++q) {
+      const Oriented& s = ks[static_cast<size_t>(q)];
+      keypoints[first + q] = s.kp;
+      descriptor(grad, s.x, s.y, s.ori, s.scl, stride, desc.data() + (first + q) * 128);
+    }
+  });
+}
 }  // namespace
 
 void detect_sift_scale_space(const cv::Mat& image, const cv::Mat& mask, const ScaleSpaceOptions& o,
@@ -403,21 +488,8 @@ void detect_sift_scale_space(const cv::Mat& image, const cv::Mat& mask, const Sc
     descriptors.create(0, 128, CV_32F);
     return;
   }
-  // the blur added from layer i - 1 to layer i (total blur sigma 2^(i / L) in octave pixels)
-  std::vector<double> step(L + 3);
-  const double k = std::pow(2.0, 1.0 / L);
-  for (int i = 1; i < L + 3; ++i) {
-    const double prev = std::pow(k, i - 1) * o.sigma, total = prev * k;
-    step[i] = std::sqrt(total * total - prev * prev);
-  }
-  // first octave: the image upsampled twice (its blur then 2 x 0.5 upsampled pixels), blurred to sigma
-  cv::Mat base;
-  {
-    cv::Mat f, up;
-    image.convertTo(f, CV_32F);
-    cv::resize(f, up, cv::Size(image.cols * 2, image.rows * 2), 0, 0, cv::INTER_LINEAR);
-    base = blurred(up, std::sqrt(std::max(o.sigma * o.sigma - 4 * kInputBlur * kInputBlur, 0.01)));
-  }
+  const std::vector<double> step = layer_steps(o);
+  cv::Mat base = first_octave(image, o.sigma);
   const int octaves = std::max(1, cvRound(std::log2(static_cast<double>(std::min(base.cols, base.rows))) - 2) + 1);
   for (int oc = 0; oc < octaves; ++oc) {
     if (oc > 0) base = decimated(base);
@@ -432,68 +504,16 @@ void detect_sift_scale_space(const cv::Mat& image, const cv::Mat& mask, const Sc
     G[0].release();
     G[L + 1].release();
     G[L + 2].release();
-    const float to_image = std::ldexp(1.f, oc - 1);  // octave pixels -> input pixels
+    // the upsampled octave's pixels are half the input's: its descriptor windows sample every second
+    // one (the input's own sampling), a quarter of the samples for most keypoints
+    const int stride = oc == 0 ? 2 : 1;
     for (int l = 1; l <= L; ++l) {
       std::vector<int> at;
       for (int e = 0; e < static_cast<int>(ext.size()); ++e)
         if (ext[e].layer == l) at.push_back(e);
       if (at.empty()) continue;
       const Gradients grad = gradients(G[l]);
-      // the upsampled octave's pixels are half the input's: its descriptor windows sample every second
-      // one (the input's own sampling), a quarter of the samples for most keypoints
-      const int stride = oc == 0 ? 2 : 1;
-      // orientations: each extremum gives one keypoint per dominant orientation
-      std::vector<std::vector<Oriented>> per(at.size());
-      cv::parallel_for_(cv::Range(0, static_cast<int>(at.size())), [&](const cv::Range& R) {
-        for (int q = R.start; q < R.end; ++q) {
-          const Extremum& e = ext[at[q]];
-          const float scl = static_cast<float>(o.sigma * std::pow(2.0, (e.layer + e.xi) / L));
-          cv::KeyPoint kp;
-          kp.pt.x = (e.c + e.xc) * to_image - 0.25f;
-          kp.pt.y = (e.r + e.xr) * to_image - 0.25f;
-          const int mx = std::clamp(cvRound(kp.pt.x), 0, image.cols - 1), my = std::clamp(cvRound(kp.pt.y), 0, image.rows - 1);
-          if (!mask.empty() && mask.at<uint8_t>(my, mx) == 0) continue;
-          kp.size = 2 * scl * to_image;
-          kp.response = e.contrast;
-          kp.octave = ((oc - 1) & 255) | (e.layer << 8) | (cvRound((e.xi + 0.5f) * 255) << 16);
-          float peaks[kOriBins];
-          const int n = orientations(grad, e.c, e.r, scl, peaks);
-          for (int p = 0; p < n; ++p) {
-            float angle = 360.f - peaks[p];
-            if (std::abs(angle - 360.f) < FLT_EPSILON) angle = 0.f;
-            kp.angle = angle;
-            // the descriptor's orientation, as OpenCV derives it from the angle
-            float ori = 360.f - angle;
-            if (std::abs(ori - 360.f) < FLT_EPSILON) ori = 0.f;
-            per[q].push_back({kp, e.c + e.xc, e.r + e.xr, scl, ori});
-          }
-        }
-      });
-      std::vector<Oriented> ks;
-      for (auto& v : per) ks.insert(ks.end(), v.begin(), v.end());
-      // duplicates (two samples interpolated to the same extremum) once
-      std::vector<int> order(ks.size());
-      std::iota(order.begin(), order.end(), 0);
-      std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-        const cv::KeyPoint &p = ks[a].kp, &q = ks[b].kp;
-        if (p.pt.y != q.pt.y) return p.pt.y < q.pt.y;  // row order: neighbouring windows share cache lines
-        if (p.pt.x != q.pt.x) return p.pt.x < q.pt.x;
-        if (p.size != q.size) return p.size > q.size;
-        return p.angle < q.angle;
-      });
-      std::vector<int> keep;
-      for (int i : order)
-        if (keep.empty() || !same_keypoint(ks[keep.back()].kp, ks[i].kp)) keep.push_back(i);
-      const size_t first = keypoints.size();
-      keypoints.resize(first + keep.size());
-      desc.resize(keypoints.size() * 128);
-      cv::parallel_for_(cv::Range(0, static_cast<int>(keep.size())), [&](const cv::Range& R) {
-        for (int q = R.start; q < R.end; ++q) {
-          const Oriented& s = ks[keep[q]];
-          keypoints[first + q] = s.kp;
-          descriptor(grad, s.x, s.y, s.ori, s.scl, stride, desc.data() + (first + q) * 128);
-        }
-      });
+      describe(oriented_keypoints(ext, at, grad, image.size(), mask, o, oc), grad, stride, keypoints, desc);
     }
     base = G[L];
   }
