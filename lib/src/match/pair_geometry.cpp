@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <functional>
 #include <limits>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
@@ -60,16 +59,9 @@ CoarseFeatures coarse_features(const ImageSource& src, const SiftOptions& o, con
   CoarseFeatures out;
   cv::Mat desc;
   detect_sift_scale_space(img, eroded, scale_space_options(o), out.kp, desc);
-  // the strongest max_keypoints (all those as strong as the last kept), in detection order
   std::vector<int> keep(out.kp.size());
   std::iota(keep.begin(), keep.end(), 0);
-  if (g.max_keypoints > 0 && static_cast<int>(keep.size()) > g.max_keypoints) {
-    std::vector<float> r;
-    for (const auto& k : out.kp) r.push_back(k.response);
-    std::nth_element(r.begin(), r.begin() + (g.max_keypoints - 1), r.end(), std::greater<float>());
-    const float least = r[g.max_keypoints - 1];
-    keep.erase(std::remove_if(keep.begin(), keep.end(), [&](int i) { return out.kp[i].response < least; }), keep.end());
-  }
+  keep_strongest(out.kp, keep, g.max_keypoints);
   std::vector<cv::KeyPoint> kept;
   out.desc.create(static_cast<int>(keep.size()), 128, CV_8U);
   for (size_t j = 0; j < keep.size(); ++j) {

@@ -31,18 +31,18 @@ constexpr float kClamp = 0.2f;        // entries clamped at 0.2 x the descriptor
 constexpr float kDescriptorNorm = 512.f;
 constexpr float kGrey = 1.f / 255;    // D and its derivatives on grey levels / 255
 
-// f(strip, first row, end row) over rows [0, rows) in a number of strips fixed by the size (so results do
-// not depend on threads), on OpenCV's pool.
+// The number of strips of a plane of `rows` rows: fixed by the size, so results do not depend on threads.
+int strip_count(int rows) { return std::max(1, std::min(64, rows / 32)); }
+
+// f(strip, first row, end row) over rows [0, rows) in strip_count(rows) strips, on OpenCV's pool.
 template <class F>
 void by_strips(int rows, F&& f) {
-  const int n = std::max(1, std::min(64, rows / 32));
+  const int n = strip_count(rows);
   cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& R) {
     for (int s = R.start; s < R.end; ++s)
       f(s, static_cast<int>(static_cast<long>(rows) * s / n), static_cast<int>(static_cast<long>(rows) * (s + 1) / n));
   });
 }
-
-int strip_count(int rows) { return std::max(1, std::min(64, rows / 32)); }
 
 cv::Mat blurred(const cv::Mat& src, double sigma) {
   cv::Mat dst(src.size(), CV_32F);
@@ -72,33 +72,46 @@ struct Extremum {
   float contrast;       // |D| at the interpolated extremum (grey levels / 255)
 };
 
+// First and second derivatives of D (grey levels / 255) at sample (layer, r, c) by central differences.
+struct Derivatives {
+  float v, dx, dy, ds, dxx, dyy, dss, dxy, dxs, dys;
+};
+
+Derivatives derivatives(const std::vector<cv::Mat>& G, int layer, int r, int c) {
+  auto at = [&](int l, int y, int x) { return G[l + 1].ptr<float>(y)[x] - G[l].ptr<float>(y)[x]; };  // D[l]
+  Derivatives d;
+  d.v = at(layer, r, c);
+  d.dx = (at(layer, r, c + 1) - at(layer, r, c - 1)) * 0.5f * kGrey;
+  d.dy = (at(layer, r + 1, c) - at(layer, r - 1, c)) * 0.5f * kGrey;
+  d.ds = (at(layer + 1, r, c) - at(layer - 1, r, c)) * 0.5f * kGrey;
+  d.dxx = (at(layer, r, c + 1) + at(layer, r, c - 1) - 2 * d.v) * kGrey;
+  d.dyy = (at(layer, r + 1, c) + at(layer, r - 1, c) - 2 * d.v) * kGrey;
+  d.dss = (at(layer + 1, r, c) + at(layer - 1, r, c) - 2 * d.v) * kGrey;
+  d.dxy = (at(layer, r + 1, c + 1) - at(layer, r + 1, c - 1) - at(layer, r - 1, c + 1) + at(layer, r - 1, c - 1)) * 0.25f * kGrey;
+  d.dxs = (at(layer + 1, r, c + 1) - at(layer + 1, r, c - 1) - at(layer - 1, r, c + 1) + at(layer - 1, r, c - 1)) * 0.25f * kGrey;
+  d.dys = (at(layer + 1, r + 1, c) - at(layer + 1, r - 1, c) - at(layer - 1, r + 1, c) + at(layer - 1, r - 1, c)) * 0.25f * kGrey;
+  return d;
+}
+
 // Lowe's interpolation of a scale-space extremum: Newton steps on the quadratic fit of D, moving to the
-// neighbouring sample while an offset exceeds half a sample; then the contrast and edge tests.
+// neighbouring sample while an offset exceeds half a sample; then the contrast and edge tests at the
+// sample where the steps settled.
 bool interpolate(const std::vector<cv::Mat>& G, int layers, const ScaleSpaceOptions& o, int layer, int r, int c, Extremum& e) {
   const int rows = G[0].rows, cols = G[0].cols;
   float xi = 0, xr = 0, xc = 0;
+  Derivatives d{};
   int step = 0;
-  auto at = [&](int l, int y, int x) { return G[l + 1].ptr<float>(y)[x] - G[l].ptr<float>(y)[x]; };  // D[l]
   for (; step < kInterpSteps; ++step) {
-    const float v = at(layer, r, c);
-    const float dx = (at(layer, r, c + 1) - at(layer, r, c - 1)) * 0.5f * kGrey;
-    const float dy = (at(layer, r + 1, c) - at(layer, r - 1, c)) * 0.5f * kGrey;
-    const float ds = (at(layer + 1, r, c) - at(layer - 1, r, c)) * 0.5f * kGrey;
-    const float dxx = (at(layer, r, c + 1) + at(layer, r, c - 1) - 2 * v) * kGrey;
-    const float dyy = (at(layer, r + 1, c) + at(layer, r - 1, c) - 2 * v) * kGrey;
-    const float dss = (at(layer + 1, r, c) + at(layer - 1, r, c) - 2 * v) * kGrey;
-    const float dxy = (at(layer, r + 1, c + 1) - at(layer, r + 1, c - 1) - at(layer, r - 1, c + 1) + at(layer, r - 1, c - 1)) * 0.25f * kGrey;
-    const float dxs = (at(layer + 1, r, c + 1) - at(layer + 1, r, c - 1) - at(layer - 1, r, c + 1) + at(layer - 1, r, c - 1)) * 0.25f * kGrey;
-    const float dys = (at(layer + 1, r + 1, c) - at(layer + 1, r - 1, c) - at(layer - 1, r + 1, c) + at(layer - 1, r - 1, c)) * 0.25f * kGrey;
+    d = derivatives(G, layer, r, c);
     // offset X = -H^-1 dD by Cramer's rule (H symmetric); a singular H gives no step
-    const double a = dxx, b = dxy, cc = dxs, d = dyy, f = dys, g = dss;
-    const double det = a * (d * g - f * f) - b * (b * g - f * cc) + cc * (b * f - d * cc);
+    const double a = d.dxx, b = d.dxy, cc = d.dxs, dd = d.dyy, f = d.dys, g = d.dss;
+    const double det = a * (dd * g - f * f) - b * (b * g - f * cc) + cc * (b * f - dd * cc);
     if (det != 0 && std::isfinite(det)) {
-      const double i00 = d * g - f * f, i01 = cc * f - b * g, i02 = b * f - cc * d;
-      const double i11 = a * g - cc * cc, i12 = b * cc - a * f, i22 = a * d - b * b;
-      xc = static_cast<float>(-(i00 * dx + i01 * dy + i02 * ds) / det);
-      xr = static_cast<float>(-(i01 * dx + i11 * dy + i12 * ds) / det);
-      xi = static_cast<float>(-(i02 * dx + i12 * dy + i22 * ds) / det);
+      const double i00 = dd * g - f * f, i01 = cc * f - b * g, i02 = b * f - cc * dd;
+      const double i11 = a * g - cc * cc, i12 = b * cc - a * f, i22 = a * dd - b * b;
+      xc = static_cast<float>(-(i00 * d.dx + i01 * d.dy + i02 * d.ds) / det);
+      xr = static_cast<float>(-(i01 * d.dx + i11 * d.dy + i12 * d.ds) / det);
+      xi = static_cast<float>(-(i02 * d.dx + i12 * d.dy + i22 * d.ds) / det);
     } else {
       xc = xr = xi = 0;
     }
@@ -110,17 +123,10 @@ bool interpolate(const std::vector<cv::Mat>& G, int layers, const ScaleSpaceOpti
     if (layer < 1 || layer > layers || c < kBorder || c >= cols - kBorder || r < kBorder || r >= rows - kBorder) return false;
   }
   if (step >= kInterpSteps) return false;
-  const float v = at(layer, r, c);
-  const float dx = (at(layer, r, c + 1) - at(layer, r, c - 1)) * 0.5f * kGrey;
-  const float dy = (at(layer, r + 1, c) - at(layer, r - 1, c)) * 0.5f * kGrey;
-  const float ds = (at(layer + 1, r, c) - at(layer - 1, r, c)) * 0.5f * kGrey;
-  const float contr = v * kGrey + 0.5f * (dx * xc + dy * xr + ds * xi);
+  const float contr = d.v * kGrey + 0.5f * (d.dx * xc + d.dy * xr + d.ds * xi);
   if (std::abs(contr) * layers < o.contrast) return false;
   // edges: the ratio of the principal curvatures from the trace and determinant of the 2 x 2 Hessian
-  const float dxx = (at(layer, r, c + 1) + at(layer, r, c - 1) - 2 * v) * kGrey;
-  const float dyy = (at(layer, r + 1, c) + at(layer, r - 1, c) - 2 * v) * kGrey;
-  const float dxy = (at(layer, r + 1, c + 1) - at(layer, r + 1, c - 1) - at(layer, r - 1, c + 1) + at(layer, r - 1, c - 1)) * 0.25f * kGrey;
-  const float tr = dxx + dyy, det = dxx * dyy - dxy * dxy;
+  const float tr = d.dxx + d.dyy, det = d.dxx * d.dyy - d.dxy * d.dxy;
   const float edge = static_cast<float>(o.edge);
   if (det <= 0 || tr * tr * edge >= (edge + 1) * (edge + 1) * det) return false;
   e = {layer, r, c, xc, xr, xi, std::abs(contr)};
@@ -474,6 +480,13 @@ void describe(const std::vector<Oriented>& ks, const Gradients& grad, int stride
   });
 }
 }  // namespace
+
+void keep_strongest(const std::vector<cv::KeyPoint>& kp, std::vector<int>& idx, int n) {
+  if (n <= 0 || static_cast<int>(idx.size()) <= n) return;
+  std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) { return kp[a].response > kp[b].response; });
+  idx.resize(n);
+  std::sort(idx.begin(), idx.end());
+}
 
 void detect_sift_scale_space(const cv::Mat& image, const cv::Mat& mask, const ScaleSpaceOptions& o,
                              std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {

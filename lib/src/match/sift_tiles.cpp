@@ -68,10 +68,7 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
     if (!inner_x || !inner_y) continue;
     keep.push_back(i);
   }
-  if (o.max_per_tile > 0 && static_cast<int>(keep.size()) > o.max_per_tile) {
-    std::stable_sort(keep.begin(), keep.end(), [&](int a, int b) { return kp[a].response > kp[b].response; });
-    keep.resize(o.max_per_tile);
-  }
+  keep_strongest(kp, keep, o.max_per_tile);
   out.kp.reserve(keep.size());
   out.desc.create(static_cast<int>(keep.size()), 128, CV_8U);
   for (size_t j = 0; j < keep.size(); ++j) {

@@ -35,6 +35,17 @@ cv::Mat textured(int w, int h, unsigned seed) {
   return u8;
 }
 
+// One bright round Gaussian blob of sigma s centred at (x0, y0) on a dark n x n background, 8-bit.
+cv::Mat gaussian_blob(int n, double x0, double y0, double s) {
+  cv::Mat f(n, n, CV_32F);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x)
+      f.at<float>(y, x) = static_cast<float>(40 + 180 * std::exp(-((x - x0) * (x - x0) + (y - y0) * (y - y0)) / (2 * s * s)));
+  cv::Mat u8;
+  f.convertTo(u8, CV_8U);
+  return u8;
+}
+
 ScaleSpaceOptions tpkit_defaults() {
   ScaleSpaceOptions o;
   o.contrast = 0.02;
@@ -47,12 +58,7 @@ TEST(SiftScaleSpace, GaussianBlobFoundAtItsCentreWithItsScale) {
   // one bright Gaussian blob of sigma s at a sub-pixel place: the DoG extremum of scale s lies at its
   // centre; OpenCV's convention would put it 0.25 px right of and below it
   const double x0 = 40.3, y0 = 37.7, s = 3.0;
-  cv::Mat f(80, 80, CV_32F);
-  for (int y = 0; y < 80; ++y)
-    for (int x = 0; x < 80; ++x)
-      f.at<float>(y, x) = static_cast<float>(40 + 180 * std::exp(-((x - x0) * (x - x0) + (y - y0) * (y - y0)) / (2 * s * s)));
-  cv::Mat u8;
-  f.convertTo(u8, CV_8U);
+  const cv::Mat u8 = gaussian_blob(80, x0, y0, s);
   std::vector<cv::KeyPoint> kp;
   cv::Mat desc;
   detect_sift_scale_space(u8, cv::Mat(), tpkit_defaults(), kp, desc);
@@ -139,12 +145,7 @@ TEST(SiftScaleSpace, MaskAndBadInput) {
 TEST(SiftScaleSpace, LargeSigmaKeepsItsKeypoints) {
   // a first-layer blur of 6 px: orientation windows of radius 34 px and more, all of them kept
   const double x0 = 100.4, y0 = 99.6, s = 10.0;
-  cv::Mat f(200, 200, CV_32F);
-  for (int y = 0; y < 200; ++y)
-    for (int x = 0; x < 200; ++x)
-      f.at<float>(y, x) = static_cast<float>(40 + 180 * std::exp(-((x - x0) * (x - x0) + (y - y0) * (y - y0)) / (2 * s * s)));
-  cv::Mat u8;
-  f.convertTo(u8, CV_8U);
+  const cv::Mat u8 = gaussian_blob(200, x0, y0, s);
   ScaleSpaceOptions o = tpkit_defaults();
   o.sigma = 6;
   std::vector<cv::KeyPoint> kp;

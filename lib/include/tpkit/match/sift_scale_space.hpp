@@ -46,4 +46,8 @@ struct ScaleSpaceOptions {
 void detect_sift_scale_space(const cv::Mat& image, const cv::Mat& mask, const ScaleSpaceOptions& o,
                              std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors);
 
+// Keeps in `idx` (indices into kp, increasing) the n with the strongest response (of equal ones, the
+// earlier), still increasing; n <= 0 keeps all.
+void keep_strongest(const std::vector<cv::KeyPoint>& kp, std::vector<int>& idx, int n);
+
 }  // namespace tpkit
