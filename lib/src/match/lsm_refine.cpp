@@ -77,6 +77,9 @@ inline v4f load4(const float* p) {
   return r;
 }
 inline float hsum(v4f a) { return (a[0] + a[1]) + (a[2] + a[3]); }
+// Grad = false: the value only (the same value, by the same operations), for the pixels that only
+// enter the grey-level normalisation and the correlation.
+template <bool Grad>
 inline bool bicubic_fast(const Raster& r, double lx, double ly, double& value, double& gx, double& gy) {
   // same support as bicubic_local (floor(lx) in [1, width - 3]); false also for NaN positions
   if (!(lx >= 1 && ly >= 1 && lx < static_cast<double>(r.width - 2) && ly < static_cast<double>(r.height - 2))) return false;
@@ -85,18 +88,21 @@ inline bool bicubic_fast(const Raster& r, double lx, double ly, double& value, d
   // w(t) = ((C3 t + C2) t + C1) t + C0, w'(t) = (3 C3 t + 2 C2) t + C1 (taps -1, 0, 1, 2)
   const v4f C0 = {0, 1, 0, 0}, C1 = {-0.5f, 0, 0.5f, 0}, C2 = {1, -2.5f, 2, -0.5f}, C3 = {-0.5f, 1.5f, -1.5f, 0.5f};
   const v4f D2 = {-1.5f, 4.5f, -4.5f, 1.5f}, D1 = {2, -5, 4, -1};
-  const v4f wx = ((C3 * tx + C2) * tx + C1) * tx + C0, dwx = (D2 * tx + D1) * tx + C1;
-  const v4f wy = ((C3 * ty + C2) * ty + C1) * ty + C0, dwy = (D2 * ty + D1) * ty + C1;
+  const v4f wx = ((C3 * tx + C2) * tx + C1) * tx + C0;
+  const v4f wy = ((C3 * ty + C2) * ty + C1) * ty + C0;
   const long W = r.width;
   const float* p = r.data.data() + static_cast<size_t>(iy - 1) * W + (ix - 1);
   const v4f R0 = load4(p), R1 = load4(p + W), R2 = load4(p + 2 * W), R3 = load4(p + 3 * W);
   const v4f S = (R0 * wy[0] + R1 * wy[1]) + (R2 * wy[2] + R3 * wy[3]);
-  const v4f Sy = (R0 * dwy[0] + R1 * dwy[1]) + (R2 * dwy[2] + R3 * dwy[3]);
   const float v = hsum(S * wx);
   if (std::isnan(v)) return false;
   value = v;
-  gx = hsum(S * dwx);
-  gy = hsum(Sy * wx);
+  if constexpr (Grad) {
+    const v4f dwx = (D2 * tx + D1) * tx + C1, dwy = (D2 * ty + D1) * ty + C1;
+    const v4f Sy = (R0 * dwy[0] + R1 * dwy[1]) + (R2 * dwy[2] + R3 * dwy[3]);
+    gx = hsum(S * dwx);
+    gy = hsum(Sy * wx);
+  }
   return true;
 }
 }  // namespace
@@ -348,12 +354,24 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   }
   for (int k = 0; k < n; ++k) s.t[k] = (s.t[k] - mt) / st;
 
-  // image 2 scaled once by the initial window's statistics, so that r0 ~ 0 and r1 ~ 1
+  // taper of the current stage and the pixels it uses (a prefix of m pixels)
+  int m = n;
+  double sigma_t = o.taper;
+  auto set_taper = [&](double sg) {
+    sigma_t = sg;
+    m = sg > 0 && o.support > 0 ? std::min(n, s.within(o.support * sg)) : n;
+    const double den = sg > 0 ? 1.0 / (2 * sg * sg) : 0.0;
+    for (int k = 0; k < m; ++k) s.tap[k] = sg > 0 ? std::exp(-(s.du[k] * s.du[k] + s.dv[k] * s.dv[k]) * den) : 1.0;
+  };
+  set_taper(o.taper);
+
+  // image 2 scaled once by the initial window's statistics, so that r0 ~ 0 and r1 ~ 1. The first m
+  // pixels' gradients are kept: they are the first iteration's (same positions, same operations).
   const double ox = p2.x() - img2.x0, oy = p2.y() - img2.y0;
   double m2 = 0, s2 = 0;
   for (int k = 0; k < n; ++k) {
-    const double u = s.du[k], v = s.dv[k];
-    if (!bicubic_fast(img2, ox + A0(0, 0) * u + A0(0, 1) * v, oy + A0(1, 0) * u + A0(1, 1) * v, s.g[k], s.gx[k], s.gy[k])) {
+    const double u = s.du[k], v = s.dv[k], qx = ox + A0(0, 0) * u + A0(0, 1) * v, qy = oy + A0(1, 0) * u + A0(1, 1) * v;
+    if (!(k < m ? bicubic_fast<true>(img2, qx, qy, s.g[k], s.gx[k], s.gy[k]) : bicubic_fast<false>(img2, qx, qy, s.g[k], s.gx[k], s.gy[k]))) {
       res.status = LsmStatus::OutOfImage;
       return res;
     }
@@ -367,17 +385,17 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     return res;
   }
   const double inv_s2 = 1.0 / s2;
-
-  // taper of the current stage and the pixels it uses (a prefix of m pixels)
-  int m = n;
-  double sigma_t = o.taper;
-  auto set_taper = [&](double sg) {
-    sigma_t = sg;
-    m = sg > 0 && o.support > 0 ? std::min(n, s.within(o.support * sg)) : n;
-    const double den = sg > 0 ? 1.0 / (2 * sg * sg) : 0.0;
-    for (int k = 0; k < m; ++k) s.tap[k] = sg > 0 ? std::exp(-(s.du[k] * s.du[k] + s.dv[k] * s.dv[k]) * den) : 1.0;
+  // pixel k's normalised value, gradient (Grad) and residual from image 2's value and gradient
+  auto store = [&](int k, double val, double vx, double vy, double c0, double c1, auto grad) {
+    const double g = (val - m2) * inv_s2;
+    s.g[k] = g;
+    if constexpr (decltype(grad)::value) {
+      s.gx[k] = vx * inv_s2;
+      s.gy[k] = vy * inv_s2;
+    }
+    s.r[k] = c0 + c1 * g - s.t[k];
   };
-  set_taper(o.taper);
+  for (int k = 0; k < m; ++k) store(k, s.g[k], s.gx[k], s.gy[k], 0.0, 1.0, std::true_type());
 
   // parameters: 0,1 p2; 2..5 A (a11 a12 a21 a22); 6 r0; 7 r1; 8..13 quadratic terms of x, y (u^2, uv, v^2) x qs
   const double qscale = o.taper > 0 ? o.taper : std::max(1, h);
@@ -389,10 +407,11 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   const int PQ = epi ? 11 : kMaxP;
   Eigen::Matrix<double, kMaxP, 1> th = Eigen::Matrix<double, kMaxP, 1>::Zero();
   th.head<8>() << p2.x(), p2.y(), A0(0, 0), A0(0, 1), A0(1, 0), A0(1, 1), 0.0, 1.0;
-  auto evaluate_model = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count, auto quad) -> bool {
+  // image 2 under the model p at the first `count` pixels, with gradients at the first `grad_count`
+  auto evaluate_model = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count, int grad_count, auto quad) -> bool {
     const double bx = p(0) - img2.x0, by = p(1) - img2.y0;
     const double a11 = p(2), a12 = p(3), a21 = p(4), a22 = p(5), c0 = p(6), c1 = p(7);
-    for (int k = 0; k < count; ++k) {
+    auto pixel = [&](int k, auto grad) -> bool {
       const double u = s.du[k], v = s.dv[k];
       double qx = bx + a11 * u + a12 * v, qy = by + a21 * u + a22 * v;
       if constexpr (decltype(quad)::value) {
@@ -406,20 +425,21 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
           qy = qy + p(11) * U + p(12) * W + p(13) * V;
         }
       }
-      double val, vx, vy;
-      if (!bicubic_fast(img2, qx, qy, val, vx, vy)) return false;
-      const double g = (val - m2) * inv_s2;
-      s.g[k] = g;
-      s.gx[k] = vx * inv_s2;
-      s.gy[k] = vy * inv_s2;
-      s.r[k] = c0 + c1 * g - s.t[k];
-    }
+      double val, vx = 0, vy = 0;
+      if (!bicubic_fast<decltype(grad)::value>(img2, qx, qy, val, vx, vy)) return false;
+      store(k, val, vx, vy, c0, c1, grad);
+      return true;
+    };
+    for (int k = 0; k < grad_count; ++k)
+      if (!pixel(k, std::true_type())) return false;
+    for (int k = grad_count; k < count; ++k)
+      if (!pixel(k, std::false_type())) return false;
     return true;
   };
   // the affine model skips the quadratic terms (zero then, so the positions are the same)
-  auto evaluate = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count) -> bool {
-    if (p.segment<6>(8).isZero(0)) return evaluate_model(p, count, std::false_type());  // also the affine stage
-    return evaluate_model(p, count, std::true_type());
+  auto evaluate = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count, int grad_count) -> bool {
+    if (p.segment<6>(8).isZero(0)) return evaluate_model(p, count, grad_count, std::false_type());  // also the affine stage
+    return evaluate_model(p, count, grad_count, std::true_type());
   };
   // the six quadratic terms (x: u^2 uv v^2, y: same) of the parameter vector, unscaled by qs
   auto quadratic_terms = [&](const Eigen::Matrix<double, kMaxP, 1>& p) -> Eigen::Matrix<double, 6, 1> {
@@ -444,7 +464,8 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       fallback = true;  // the quadratic stages did not settle: keep the affine solution
       break;
     }
-    if (!evaluate(th, m)) {
+    // (the first iteration's image 2 is the normalisation's)
+    if (it > 0 && !evaluate(th, m, m)) {
       res.status = LsmStatus::OutOfImage;
       return res;
     }
@@ -515,7 +536,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     th = th_affine;
     P = 8;
     set_taper(o.taper);
-    if (!evaluate(th, m)) {
+    if (!evaluate(th, m, m)) {
       res.status = LsmStatus::OutOfImage;
       return res;
     }
@@ -534,8 +555,9 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     res.status = LsmStatus::NotConverged;
     return res;
   }
-  // final residuals, covariance and correlation at the solution (weights of the last iteration)
-  if (!evaluate(th, n)) {
+  // final residuals, covariance and correlation at the solution (weights of the last iteration); the
+  // gradients only where the covariance takes them
+  if (!evaluate(th, n, m)) {
     res.status = LsmStatus::OutOfImage;
     return res;
   }
