@@ -276,7 +276,8 @@ TiffRowWriter::TiffRowWriter(const std::string& path, long width, long height, i
   TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
   TIFFSetField(tif, TIFFTAG_ZIPQUALITY, zip_level);
   TIFFSetField(tif, TIFFTAG_PREDICTOR, PREDICTOR_HORIZONTAL);
-  TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, 64);
+  TIFFSetField(tif, TIFFTAG_TILEWIDTH, static_cast<uint32_t>(kTile));
+  TIFFSetField(tif, TIFFTAG_TILELENGTH, static_cast<uint32_t>(kTile));
   for (const auto& kv : tags) TIFFSetField(tif, kAscii.at(kv.first), kv.second.c_str());
 }
 
@@ -285,15 +286,32 @@ TiffRowWriter::~TiffRowWriter() {
 }
 
 void TiffRowWriter::write_rows(long rows, const void* data) {
-  TIFF* tif = static_cast<TIFF*>(tif_);
-  if (!tif || next_ + rows > height_) throw std::logic_error("TiffRowWriter: rows past the image or after close");
-  const size_t row_bytes = static_cast<size_t>(width_) * (bits_ / 8);
-  // the predictor differences the row in place: libtiff gets a copy, the caller's rows stay as they are
-  row_.resize(row_bytes);
+  if (!tif_ || next_ + rows > height_) throw std::logic_error("TiffRowWriter: rows past the image or after close");
+  const size_t bytes = static_cast<size_t>(bits_ / 8), row_bytes = static_cast<size_t>(width_) * bytes;
+  // rows gather into one row of tiles, written when it is full (or the image ends)
+  band_.resize(row_bytes * kTile);
   for (long k = 0; k < rows; ++k, ++next_) {
-    std::memcpy(row_.data(), static_cast<const unsigned char*>(data) + k * row_bytes, row_bytes);
-    if (TIFFWriteScanline(tif, row_.data(), static_cast<uint32_t>(next_), 0) != 1)
-      throw InputError(path_, 0, "write error at row " + std::to_string(next_) + " (disk full?)");
+    std::memcpy(band_.data() + static_cast<size_t>(next_ % kTile) * row_bytes, static_cast<const unsigned char*>(data) + k * row_bytes, row_bytes);
+    if ((next_ + 1) % kTile == 0 || next_ + 1 == height_) write_tile_row();
+  }
+}
+
+// The tile row that holds row next_: each tile copied out of the band (the predictor differences the
+// tile in place, and an edge tile is padded with zeros), then compressed and written.
+void TiffRowWriter::write_tile_row() {
+  TIFF* tif = static_cast<TIFF*>(tif_);
+  const size_t bytes = static_cast<size_t>(bits_ / 8), row_bytes = static_cast<size_t>(width_) * bytes;
+  const long y0 = next_ - next_ % kTile, rows = next_ + 1 - y0;
+  std::vector<unsigned char>& tile = tile_;
+  tile.resize(static_cast<size_t>(kTile) * kTile * bytes);
+  for (long x0 = 0; x0 < width_; x0 += kTile) {
+    const size_t cols = static_cast<size_t>(std::min<long>(kTile, width_ - x0)) * bytes;
+    std::fill(tile.begin(), tile.end(), 0);
+    for (long r = 0; r < rows; ++r)
+      std::memcpy(tile.data() + static_cast<size_t>(r) * kTile * bytes, band_.data() + static_cast<size_t>(r) * row_bytes + static_cast<size_t>(x0) * bytes, cols);
+    const uint32_t index = TIFFComputeTile(tif, static_cast<uint32_t>(x0), static_cast<uint32_t>(y0), 0, 0);
+    if (TIFFWriteEncodedTile(tif, index, tile.data(), static_cast<tmsize_t>(tile.size())) < 0)
+      throw InputError(path_, 0, "write error at rows " + std::to_string(y0) + "-" + std::to_string(y0 + rows - 1) + " (disk full?)");
   }
 }
 

@@ -47,8 +47,8 @@ Raster read_band(const std::string& path, int band = 0);
 // allocated, zero), after checking that `band` is one of the image's `bands` (InputError naming `path`).
 Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h);
 
-// Writes a single-band 16-bit TIFF row strip by row strip (bounded memory), atomically: rows go to a
-// temporary file that replaces `path` on close().
+// Writes a single-band 16-bit TIFF given strip of rows by strip of rows (bounded memory; the file is tiled
+// as TiffRowWriter writes it), atomically: rows go to a temporary file that replaces `path` on close().
 class TiffWriterU16 {
  public:
   TiffWriterU16(const std::string& path, long width, long height, const std::vector<std::pair<std::string, std::string>>& tags = {});

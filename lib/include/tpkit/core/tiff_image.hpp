@@ -37,8 +37,10 @@ std::optional<Raster> read_tiff_region(const std::string& path, int band, long x
 // the GeoTIFF tags and GDAL_NODATA; libtiff's own warnings silenced (errors are reported by the callers).
 void register_tiff_tags();
 
-// A single-band 8- or 16-bit TIFF written row by row to `path` (deflate at `zip_level`, 64-row strips,
-// horizontal predictor). `tags` are TIFF ASCII tags by name: ImageDescription, DateTime, Software,
+// A single-band 8- or 16-bit TIFF written row by row to `path` (deflate at `zip_level`, horizontal
+// predictor, 256 x 256 tiles: a reader of a block decodes that block's tiles, where full-width strips
+// made a job reading a quarter of a 10000-px row decode four times its pixels; the writer holds one row
+// of tiles, 256 rows). `tags` are TIFF ASCII tags by name: ImageDescription, DateTime, Software,
 // Artist, Copyright, DocumentName. The file is written as given: atomicity is the caller's.
 class TiffRowWriter {
  public:
@@ -59,7 +61,9 @@ class TiffRowWriter {
   std::string path_;
   long width_, height_, next_ = 0;
   int bits_;
-  std::vector<unsigned char> row_;
+  static constexpr long kTile = 256;
+  std::vector<unsigned char> band_, tile_;  // the current row of tiles; one tile being encoded
+  void write_tile_row();
 };
 
 }  // namespace tpkit
