@@ -12,7 +12,9 @@
 // centre pixel take part in the estimation (the outer ones weigh < 1 %); all win x win pixels set the
 // grey-level normalisation and the final correlation. Robust L1 by iteratively reweighted least
 // squares (the first two iterations L2), weights taper / max(|r|, eps) (residuals of contrast-normalised
-// grey levels). Converged when the update of p2 is below `tolerance` pixels (not before iteration 4 with L1).
+// grey levels); an L1 step along the last one and shorter by rho is stretched by min(2, 1 / (1 - rho))
+// (over-relaxation: the same fixed point, reached in fewer iterations). Converged when the IRLS update of
+// p2 is below `tolerance` pixels (not before iteration 4 with L1).
 //
 // Stages: (0) affine, as above. With `quadratic`: (1) the quadratic model from the affine solution; with
 // `adaptive`: (2) the quadratic model again with the taper taper * (c / curvature_ref)^(-1/4) clamped to
