@@ -282,17 +282,33 @@ bool cell_span(float a, float b, float& lo, float& hi) {
 
 constexpr int kRow = kCells + 2, kHist = kRow * kRow * (kBins + 2);  // descriptor histogram with a border cell
 
-// One row of a descriptor window, samples k = 0..n-1 at every S-th pixel from the row's first: the
-// sample's cell coordinates (column, row), orientation bin and weighted magnitude.
+// floor(x) for |x| < 2^31, in operations a vector unit has (truncation, compare): the compiler vectorises
+// the loops that use it, where std::floor needs SSE4.1.
+inline int floor_int(float x) {
+  const int i = static_cast<int>(x);
+  return i - static_cast<int>(x < static_cast<float>(i));
+}
+
+// One row of a descriptor window, samples k = 0..n-1 at every S-th pixel from the row's first, in a
+// loop the compiler vectorises: the sample's histogram entry (cell row, cell column, orientation bin:
+// the first of the 8 it spreads over), its fractional parts there and its weighted magnitude (0 for a
+// sample outside the cells, whose entry is then 0).
 template <int S>
-void row_bins(const float* m, const float* t, const float* wx, int n, float ca, float sa, float c0, float r0, float ori,
-              float per_degree, float wy, float* cb, float* rb, float* ob, float* mg) {
+void row_bins(const float* __restrict m, const float* __restrict t, const float* __restrict wx, int n, float ca, float sa, float c0,
+              float r0, float ori, float per_degree, float wy, int* __restrict at, float* __restrict dr, float* __restrict dc,
+              float* __restrict dob, float* __restrict mg) {
   for (int k = 0; k < n; ++k) {
     const float u = static_cast<float>(S * k);
-    cb[k] = c0 + u * ca;
-    rb[k] = r0 + u * sa;
-    ob[k] = (t[S * k] - ori) * per_degree;
-    mg[k] = m[S * k] * wx[S * k] * wy;
+    const float cbin = c0 + u * ca, rbin = r0 + u * sa, obin = (t[S * k] - ori) * per_degree;
+    const int inside = static_cast<int>(rbin > -1) & static_cast<int>(rbin < kCells) & static_cast<int>(cbin > -1) &
+                       static_cast<int>(cbin < kCells);
+    const int ri = floor_int(rbin), ci = floor_int(cbin), oi = floor_int(obin);
+    const int o0 = oi + kBins * static_cast<int>(oi < 0) - kBins * static_cast<int>(oi >= kBins);
+    dr[k] = rbin - static_cast<float>(ri);
+    dc[k] = cbin - static_cast<float>(ci);
+    dob[k] = obin - static_cast<float>(oi);
+    at[k] = (((ri + 1) * kRow + ci + 1) * (kBins + 2) + o0) & -inside;
+    mg[k] = m[S * k] * wx[S * k] * wy * static_cast<float>(inside);
   }
 }
 
@@ -319,8 +335,11 @@ void descriptor(const Gradients& G, float x, float y, float ori, float scl, int 
   float hist[kHist] = {};
   const float half = kCells / 2.f - 0.5f, per_degree = kBins / 360.f;
   thread_local std::vector<float> buf;
+  thread_local std::vector<int> entry;
   buf.resize(4 * static_cast<size_t>(2 * R + 1));
-  float *cb = buf.data(), *rb = cb + (2 * R + 1), *ob = rb + (2 * R + 1), *mg = ob + (2 * R + 1);
+  entry.resize(static_cast<size_t>(2 * R + 1));
+  float *dr = buf.data(), *dc = dr + (2 * R + 1), *dob = dc + (2 * R + 1), *mg = dob + (2 * R + 1);
+  int* at = entry.data();
   for (int i = -R; i <= R; i += stride) {
     const int yy = py + i;
     if (yy <= 0 || yy >= rows - 1) continue;
@@ -334,26 +353,20 @@ void descriptor(const Gradients& G, float x, float y, float ori, float scl, int 
     if (j1 < js) continue;
     const int n = (j1 - js) / stride + 1;
     const float *m = G.mag.ptr<float>(yy) + px + js, *t = G.ori.ptr<float>(yy) + px + js, *wx = wxs.data() + R + js;
-    // the row's bins and weighted magnitudes, in a loop the compiler vectorises; then the scatter
+    // the row's entries and weights, vectorised; then the scatter (a sample outside adds zeros to entry 0)
     const float wy = wys[i + R], c0v = (js - fx) * ca - v * sa + half, r0v = (js - fx) * sa + v * ca + half;
     if (stride == 2)
-      row_bins<2>(m, t, wx, n, ca, sa, c0v, r0v, ori, per_degree, wy, cb, rb, ob, mg);
+      row_bins<2>(m, t, wx, n, ca, sa, c0v, r0v, ori, per_degree, wy, at, dr, dc, dob, mg);
     else
-      row_bins<1>(m, t, wx, n, ca, sa, c0v, r0v, ori, per_degree, wy, cb, rb, ob, mg);
+      row_bins<1>(m, t, wx, n, ca, sa, c0v, r0v, ori, per_degree, wy, at, dr, dc, dob, mg);
     for (int k = 0; k < n; ++k) {
-      const float rbin = rb[k], cbin = cb[k], obin = ob[k];
-      if (!(rbin > -1 && rbin < kCells && cbin > -1 && cbin < kCells)) continue;
-      const int r0 = cvFloor(rbin), c0 = cvFloor(cbin);
-      int o0 = cvFloor(obin);
-      const float dr = rbin - r0, dc = cbin - c0, dob = obin - o0;
-      if (o0 < 0) o0 += kBins;
-      if (o0 >= kBins) o0 -= kBins;
       const float mag = mg[k];
-      const float v1 = mag * dr, v0 = mag - v1;
-      const float v11 = v1 * dc, v10 = v1 - v11, v01 = v0 * dc, v00 = v0 - v01;
-      const float v111 = v11 * dob, v110 = v11 - v111, v101 = v10 * dob, v100 = v10 - v101;
-      const float v011 = v01 * dob, v010 = v01 - v011, v001 = v00 * dob, v000 = v00 - v001;
-      float* p = hist + ((r0 + 1) * kRow + c0 + 1) * (kBins + 2) + o0;
+      const float v1 = mag * dr[k], v0 = mag - v1;
+      const float v11 = v1 * dc[k], v10 = v1 - v11, v01 = v0 * dc[k], v00 = v0 - v01;
+      const float d = dob[k];
+      const float v111 = v11 * d, v110 = v11 - v111, v101 = v10 * d, v100 = v10 - v101;
+      const float v011 = v01 * d, v010 = v01 - v011, v001 = v00 * d, v000 = v00 - v001;
+      float* p = hist + at[k];
       p[0] += v000;
       p[1] += v001;
       p[kBins + 2] += v010;
