@@ -4,6 +4,8 @@
 #include <cfloat>
 #include <climits>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <numeric>
 #include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
@@ -133,66 +135,87 @@ bool interpolate(const std::vector<cv::Mat>& G, int layers, const ScaleSpaceOpti
   return true;
 }
 
-// cand[c] = 1 where D (row q, with the rows above and below) is an extremum of its 3 x 3 neighbourhood
-// beyond the pre-threshold, for c in [kBorder, cols - kBorder): a branch-free loop the compiler
-// vectorises, so that the 26-neighbour test runs on the few candidates only.
-void row_candidates(const float* qu, const float* q, const float* qd, int cols, float threshold, uint8_t* cand) {
+// Max and min of a row's pixel c - 1, c, c + 1.
+inline void row3(const float* __restrict p, int c, float& hi, float& lo) {
+  hi = std::max(std::max(p[c - 1], p[c]), p[c + 1]);
+  lo = std::min(std::min(p[c - 1], p[c]), p[c + 1]);
+}
+
+// cand[c] = 1 where D[l] (rows m: above, middle, below, of layers l - 1, l, l + 1) is an extremum of its
+// 26 neighbours beyond the pre-threshold (v >= each of them for a maximum, <= for a minimum), for c in
+// [kBorder, cols - kBorder): a branch-free loop the compiler vectorises, so that only the extrema reach
+// the branches of the interpolation.
+void cube_candidates(const float* const m[3][3], int cols, float threshold, uint8_t* __restrict cand) {
+  const float *__restrict a0 = m[0][0], *__restrict a1 = m[0][1], *__restrict a2 = m[0][2];
+  const float *__restrict b0 = m[1][0], *__restrict b1 = m[1][1], *__restrict b2 = m[1][2];
+  const float *__restrict e0 = m[2][0], *__restrict e1 = m[2][1], *__restrict e2 = m[2][2];
   for (int c = kBorder; c < cols - kBorder; ++c) {
-    const float v = q[c];
-    const float hi = std::max(std::max(std::max(qu[c - 1], qu[c]), std::max(qu[c + 1], qd[c - 1])),
-                              std::max(std::max(qd[c], qd[c + 1]), std::max(q[c - 1], q[c + 1])));
-    const float lo = std::min(std::min(std::min(qu[c - 1], qu[c]), std::min(qu[c + 1], qd[c - 1])),
-                              std::min(std::min(qd[c], qd[c + 1]), std::min(q[c - 1], q[c + 1])));
+    const float v = b1[c];
+    float h[8], l[8];
+    row3(a0, c, h[0], l[0]);
+    row3(a1, c, h[1], l[1]);
+    row3(a2, c, h[2], l[2]);
+    row3(b0, c, h[3], l[3]);
+    row3(b2, c, h[4], l[4]);
+    row3(e0, c, h[5], l[5]);
+    row3(e1, c, h[6], l[6]);
+    row3(e2, c, h[7], l[7]);
+    const float hi = std::max(std::max(std::max(h[0], h[1]), std::max(h[2], h[3])),
+                              std::max(std::max(std::max(h[4], h[5]), std::max(h[6], h[7])), std::max(b1[c - 1], b1[c + 1])));
+    const float lo = std::min(std::min(std::min(l[0], l[1]), std::min(l[2], l[3])),
+                              std::min(std::min(std::min(l[4], l[5]), std::min(l[6], l[7])), std::min(b1[c - 1], b1[c + 1])));
     const bool up = (v > threshold) & (v > 0.f) & (v >= hi), down = (v < -threshold) & (v < 0.f) & (v <= lo);
     cand[c] = static_cast<uint8_t>(up | down);
   }
 }
 
 // Extrema of D over its 26 neighbours in layers 1..layers (D from the Gaussian layers G), interpolated;
-// in row order, layer by layer.
+// in row order, layer by layer. One pass down the rows keeps rows r - 1, r, r + 1 of every D layer.
 std::vector<Extremum> extrema(const std::vector<cv::Mat>& G, int layers, const ScaleSpaceOptions& o) {
-  const int rows = G[0].rows, cols = G[0].cols;
+  const int rows = G[0].rows, cols = G[0].cols, nd = layers + 2;  // D[k] = G[k + 1] - G[k], k = 0..layers + 1
   std::vector<Extremum> out;
   if (rows <= 2 * kBorder || cols <= 2 * kBorder) return out;
   // OpenCV's pre-threshold on |D| (grey levels; 0 for contrast thresholds below 0.06 with 3 layers)
   const float threshold = static_cast<float>(std::floor(0.5 * o.contrast / layers * 255));
-  for (int l = 1; l <= layers; ++l) {
-    std::vector<std::vector<Extremum>> found(strip_count(rows));
-    by_strips(rows, [&](int s, int a, int b) {
-      const int r0 = std::max(a, kBorder), r1 = std::min(b, rows - kBorder);
-      if (r0 >= r1) return;
-      // rows r - 1, r, r + 1 of D[l], each computed once as the scan moves down
-      std::vector<float> ring(3 * static_cast<size_t>(cols));
-      std::vector<uint8_t> cand(cols);
-      float* d[3] = {ring.data(), ring.data() + cols, ring.data() + 2 * cols};
-      auto d_row = [&](int y, float* to) {
-        const float *hi = G[l + 1].ptr<float>(y), *lo = G[l].ptr<float>(y);
+  // found[l][strip]
+  std::vector<std::vector<std::vector<Extremum>>> found(layers + 1, std::vector<std::vector<Extremum>>(strip_count(rows)));
+  by_strips(rows, [&](int s, int a, int b) {
+    const int r0 = std::max(a, kBorder), r1 = std::min(b, rows - kBorder);
+    if (r0 >= r1) return;
+    // slot (y - r0 + 1) % 3 holds row y of every D layer, each computed once
+    std::vector<float> ring(3 * static_cast<size_t>(nd) * cols);
+    std::vector<uint8_t> cand(cols);
+    auto d_row = [&](int y, int k) { return ring.data() + (static_cast<size_t>((y - r0 + 1) % 3) * nd + k) * cols; };
+    auto fill_rows = [&](int y) {
+      for (int k = 0; k < nd; ++k) {
+        const float *hi = G[k + 1].ptr<float>(y), *lo = G[k].ptr<float>(y);
+        float* to = d_row(y, k);
         for (int c = 0; c < cols; ++c) to[c] = hi[c] - lo[c];
-      };
-      d_row(r0 - 1, d[0]);
-      d_row(r0, d[1]);
-      for (int r = r0; r < r1; ++r) {
-        d_row(r + 1, d[2]);
-        row_candidates(d[0], d[1], d[2], cols, threshold, cand.data());
-        for (int c = kBorder; c < cols - kBorder; ++c) {
-          if (!cand[c]) continue;
-          const float v = d[1][c];
-          bool ok = true;
-          for (int n = l - 1; n <= l + 1 && ok; n += 2)
-            for (int y = r - 1; y <= r + 1 && ok; ++y) {
-              const float *hi = G[n + 1].ptr<float>(y) + c, *lo = G[n].ptr<float>(y) + c;
-              const float p0 = hi[-1] - lo[-1], p1 = hi[0] - lo[0], p2 = hi[1] - lo[1];
-              ok = v > 0 ? (v >= p0 && v >= p1 && v >= p2) : (v <= p0 && v <= p1 && v <= p2);
-            }
-          if (!ok) continue;
-          Extremum e;
-          if (interpolate(G, layers, o, l, r, c, e)) found[s].push_back(e);
-        }
-        std::rotate(d, d + 1, d + 3);
       }
-    });
-    for (auto& f : found) out.insert(out.end(), f.begin(), f.end());
-  }
+    };
+    fill_rows(r0 - 1);
+    fill_rows(r0);
+    for (int r = r0; r < r1; ++r) {
+      fill_rows(r + 1);
+      for (int l = 1; l <= layers; ++l) {
+        const float* m[3][3];
+        for (int n = 0; n < 3; ++n)
+          for (int y = 0; y < 3; ++y) m[n][y] = d_row(r - 1 + y, l - 1 + n);
+        cube_candidates(m, cols, threshold, cand.data());
+        const int end = cols - kBorder;
+        for (int c = kBorder; c < end; ++c) {
+          uint64_t eight;  // the candidates are rare: skip 8 columns at a time
+          while (c + 8 <= end && (std::memcpy(&eight, cand.data() + c, 8), eight == 0)) c += 8;
+          if (c >= end) break;
+          if (!cand[c]) continue;
+          Extremum e;
+          if (interpolate(G, layers, o, l, r, c, e)) found[l][s].push_back(e);
+        }
+      }
+    }
+  });
+  for (int l = 1; l <= layers; ++l)
+    for (auto& f : found[l]) out.insert(out.end(), f.begin(), f.end());
   return out;
 }
 
