@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <sstream>
 
 #include "tpkit/core/error.hpp"
@@ -13,6 +12,7 @@ namespace tpkit {
 namespace {
 
 struct Candidate {
+  long long id1, id2;
   size_t file;
   Eigen::Index row;
   double inner;  // distance of x1 inside its file's region, pixels
@@ -20,14 +20,21 @@ struct Candidate {
 
 // Distance from (x, y) to the border of the file's region (x0 y0 w h in the `region` metadata), or
 // infinity for a file without one.
-double inner_distance(const Matches& m, double x, double y) {
-  const std::string r = meta_get(m.meta, "region");
-  if (r.empty()) return std::numeric_limits<double>::infinity();
-  std::istringstream in(r);
-  double x0, y0, w, h;
-  if (!(in >> x0 >> y0 >> w >> h)) throw InputError(m.source, 0, "unreadable region metadata: " + r);
-  return std::min({x - (x0 - 0.5), x0 + w - 0.5 - x, y - (y0 - 0.5), y0 + h - 0.5 - y});
-}
+struct RegionBorder {
+  bool whole = true;
+  double x0 = 0, y0 = 0, w = 0, h = 0;
+  explicit RegionBorder(const Matches& m) {
+    const std::string r = meta_get(m.meta, "region");
+    if (r.empty()) return;
+    std::istringstream in(r);
+    if (!(in >> x0 >> y0 >> w >> h)) throw InputError(m.source, 0, "unreadable region metadata: " + r);
+    whole = false;
+  }
+  double inner(double x, double y) const {
+    if (whole) return std::numeric_limits<double>::infinity();
+    return std::min({x - (x0 - 0.5), x0 + w - 0.5 - x, y - (y0 - 0.5), y0 + h - 0.5 - y});
+  }
+};
 
 void check_same_pair(const Matches& first, const Matches& m) {
   auto same = [](const ImageRef& p, const ImageRef& q) { return p.path == q.path && p.width == q.width && p.height == q.height; };
@@ -49,45 +56,50 @@ bool better(const Candidate& p, const Candidate& q) {
 
 }  // namespace
 
+// Every record of every file, then groups by sorting (stable: a group keeps the files' order, so that the
+// earlier file wins ties): one record per match, then per id1, then per id2.
 Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats, const MergeOptions& o) {
   if (files.empty()) throw UsageError("no matches file to merge");
   MergeStats st;
   st.files = static_cast<long>(files.size());
   const Matches& first = files[0];
-  std::map<std::pair<long long, long long>, Candidate> by_match;
+  std::vector<Candidate> all;
   for (size_t f = 0; f < files.size(); ++f) {
     const Matches& m = files[f];
     check_same_pair(first, m);
-    for (Eigen::Index k = 0; k < m.xy.rows(); ++k) {
-      ++st.records;
-      const Candidate c{f, k, inner_distance(m, m.xy(k, 0), m.xy(k, 1))};
-      const auto key = std::make_pair(m.id1[static_cast<size_t>(k)], m.id2[static_cast<size_t>(k)]);
-      auto [it, fresh] = by_match.emplace(key, c);
-      if (!fresh) {
-        // one match at two positions is a conflict: one of them is wrong
-        const Matches& kept = files[it->second.file];
-        const double apart = (kept.xy.row(it->second.row) - m.xy.row(k)).cwiseAbs().maxCoeff();
-        ++(apart > o.same_position ? st.conflicts : st.duplicates);
-        if (better(c, it->second)) it->second = c;
-      }
-    }
+    const RegionBorder region(m);
+    for (Eigen::Index k = 0; k < m.xy.rows(); ++k)
+      all.push_back({m.id1[static_cast<size_t>(k)], m.id2[static_cast<size_t>(k)], f, k, region.inner(m.xy(k, 0), m.xy(k, 1))});
   }
-  // conflicts: one record per id1, then one per id2
-  auto keep_one_per = [&](auto key_of) {
-    std::map<long long, std::pair<std::pair<long long, long long>, Candidate>> best;
-    for (const auto& [match, c] : by_match) {
-      auto [it, fresh] = best.emplace(key_of(match), std::make_pair(match, c));
-      if (!fresh) {
-        ++st.conflicts;
-        if (better(c, it->second.second)) it->second = {match, c};
+  st.records = static_cast<long>(all.size());
+  // the best of each run of equal keys (the first on ties), in the order of `v`
+  auto best_of_runs = [&](std::vector<Candidate>& v, auto same_key, auto on_repeat) {
+    std::vector<Candidate> kept;
+    for (size_t a = 0, b; a < v.size(); a = b) {
+      Candidate best = v[a];
+      for (b = a + 1; b < v.size() && same_key(v[a], v[b]); ++b) {
+        on_repeat(best, v[b]);
+        if (better(v[b], best)) best = v[b];
       }
+      kept.push_back(best);
     }
-    std::map<std::pair<long long, long long>, Candidate> kept;
-    for (const auto& [k, mc] : best) kept.emplace(mc.first, mc.second);
-    by_match.swap(kept);
+    v.swap(kept);
   };
-  keep_one_per([](const std::pair<long long, long long>& m) { return m.first; });
-  keep_one_per([](const std::pair<long long, long long>& m) { return m.second; });
+  auto by_match = [](const Candidate& p, const Candidate& q) { return p.id1 != q.id1 ? p.id1 < q.id1 : p.id2 < q.id2; };
+  std::stable_sort(all.begin(), all.end(), by_match);
+  // one match at two positions is a conflict: one of them is wrong
+  best_of_runs(
+      all, [](const Candidate& p, const Candidate& q) { return p.id1 == q.id1 && p.id2 == q.id2; },
+      [&](const Candidate& kept, const Candidate& c) {
+        const double apart = (files[kept.file].xy.row(kept.row) - files[c.file].xy.row(c.row)).cwiseAbs().maxCoeff();
+        ++(apart > o.same_position ? st.conflicts : st.duplicates);
+      });
+  // conflicts: one record per id1, then one per id2
+  auto count_conflict = [&](const Candidate&, const Candidate&) { ++st.conflicts; };
+  best_of_runs(all, [](const Candidate& p, const Candidate& q) { return p.id1 == q.id1; }, count_conflict);
+  std::stable_sort(all.begin(), all.end(), [](const Candidate& p, const Candidate& q) { return p.id2 < q.id2; });
+  best_of_runs(all, [](const Candidate& p, const Candidate& q) { return p.id2 == q.id2; }, count_conflict);
+  std::sort(all.begin(), all.end(), by_match);
 
   Matches out;
   out.image1 = first.image1;
@@ -97,14 +109,14 @@ Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats, cons
         kv.first != "verified")
       out.meta.push_back(kv);
   out.extra.names = first.extra.names;
-  const auto n = static_cast<Eigen::Index>(by_match.size());
+  const auto n = static_cast<Eigen::Index>(all.size());
   out.xy.resize(n, 4);
   out.extra.values.resize(n, static_cast<Eigen::Index>(first.extra.names.size()));
   Eigen::Index r = 0;
-  for (const auto& [match, c] : by_match) {  // sorted by (id1, id2)
+  for (const Candidate& c : all) {  // sorted by (id1, id2)
     const Matches& m = files[c.file];
-    out.id1.push_back(match.first);
-    out.id2.push_back(match.second);
+    out.id1.push_back(c.id1);
+    out.id2.push_back(c.id2);
     out.xy.row(r) = m.xy.row(c.row);
     if (out.extra.values.cols() > 0) out.extra.values.row(r) = m.extra.values.row(c.row);
     ++r;
