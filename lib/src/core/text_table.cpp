@@ -1,5 +1,6 @@
 #include "tpkit/core/text_table.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -60,11 +61,27 @@ std::string trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
+// The words of s between white space (the C locale's: space, \t \n \v \f \r), as `is >> word` reads them
+// (without a stream per line: the records of a large file are read a million at a time).
+void split_ws(const std::string& s, std::vector<std::string>& out) {
+  auto space = [](char c) { return c == ' ' || (c >= '\t' && c <= '\r'); };
+  size_t n = 0;
+  const size_t len = s.size();
+  for (size_t b = 0;;) {
+    while (b < len && space(s[b])) ++b;
+    if (b == len) break;
+    size_t e = b;
+    while (e < len && !space(s[e])) ++e;
+    if (n == out.size()) out.emplace_back();
+    out[n++].assign(s, b, e - b);
+    b = e;
+  }
+  out.resize(n);
+}
+
 std::vector<std::string> split_ws(const std::string& s) {
   std::vector<std::string> out;
-  std::istringstream is(s);
-  std::string w;
-  while (is >> w) out.push_back(w);
+  split_ws(s, out);
   return out;
 }
 
@@ -90,6 +107,7 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
   long lineno = 0;
   bool header_seen = false;
   bool first_content = true;
+  std::vector<std::string> f;  // a record's fields (reused)
   while (read_text_line(in, line, t.source, lineno + 1)) {
     ++lineno;
     if (lineno == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // a UTF-8 byte order mark
@@ -164,7 +182,7 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
     }
     // a record
     first_content = false;
-    auto f = split_ws(s);
+    split_ws(s, f);
     if (opt.columnar && t.columns.empty()) {
       if (header_seen || !opt.default_columns)
         throw InputError(t.source, lineno, "record before any '# columns:' line");
@@ -183,11 +201,13 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
     std::vector<double> row(f.size());
     for (size_t i = 0; i < f.size(); ++i) {
       double v;
-      std::string name = (opt.columnar ? "'" + t.columns[i] + "'" : std::to_string(i + 1));
-      if (!parse_double(f[i], v)) throw InputError(t.source, lineno, "field " + name + " is not a number: '" + f[i] + "'");
-      const std::string column = i < t.columns.size() ? t.columns[i] : std::string();  // a row longer than its columns: ""
-      if (!std::isfinite(v) && !(std::isnan(v) && opt.may_be_missing && opt.may_be_missing(column)))
-        throw InputError(t.source, lineno, "field " + name + " is not finite: '" + f[i] + "'");
+      auto name = [&] { return opt.columnar ? "'" + t.columns[i] + "'" : std::to_string(i + 1); };
+      if (!parse_double(f[i], v)) throw InputError(t.source, lineno, "field " + name() + " is not a number: '" + f[i] + "'");
+      if (!std::isfinite(v)) {
+        const std::string column = i < t.columns.size() ? t.columns[i] : std::string();  // a row longer than its columns: ""
+        if (!(std::isnan(v) && opt.may_be_missing && opt.may_be_missing(column)))
+          throw InputError(t.source, lineno, "field " + name() + " is not finite: '" + f[i] + "'");
+      }
       row[i] = v;
     }
     t.rows.push_back(std::move(row));
