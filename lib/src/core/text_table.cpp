@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <sstream>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"

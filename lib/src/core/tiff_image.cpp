@@ -302,15 +302,14 @@ void TiffRowWriter::write_tile_row() {
   TIFF* tif = static_cast<TIFF*>(tif_);
   const size_t bytes = static_cast<size_t>(bits_ / 8), row_bytes = static_cast<size_t>(width_) * bytes;
   const long y0 = next_ - next_ % kTile, rows = next_ + 1 - y0;
-  std::vector<unsigned char>& tile = tile_;
-  tile.resize(static_cast<size_t>(kTile) * kTile * bytes);
+  tile_.resize(static_cast<size_t>(kTile) * kTile * bytes);
   for (long x0 = 0; x0 < width_; x0 += kTile) {
     const size_t cols = static_cast<size_t>(std::min<long>(kTile, width_ - x0)) * bytes;
-    std::fill(tile.begin(), tile.end(), 0);
+    std::fill(tile_.begin(), tile_.end(), 0);
     for (long r = 0; r < rows; ++r)
-      std::memcpy(tile.data() + static_cast<size_t>(r) * kTile * bytes, band_.data() + static_cast<size_t>(r) * row_bytes + static_cast<size_t>(x0) * bytes, cols);
+      std::memcpy(tile_.data() + static_cast<size_t>(r) * kTile * bytes, band_.data() + static_cast<size_t>(r) * row_bytes + static_cast<size_t>(x0) * bytes, cols);
     const uint32_t index = TIFFComputeTile(tif, static_cast<uint32_t>(x0), static_cast<uint32_t>(y0), 0, 0);
-    if (TIFFWriteEncodedTile(tif, index, tile.data(), static_cast<tmsize_t>(tile.size())) < 0)
+    if (TIFFWriteEncodedTile(tif, index, tile_.data(), static_cast<tmsize_t>(tile_.size())) < 0)
       throw InputError(path_, 0, "write error at rows " + std::to_string(y0) + "-" + std::to_string(y0 + rows - 1) + " (disk full?)");
   }
 }
