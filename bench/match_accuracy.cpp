@@ -11,7 +11,8 @@
 //       is above MED / P90.
 //       --score FILE A B: instead, score any program's matches file of views A and B (1-based; e.g. COLMAP's
 //       through tp-convert --from colmap) against the truth: matches, correct (< 1 px), error median/p90.
-//       --min-corr R, --max-sigma PX: the LSM acceptance (tp-match's options); --nodata V: grey level of
+//       --min-corr R, --max-sigma PX: the LSM acceptance (tp-match's options); --contrast C: the SIFT
+//       contrast threshold (tp-match --contrast); --nodata V: grey level of
 //       invalid pixels (tp-synth --nodata-band writes 0).
 //       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
 //       the true local map's Jacobian and Hessians (central differences, 1 px) for error analysis.
@@ -101,7 +102,7 @@ int main(int argc, char** argv) {
     int quad = -1;
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
     int adaptive = -1, sit = -1, epic = -1;
-    double stol = -1, min_corr = -2, max_sigma = -1;
+    double stol = -1, min_corr = -2, max_sigma = -1, contrast = -1;
     std::optional<double> nodata;
     std::string score;
     int score_a = 1, score_b = 2;
@@ -148,6 +149,7 @@ int main(int argc, char** argv) {
       else if (a == "--render8") need(2), r_in = argv[++i], r_out = argv[++i];
       else if (a == "--min-corr") need(1), min_corr = num();
       else if (a == "--max-sigma") need(1), max_sigma = num();
+      else if (a == "--contrast") need(1), contrast = num();
       else if (a == "--nodata") need(1), nodata = num();
       else if (a == "--score") need(3), score = argv[++i], score_a = whole(), score_b = whole();
       else {
@@ -218,6 +220,7 @@ int main(int argc, char** argv) {
       if (stol > 0) po.lsm.stage_tolerance = stol;
       if (sit > 0) po.lsm.stage_iterations = sit;
       if (min_corr >= -1) po.lsm.min_corr = min_corr;
+      if (contrast > 0) po.sift.contrast = contrast;
       if (max_sigma > 0) po.lsm.max_sigma = max_sigma;
       const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
       FILE* df = dump.empty() ? nullptr : std::fopen(dump.c_str(), "w");
