@@ -7,6 +7,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/core/text_table.hpp"
+#include "tpkit/rpc/epipolar_grid.hpp"
 
 namespace tpkit {
 
@@ -28,23 +29,32 @@ void rpc_height_range(const RpcModel& a, const RpcModel& b, const RpcGuideOption
 namespace {
 
 // The chord of the epipolar curve of pixel (x, y) of image a in image b from height lo to hi.
+constexpr int kMaxSamples = 64;  // heights along a curve (RpcGuideOptions::samples, clamped)
 struct Chord {
   Eigen::Vector2d q0{0, 0}, q1{0, 0};
   double bend = 0;  // largest distance of the curve from the chord, pixels
   bool ok = false;
 };
 
-Chord chord_of(const RpcModel& a, const RpcModel& b, double x, double y, double lo, double hi, int samples) {
+// The curve's points come from `grid` where it holds them (all of them), else from the models.
+Chord chord_of(const RpcModel& a, const RpcModel& b, const EpipolarGrid& grid, double x, double y, double lo, double hi,
+               int samples) {
   Chord c;
-  const auto curve = epipolar_curve(a, b, x, y, lo, hi, samples);
-  if (curve.size() < static_cast<size_t>(samples)) return c;  // a height the model cannot localize
-  c.q0 = curve.front().head<2>();
-  c.q1 = curve.back().head<2>();
+  Eigen::Vector2d curve[kMaxSamples];
+  bool from_grid = true;
+  for (int k = 0; k < samples && from_grid; ++k) from_grid = grid.point(x, y, lo + (hi - lo) * k / (samples - 1), curve[k]);
+  if (!from_grid) {
+    const auto exact = epipolar_curve(a, b, x, y, lo, hi, samples);
+    if (exact.size() < static_cast<size_t>(samples)) return c;  // a height the model cannot localize
+    for (int k = 0; k < samples; ++k) curve[k] = exact[static_cast<size_t>(k)].head<2>();
+  }
+  c.q0 = curve[0];
+  c.q1 = curve[samples - 1];
   const Eigen::Vector2d d = c.q1 - c.q0;
   const double len = d.norm();
   if (len > 1e-9) {
     const Eigen::Vector2d n(d.y() / len, -d.x() / len);
-    for (const auto& p : curve) c.bend = std::max(c.bend, std::abs(n.dot(p.head<2>() - c.q0)));
+    for (int k = 0; k < samples; ++k) c.bend = std::max(c.bend, std::abs(n.dot(curve[k] - c.q0)));
   }
   c.ok = true;
   return c;
@@ -77,12 +87,23 @@ Keypoints subset(const Keypoints& K, const std::vector<int>& idx) {
 std::vector<SearchRegion> rpc_search_regions(const RpcModel& a, const RpcModel& b, const std::vector<cv::KeyPoint>& kp1,
                                              const std::vector<double>& h_lo, const std::vector<double>& h_hi,
                                              double along, double across, int samples, int threads, RpcGuidedStats* stats) {
-  samples = std::max(2, samples);
+  samples = std::clamp(samples, 2, kMaxSamples);
+  // the curves' points interpolated in a grid of exact ones over the keypoints' box and heights
+  // (epipolar_grid.hpp: checked to 1e-3 px), the models' own where the grid has none
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300, lo = 1e300, hi = -1e300;
+  for (size_t i = 0; i < kp1.size(); ++i) {
+    x0 = std::min(x0, static_cast<double>(kp1[i].pt.x)), x1 = std::max(x1, static_cast<double>(kp1[i].pt.x));
+    y0 = std::min(y0, static_cast<double>(kp1[i].pt.y)), y1 = std::max(y1, static_cast<double>(kp1[i].pt.y));
+    lo = std::min(lo, h_lo[i]), hi = std::max(hi, h_hi[i]);
+  }
+  EpipolarGridOptions go;
+  go.max_nodes = static_cast<long>(kp1.size()) * samples / 4;  // the grid must save most of the localizations
+  const EpipolarGrid grid(a, b, x0, y0, x1, y1, lo, hi, go, threads);
   // each keypoint's region straight from its chord (a 10000² image's 2 million chords held beside the
   // regions cost 97 MB at the run's peak); the statistics read the chords back from the regions
   std::vector<SearchRegion> out(kp1.size());
   parallel_for(kp1.size(), threads, [&](size_t i) {
-    out[i] = region_of(chord_of(a, b, kp1[i].pt.x, kp1[i].pt.y, h_lo[i], h_hi[i], samples), along, across);
+    out[i] = region_of(chord_of(a, b, grid, kp1[i].pt.x, kp1[i].pt.y, h_lo[i], h_hi[i], samples), along, across);
   });
   double sum = 0;
   long n = 0;
