@@ -19,7 +19,9 @@ namespace tpkit {
 
 std::string detector_tag(const SiftOptions& o, const ImageSource& src) {
   std::ostringstream s;
-  s << "sift tpkit-1 band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
+  // tpkit-N: the version of tpkit's SIFT, raised whenever its keypoints or descriptors change, so that a
+  // keypoint cache of another version is not reused (2: every octave's descriptors sample every second pixel)
+  s << "sift tpkit-2 band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
     << " max_per_tile=" << o.max_per_tile << " contrast=" << format_number(o.contrast) << " edge=" << format_number(o.edge)
     << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " descriptor=rootsift stretch=" << format_number(o.stretch_lo)
     << "," << format_number(o.stretch_hi) << " ids=tile-rank";

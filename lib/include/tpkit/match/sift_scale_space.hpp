@@ -17,7 +17,10 @@
 //     samples 1200-4800 pixels, and neighbouring windows overlap);
 //   - the Gaussian weights of a window from two one-dimensional tables (the weight is separable in
 //     the unrotated offsets), and each row of a descriptor window visited only over the columns whose
-//     rotated position falls in the 4 x 4 cells.
+//     rotated position falls in the 4 x 4 cells;
+//   - descriptor windows sampled at every second pixel of their octave, in rows and columns (in the
+//     upsampled octave, the input's own pixels): a quarter of the samples, the same information (a
+//     window is at least 24 octave pixels wide, its gradient maps blurred by sigma >= 2 of them).
 // Differences from OpenCV, all small: positions use the half-pixel convention of the upsampling
 // (OpenCV's upsampled-octave positions are 0.25 px right of and below the pixel they describe, in every
 // octave); descriptor windows are centred on the keypoint's sub-pixel position rather than on its
