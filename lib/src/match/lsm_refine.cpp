@@ -361,7 +361,8 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   double sigma_t = o.taper;
   auto set_taper = [&](double sg) {
     sigma_t = sg;
-    m = sg > 0 && o.support > 0 ? std::min(n, s.within(o.support * sg)) : n;
+    const double support = o.quadratic ? o.quadratic_support : o.support;
+    m = sg > 0 && support > 0 ? std::min(n, s.within(support * sg)) : n;
     const double den = sg > 0 ? 1.0 / (2 * sg * sg) : 0.0;
     // the Gaussian is separable: 2 w exponentials instead of one a pixel
     for (int i = -h; i <= h; ++i) {
