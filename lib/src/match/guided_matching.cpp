@@ -96,15 +96,23 @@ TPKIT_HOT void search_region(const Buckets& B, const double* bx, const double* b
   for (int a = da; a <= db; ++a) {
     // the buckets of one row are contiguous in bucket order
     const int t0 = B.start[static_cast<size_t>(a) * B.ns + sa], t1 = B.start[static_cast<size_t>(a) * B.ns + sb + 1];
-    cand.resize(static_cast<size_t>(t1 - t0));
-    int nc = 0;
-    for (int t = t0; t < t1; ++t) {  // without branches: whether a keypoint is inside is hard to predict
-      const double vx = bx[t] - ax, vy = by[t] - ay;
+    // which keypoints of the row lie in the wider region (bit 1) and in the region (bit 0): one loop the
+    // compiler vectorises, then the compaction (a store per keypoint, no branch: inside is hard to predict)
+    const int span = t1 - t0;
+    cand.resize(2 * static_cast<size_t>(span));
+    int* flag = cand.data() + span;
+    const double *px = bx + t0, *py = by + t0;
+    for (int k = 0; k < span; ++k) {
+      const double vx = px[k] - ax, vy = py[k] - ay;
       const double dd = nx * vx + ny * vy, ss = ux * vx + uy * vy;
-      const bool wide = (std::abs(dd) <= rd) & (ss >= ws_lo) & (ss <= ws_hi);
-      const bool inner = (std::abs(dd) <= band) & (ss >= 0) & (ss <= len);
-      cand[static_cast<size_t>(nc)] = 2 * t + static_cast<int>(inner);
-      nc += static_cast<int>(wide);
+      const int wide = static_cast<int>(std::abs(dd) <= rd) & static_cast<int>(ss >= ws_lo) & static_cast<int>(ss <= ws_hi);
+      const int inner = static_cast<int>(std::abs(dd) <= band) & static_cast<int>(ss >= 0) & static_cast<int>(ss <= len);
+      flag[k] = 2 * wide + inner;
+    }
+    int nc = 0;
+    for (int k = 0; k < span; ++k) {
+      cand[static_cast<size_t>(nc)] = 2 * (t0 + k) + (flag[k] & 1);
+      nc += flag[k] >> 1;
     }
     for (int c = 0; c < nc; ++c) {
       if (c + 4 < nc) {  // the rows are scattered over the matrix: ask for one a few candidates ahead
