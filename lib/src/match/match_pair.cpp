@@ -337,6 +337,18 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
     groups.push_back(std::move(G));
   };
   for (auto& js : bands) plan(js);
+  // few records a group (the estimates' samples: 200 or 300 over the image's bands): the groups side by
+  // side, each read, filtered and refined on one thread, where splitting a group of a few dozen records
+  // over the threads left them waiting on its reading and filtering (Marseille pair 1-2 at 2 threads:
+  // the estimates took a quarter of the refinement stage)
+  if (groups.size() > 1 && recs.size() < 256 * groups.size()) {
+    parallel_for(groups.size(), threads(), [&](size_t g) {
+      refine(groups[g], load(groups[g]), 0, groups[g].js.size());
+      if (pr) pr->add(static_cast<long>(groups[g].js.size()));
+    });
+    if (pr) pr->done();
+    return;
+  }
   // the next group's regions are read on their own thread (or, where none can start, when they are needed)
   std::future<std::pair<Raster, Raster>> next;
   if (!groups.empty()) next = std::async(std::launch::async | std::launch::deferred, load, std::cref(groups[0]));
