@@ -84,16 +84,18 @@ std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<ui
   if (valid) valid->assign(r.data.size(), 255);
   const double span = s.hi - s.lo;
   const double g = span > 0 ? 255.0 / span : 0.0;
-  for (size_t i = 0; i < r.data.size(); ++i) {
-    float v = r.data[i];
-    if (std::isnan(v)) {
-      out[i] = 0;
-      if (valid) (*valid)[i] = 0;
-      continue;
-    }
-    double q = std::round((v - s.lo) * g);
-    out[i] = static_cast<uint8_t>(std::clamp(q, 0.0, 255.0));
+  // the grey level rounded half up (x + 0.5 truncated: std::round's value for x >= 0; below 0 the clamp
+  // gives 0 either way), NaN 0: a loop the compiler vectorises
+  const size_t n = r.data.size();
+  const float* in = r.data.data();
+  uint8_t* o = out.data();
+  for (size_t i = 0; i < n; ++i) {
+    const double x = (static_cast<double>(in[i]) - s.lo) * g;
+    const double q = x > 0 ? std::min(255.0, static_cast<double>(static_cast<int>(std::min(x, 255.0) + 0.5))) : 0.0;
+    o[i] = static_cast<uint8_t>(q);  // NaN: x > 0 is false
   }
+  if (valid)
+    for (size_t i = 0; i < n; ++i) (*valid)[i] = std::isnan(in[i]) ? 0 : 255;
   return out;
 }
 

@@ -15,9 +15,10 @@ void root_row(const T* in, uint8_t* out, int n) {
     std::fill(out, out + n, uint8_t{0});
     return;
   }
+  // round half up by truncation of x + 0.5 (x >= 0: std::round's value), a loop the compiler vectorises
   for (int k = 0; k < n; ++k) {
     const double v = std::max(0.0, static_cast<double>(in[k])) / l1;
-    out[k] = static_cast<uint8_t>(std::min(255.0, std::round(512.0 * std::sqrt(v))));
+    out[k] = static_cast<uint8_t>(std::min(255.0, static_cast<double>(static_cast<int>(512.0 * std::sqrt(v) + 0.5))));
   }
 }
 
