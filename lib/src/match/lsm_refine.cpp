@@ -415,8 +415,9 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   const int PQ = epi ? 11 : kMaxP;
   Eigen::Matrix<double, kMaxP, 1> th = Eigen::Matrix<double, kMaxP, 1>::Zero();
   th.head<8>() << p2.x(), p2.y(), A0(0, 0), A0(0, 1), A0(1, 0), A0(1, 1), 0.0, 1.0;
-  // image 2 under the model p at the first `count` pixels, with gradients at the first `grad_count`
-  auto evaluate_model = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count, int grad_count, auto quad) -> bool {
+  Eigen::Matrix<double, kMaxP, 1> th_eval = th;  // the model at which the support's pixels were last evaluated
+  // image 2 under the model p at pixels first..count - 1, with gradients below `grad_count`
+  auto evaluate_model = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int first, int count, int grad_count, auto quad) -> bool {
     const double bx = p(0) - img2.x0, by = p(1) - img2.y0;
     const double a11 = p(2), a12 = p(3), a21 = p(4), a22 = p(5), c0 = p(6), c1 = p(7);
     auto pixel = [&](int k, auto grad) -> bool {
@@ -438,16 +439,16 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       store(k, val, vx, vy, c0, c1, grad);
       return true;
     };
-    for (int k = 0; k < grad_count; ++k)
+    for (int k = first; k < grad_count; ++k)
       if (!pixel(k, std::true_type())) return false;
-    for (int k = grad_count; k < count; ++k)
+    for (int k = std::max(first, grad_count); k < count; ++k)
       if (!pixel(k, std::false_type())) return false;
     return true;
   };
   // the affine model skips the quadratic terms (zero then, so the positions are the same)
-  auto evaluate = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count, int grad_count) -> bool {
-    if (p.segment<6>(8).isZero(0)) return evaluate_model(p, count, grad_count, std::false_type());  // also the affine stage
-    return evaluate_model(p, count, grad_count, std::true_type());
+  auto evaluate = [&](const Eigen::Matrix<double, kMaxP, 1>& p, int count, int grad_count, int first = 0) -> bool {
+    if (p.segment<6>(8).isZero(0)) return evaluate_model(p, first, count, grad_count, std::false_type());  // also the affine stage
+    return evaluate_model(p, first, count, grad_count, std::true_type());
   };
   // the six quadratic terms (x: u^2 uv v^2, y: same) of the parameter vector, unscaled by qs
   auto quadratic_terms = [&](const Eigen::Matrix<double, kMaxP, 1>& p) -> Eigen::Matrix<double, 6, 1> {
@@ -479,6 +480,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       res.status = LsmStatus::OutOfImage;
       return res;
     }
+    th_eval = th;
     // IRLS weights: plain least squares for the first two iterations, then L1
     if (o.l1 && it >= 2)
       for (int k = 0; k < m; ++k) s.wt[k] = s.tap[k] / std::max(std::abs(s.r[k]), o.eps);
@@ -579,13 +581,14 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     res.status = LsmStatus::NotConverged;
     return res;
   }
-  // final residuals and correlation at the solution, values only: the covariance takes the normal matrix
-  // of the last iteration (its Jacobian at the last iterate, less than the tolerance away; sigma on the
-  // Marseille pair 1-2 0.3% from the one at the solution on average, 4.4% at most, the spread of sigma0's
-  // own estimate from 253 residuals; an iteration's worth of gradients and a normal matrix less, 9% of the
-  // refinement). After a fallback the affine model's normal matrix is built afresh.
-  const bool last_normal = !fallback;
-  if (!evaluate(th, n, last_normal ? 0 : m)) {
+  // the fit's precision and correlation are those of the last iteration's state, less than the tolerance
+  // from the solution: its normal matrix, its residuals, and its model at the pixels outside the support
+  // (values only). Against the covariance and correlation at the solution itself, sigma on the Marseille
+  // pair 1-2 moves 0.3% on average and 4.4% at most, the spread of sigma0's own estimate from ~200
+  // residuals: an iteration's worth of gradients, a normal matrix and the support's values less, 12% of the
+  // refinement. After a fallback the affine model's state is built afresh at its solution.
+  const bool last_state = !fallback;
+  if (!(last_state ? evaluate(th_eval, n, 0, m) : evaluate(th, n, m))) {
     res.status = LsmStatus::OutOfImage;
     return res;
   }
@@ -593,7 +596,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     double sum_wr2 = 0;
     for (int k = 0; k < m; ++k) sum_wr2 += s.wt[k] * s.r[k] * s.r[k];
     double var;
-    if (last_normal) {
+    if (last_state) {
       var = P == 8 ? var_p2<8>(n8) : P == 11 ? var_p2<11>(n11) : var_p2<kMaxP>(n14);
     } else if (P == 8) {
       accumulate<8>(s, m, th(7), qs, n8, false);

@@ -26,8 +26,9 @@
 // set, the quadratic terms act only along that direction of image 2 (3 parameters, H = e (K0, K1, K2)):
 // for affine views the parallax of the terrain moves a point only along the epipolar lines, so this is
 // the map's exact second-order form, with 3 fewer unknowns than the general one.
-// Precision: the covariance sigma0^2 (J^T W J)^-1 of the final model with sigma0^2 = sum(w r^2) / (n - P)
-// (J^T W J as the last iteration built it, within the tolerance of the solution; r at the solution);
+// Precision: the covariance sigma0^2 (J^T W J)^-1 of the final model with sigma0^2 = sum(w r^2) / (n - P),
+// J, w and r those of the last iteration (its model within the tolerance of the solution, as is the model
+// the correlation is measured at);
 // `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error).
 // Arithmetic: the iterations interpolate image 2 in single precision (4 taps at a time) and build the
 // affine normal matrix in single precision, 4 pixels at a time (the covariance inverts it in double);
