@@ -583,10 +583,10 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   }
   // the fit's precision and correlation are those of the last iteration's state, less than the tolerance
   // from the solution: its normal matrix, its residuals, and its model at the pixels outside the support
-  // (values only). Against the covariance and correlation at the solution itself, sigma on the Marseille
-  // pair 1-2 moves 0.3% on average and 4.4% at most, the spread of sigma0's own estimate from ~200
-  // residuals: an iteration's worth of gradients, a normal matrix and the support's values less, 12% of the
-  // refinement. After a fallback the affine model's state is built afresh at its solution.
+  // (values only). Against those at the solution itself, sigma on the Marseille pair 1-2 moves 0.3% on
+  // average and 4.4% at most (the spread of sigma0's own estimate from ~200 residuals), the correlation
+  // 0.022 at most: an iteration's worth of gradients, a normal matrix and the support's values less, 12% of
+  // the refinement. After a fallback the affine model's state is built afresh at its solution.
   const bool last_state = !fallback;
   if (!(last_state ? evaluate(th_eval, n, 0, m) : evaluate(th, n, m))) {
     res.status = LsmStatus::OutOfImage;
