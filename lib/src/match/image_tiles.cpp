@@ -81,7 +81,6 @@ Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, lon
 
 std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<uint8_t>* valid) {
   std::vector<uint8_t> out(r.data.size());
-  if (valid) valid->assign(r.data.size(), 255);
   const double span = s.hi - s.lo;
   const double g = span > 0 ? 255.0 / span : 0.0;
   // the grey level rounded half up (x + 0.5 truncated: std::round's value for x >= 0; below 0 the clamp
@@ -91,11 +90,12 @@ std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<ui
   uint8_t* o = out.data();
   for (size_t i = 0; i < n; ++i) {
     const double x = (static_cast<double>(in[i]) - s.lo) * g;
-    const double q = x > 0 ? std::min(255.0, static_cast<double>(static_cast<int>(std::min(x, 255.0) + 0.5))) : 0.0;
-    o[i] = static_cast<uint8_t>(q);  // NaN: x > 0 is false
+    o[i] = x > 0 ? static_cast<uint8_t>(std::min(x, 255.0) + 0.5) : 0;  // NaN: x > 0 is false
   }
-  if (valid)
+  if (valid) {
+    valid->resize(n);
     for (size_t i = 0; i < n; ++i) (*valid)[i] = std::isnan(in[i]) ? 0 : 255;
+  }
   return out;
 }
 

@@ -4,21 +4,15 @@
 #include <cmath>
 #include <limits>
 
-#include "tpkit/core/error.hpp"
 #include "tpkit/core/parallel_for.hpp"
 
 namespace tpkit {
 
 namespace {
-// The exact curve point, or NaN where the localization fails.
+// The exact curve point, or NaN where the localization fails (a node that poisons its cells).
 Eigen::Vector2d exact_point(const RpcModel& a, const RpcModel& b, double x, double y, double h) {
-  try {
-    const Eigen::Vector2d ll = a.localize(x, y, h);
-    return b.project(ll[0], ll[1], h);
-  } catch (const NumericalError&) {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    return {nan, nan};
-  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  return epipolar_point(a, b, x, y, h).value_or(Eigen::Vector2d(nan, nan));
 }
 }  // namespace
 

@@ -79,19 +79,23 @@ bool RpcModel::operator==(const RpcModel& o) const {
          (lon_num == o.lon_num && lon_den == o.lon_den && lat_num == o.lat_num && lat_den == o.lat_den);
 }
 
+std::optional<Eigen::Vector2d> epipolar_point(const RpcModel& a, const RpcModel& b, double x, double y, double h) {
+  try {
+    const Eigen::Vector2d ll = a.localize(x, y, h);
+    return b.project(ll[0], ll[1], h);
+  } catch (const NumericalError&) {
+    return std::nullopt;
+  }
+}
+
 std::vector<Eigen::Vector3d> epipolar_curve(const RpcModel& a, const RpcModel& b, double x, double y, double h_lo,
                                             double h_hi, int samples) {
   samples = std::max(samples, 2);
   std::vector<Eigen::Vector3d> out;
   out.reserve(samples);
   for (int k = 0; k < samples; ++k) {
-    double h = h_lo + (h_hi - h_lo) * k / (samples - 1);
-    try {
-      Eigen::Vector2d ll = a.localize(x, y, h);
-      Eigen::Vector2d q = b.project(ll[0], ll[1], h);
-      out.emplace_back(q[0], q[1], h);
-    } catch (const NumericalError&) {
-    }
+    const double h = h_lo + (h_hi - h_lo) * k / (samples - 1);
+    if (const auto q = epipolar_point(a, b, x, y, h)) out.emplace_back(q->x(), q->y(), h);
   }
   return out;
 }

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace tpkit {
@@ -99,6 +100,9 @@ struct RpcModel {
   bool operator!=(const RpcModel& o) const { return !(*this == o); }
 };
 
+// The pixel of image `b` that sees the ground point of pixel (x, y) of image `a` at height h (metres);
+// nullopt where the localization in `a` fails.
+std::optional<Eigen::Vector2d> epipolar_point(const RpcModel& a, const RpcModel& b, double x, double y, double h);
 // Epipolar curve: the pixels of image `b` that see the ground points of pixel (x, y) of image `a` at
 // `samples` heights evenly spread over [h_lo, h_hi] (metres; samples >= 2). Row k: (x_b, y_b, h).
 // Heights where localization fails are skipped.
