@@ -20,8 +20,9 @@ namespace tpkit {
 std::string detector_tag(const SiftOptions& o, const ImageSource& src) {
   std::ostringstream s;
   // tpkit-N: the version of tpkit's SIFT, raised whenever its keypoints or descriptors change, so that a
-  // keypoint cache of another version is not reused (2: every octave's descriptors sample every second pixel)
-  s << "sift tpkit-2 band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
+  // keypoint cache of another version is not reused (2: every octave's descriptors sample every second pixel;
+  // 3: an extremum's sub-pixel steps move it 6 octave pixels at most)
+  s << "sift tpkit-3 band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
     << " max_per_tile=" << o.max_per_tile << " contrast=" << format_number(o.contrast) << " edge=" << format_number(o.edge)
     << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " descriptor=rootsift stretch=" << format_number(o.stretch_lo)
     << "," << format_number(o.stretch_hi) << " ids=tile-rank";
@@ -58,11 +59,14 @@ TileResult detect_tile(const ImageSource& src, const Raster& band, const SiftOpt
   TileResult out;
   std::vector<cv::KeyPoint> kp;
   cv::Mat desc;
-  detect_sift_scale_space(img, any_invalid ? eroded : cv::Mat(), scale_space_options(o), kp, desc);
+  // the keypoints of the tile's core, in the crop's pixels; the overlap is read for the blurs only, its
+  // keypoints belong to other tiles
+  ScaleSpaceOptions so = scale_space_options(o);
+  so.region = {t.cx0 - 0.5 - t.rx0, t.cy0 - 0.5 - t.ry0, t.cx1 - 0.5 - t.rx0, t.cy1 - 0.5 - t.ry0};
+  detect_sift_scale_space(img, any_invalid ? eroded : cv::Mat(), so, kp, desc);
   std::vector<int> keep;
   for (int i = 0; i < static_cast<int>(kp.size()); ++i) {
     double x = kp[i].pt.x + t.rx0, y = kp[i].pt.y + t.ry0;
-    if (x < t.cx0 - 0.5 || x >= t.cx1 - 0.5 || y < t.cy0 - 0.5 || y >= t.cy1 - 0.5) continue;  // owned by another tile
     // a keypoint whose support reaches past the read region could differ between tilings
     double reach = 2.0 * kp[i].size;
     bool inner_x = (t.rx0 == 0 || x - reach >= t.rx0) && (t.rx1 == src.info.width || x + reach <= t.rx1);

@@ -156,3 +156,31 @@ TEST(SiftScaleSpace, LargeSigmaKeepsItsKeypoints) {
   EXPECT_NEAR(k.pt.x, x0, 0.2);
   EXPECT_NEAR(k.pt.y, y0, 0.2);
 }
+
+TEST(SiftScaleSpace, RegionGivesTheWholeImagesKeypointsThere) {
+  // a wanted region (a detection tile's core) skips the extrema, orientations and descriptors outside
+  // it, and changes nothing inside: the same keypoints, byte for byte, with the same descriptors
+  const cv::Mat img = textured(400, 360, 11);
+  const ScaleSpaceOptions whole = tpkit_defaults();
+  std::vector<cv::KeyPoint> all;
+  cv::Mat all_desc;
+  detect_sift_scale_space(img, cv::Mat(), whole, all, all_desc);
+  for (const ScaleSpaceOptions::Region r : {ScaleSpaceOptions::Region{100.5, 80.5, 300.5, 250.5}, ScaleSpaceOptions::Region{-0.5, 37.25, 171, 359.5}}) {
+    ScaleSpaceOptions o = whole;
+    o.region = r;
+    std::vector<cv::KeyPoint> kp;
+    cv::Mat desc;
+    detect_sift_scale_space(img, cv::Mat(), o, kp, desc);
+    std::vector<int> inside;
+    for (int i = 0; i < static_cast<int>(all.size()); ++i)
+      if (r.contains(all[i].pt.x, all[i].pt.y)) inside.push_back(i);
+    ASSERT_GT(inside.size(), 100u);
+    ASSERT_EQ(kp.size(), inside.size());
+    // both lists are in the scale space's order (octave, layer, then row); the region's is a subsequence
+    for (size_t j = 0; j < kp.size(); ++j) {
+      const cv::KeyPoint& a = all[inside[j]];
+      EXPECT_TRUE(a.pt == kp[j].pt && a.size == kp[j].size && a.angle == kp[j].angle && a.response == kp[j].response && a.octave == kp[j].octave) << j;
+      EXPECT_EQ(cv::norm(all_desc.row(inside[j]), desc.row(static_cast<int>(j)), cv::NORM_INF), 0) << j;
+    }
+  }
+}

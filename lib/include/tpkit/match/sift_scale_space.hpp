@@ -31,6 +31,7 @@
 // Pixels: x = column, y = row, (0, 0) the centre of the top-left pixel of `image`. The result does not
 // depend on the thread count of OpenCV's pool.
 #pragma once
+#include <limits>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -41,6 +42,16 @@ struct ScaleSpaceOptions {
   double contrast = 0.04;  // |D| at the extremum x octave_layers, D on grey levels / 255 (OpenCV contrastThreshold)
   double edge = 10;        // largest ratio of principal curvatures kept (OpenCV edgeThreshold)
   double sigma = 1.6;      // blur of the first layer of each octave, in that octave's pixels
+  // Where keypoints are wanted, in the image's pixels: x0 <= x < x1 and y0 <= y < y1 (by default
+  // everywhere). The blurs cover the whole image; extrema are sought over the region and 7 octave
+  // pixels around it (an extremum's sub-pixel steps move it 6 of them at most), and only the keypoints
+  // inside are oriented and described: the same keypoints and descriptors as the whole image's there.
+  // A detection tile (sift_tiles.hpp) wants its core: its overlap is there for the blurs only.
+  struct Region {
+    double x0 = -std::numeric_limits<double>::infinity(), y0 = -std::numeric_limits<double>::infinity();
+    double x1 = std::numeric_limits<double>::infinity(), y1 = std::numeric_limits<double>::infinity();
+    bool contains(double x, double y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+  } region;
 };
 
 // Keypoints of `image` (CV_8U, one channel) where `mask` (empty, or CV_8U of the image's size) is
