@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/parallel_for.hpp"
 
 namespace tpkit {
 
@@ -46,24 +47,35 @@ Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long 
   return r;
 }
 
-Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, long max_samples) {
+Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, long max_samples, int threads) {
   const long W = src.info.width, H = src.info.height;
   // regular subsample with step k in both directions
   long k = 1;
   while ((W / k) * (H / k) > max_samples) ++k;
-  std::vector<float> samples;
-  samples.reserve(static_cast<size_t>((W / k + 1) * (H / k + 1)));
+  // strips of ~4 M pixels (a multiple of k rows), read side by side on `threads` workers (decoding a
+  // compressed file is most of the time: 1.1 s for a 10000² deflate image on one thread), their samples
+  // gathered in row order
   const long strip = std::max(k, (k * std::max(1L, (1L << 22) / std::max(1L, W)) / k));
-  for (long y = 0; y < H; y += strip) {
-    long h = std::min(strip, H - y);
+  const size_t strips = static_cast<size_t>((H + strip - 1) / strip);
+  std::vector<std::vector<float>> per(strips);
+  parallel_for(strips, std::max(1, std::min(threads, 4)), [&](size_t i) {
+    const long y = static_cast<long>(i) * strip, h = std::min(strip, H - y);
     Raster r = read_valid_region(src, 0, y, W, h);
     for (long yy = 0; yy < h; ++yy) {
       if ((y + yy) % k) continue;
       for (long x = 0; x < W; x += k) {
         float v = r.at(x, yy);
-        if (!std::isnan(v)) samples.push_back(v);
+        if (!std::isnan(v)) per[i].push_back(v);
       }
     }
+  });
+  std::vector<float> samples;
+  size_t n = 0;
+  for (const auto& p : per) n += p.size();
+  samples.reserve(n);
+  for (auto& p : per) {
+    samples.insert(samples.end(), p.begin(), p.end());
+    std::vector<float>().swap(p);
   }
   if (samples.empty()) throw InputError(src.path, 0, "every pixel of band " + std::to_string(src.band + 1) + " is nodata or masked");
   Stretch s;

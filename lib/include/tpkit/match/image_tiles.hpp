@@ -29,13 +29,14 @@ ImageSource open_image_source(const std::string& path, int band, std::optional<d
 Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h);
 
 // Grey levels at the low and high percentiles (0..100) of the valid pixels, from a regular subsample
-// of at most ~`max_samples` pixels read strip by strip (bounded memory). lo == hi when the image is
-// flat; throws InputError when no pixel is valid.
+// of at most ~`max_samples` pixels read strip by strip (bounded memory: a strip of 4 M pixels per
+// worker, min(threads, 4) workers). lo == hi when the image is flat; throws InputError when no pixel is
+// valid.
 struct Stretch {
   double lo = 0, hi = 1;
   long valid_samples = 0;
 };
-Stretch percentile_stretch(const ImageSource& src, double p_lo = 0.5, double p_hi = 99.5, long max_samples = 1 << 21);
+Stretch percentile_stretch(const ImageSource& src, double p_lo = 0.5, double p_hi = 99.5, long max_samples = 1 << 21, int threads = 1);
 
 // 8-bit rendering: round(255 (v - lo) / (hi - lo)) clipped to 0..255; NaN (invalid) -> 0.
 // `valid` (same size, may be null) receives 255 for valid pixels, 0 otherwise.
