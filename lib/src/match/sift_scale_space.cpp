@@ -11,6 +11,8 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "tpkit/match/gaussian_blur.hpp"
+
 namespace tpkit {
 
 // Conventions: an octave's planes are CV_32F grey levels (0..255 of the 8-bit input); octave k (k = 0
@@ -50,17 +52,6 @@ void by_strips(int rows, F&& f) {
     for (int s = R.start; s < R.end; ++s)
       f(s, static_cast<int>(static_cast<long>(rows) * s / n), static_cast<int>(static_cast<long>(rows) * (s + 1) / n));
   });
-}
-
-cv::Mat blurred(const cv::Mat& src, double sigma) {
-  cv::Mat dst(src.size(), CV_32F);
-  // a strip of the output from the input rows around it: OpenCV's filters read past a submatrix into
-  // its parent (no BORDER_ISOLATED), so the strips give the plane blurred whole
-  by_strips(src.rows, [&](int, int a, int b) {
-    cv::Mat d = dst.rowRange(a, b);
-    cv::GaussianBlur(src.rowRange(a, b), d, cv::Size(), sigma, sigma, cv::BORDER_REFLECT_101);
-  });
-  return dst;
 }
 
 // every second pixel of every second row: the next octave's first layer
@@ -500,7 +491,7 @@ cv::Mat first_octave(const cv::Mat& image, double sigma) {
   cv::Mat f, up;
   image.convertTo(f, CV_32F);
   cv::resize(f, up, cv::Size(image.cols * 2, image.rows * 2), 0, 0, cv::INTER_LINEAR);
-  return blurred(up, std::sqrt(std::max(sigma * sigma - 4 * kInputBlur * kInputBlur, 0.01)));
+  return gaussian_blur(up, std::sqrt(std::max(sigma * sigma - 4 * kInputBlur * kInputBlur, 0.01)));
 }
 
 // An extremum of octave `oc`: its position in the input's pixels and its scale in octave pixels.
@@ -633,7 +624,7 @@ void detect_sift_scale_space(const cv::Mat& image, const cv::Mat& mask, const Sc
     std::vector<cv::Mat> G(L + 3);
     G[0] = base;
     base.release();
-    for (int i = 1; i < L + 3; ++i) G[i] = blurred(G[i - 1], step[i]);
+    for (int i = 1; i < L + 3; ++i) G[i] = gaussian_blur(G[i - 1], step[i]);
     const std::vector<Extremum> ext = extrema(G, L, o, scan_window(o.region, oc, G[0].size()));
     G[0].release();
     G[L + 1].release();

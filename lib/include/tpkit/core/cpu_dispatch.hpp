@@ -6,10 +6,29 @@
 // FMA, and GCC does not reassociate without -ffast-math), so results do not depend on the CPU.
 // Users: the synthetic renderer (synth_render, synth_scene, synth_terrain, synth_texture: the same
 // pixels) and the guided descriptor search (guided_matching: the same matches).
+//
+// TPKIT_AVX2 marks a function compiled for AVX2 alone, for code written at two vector widths (GCC's
+// vector extension, 16 bytes in the baseline version, 32 in the AVX2 one) that cpu_has_avx2() chooses
+// between at run time; the same rule holds (no FMA, the same operations in the same order in each lane).
+// Where TPKIT_HOT is an ordinary function, TPKIT_HAS_AVX2 is 0 and cpu_has_avx2() false.
+// User: the Gaussian blur of the SIFT scale space (gaussian_blur).
 #pragma once
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
 #define TPKIT_HOT __attribute__((target_clones("avx2", "default")))
+#define TPKIT_HAS_AVX2 1
+#define TPKIT_AVX2 __attribute__((target("avx2")))
+namespace tpkit {
+inline bool cpu_has_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+}  // namespace tpkit
 #else
 #define TPKIT_HOT
+#define TPKIT_HAS_AVX2 0
+#define TPKIT_AVX2
+namespace tpkit {
+inline bool cpu_has_avx2() { return false; }
+}  // namespace tpkit
 #endif
