@@ -9,8 +9,10 @@
 //     the scale space holds one octave's Gaussian layers at most (OpenCV holds every octave's layers
 //     and differences at once): for a 1024-pixel tile with its 96-pixel overlaps (1216², upsampled
 //     2432²) 142 MB at the peak, not 346;
-//   - the Gaussian blurs in horizontal strips on OpenCV's thread pool (OpenCV blurs a float image on
-//     one thread);
+//   - the Gaussian blurs tpkit's own (gaussian_blur.hpp: OpenCV's kernel and borders, up to twice as
+//     fast) in horizontal strips on OpenCV's thread pool (OpenCV blurs a float image on one thread);
+//   - in a detection tile, extrema, orientations and descriptors for the tile's core only
+//     (ScaleSpaceOptions::region): its overlap serves the blurs;
 //   - gradient magnitude and orientation computed once per pixel of a layer and shared by every
 //     orientation histogram and descriptor that samples it (OpenCV computes them, and the Gaussian
 //     weight's exponential, afresh for every sample of every window: an upsampled-octave descriptor
