@@ -144,7 +144,7 @@ cv::Mat gaussian_blur(const cv::Mat& src, double sigma, bool baseline) {
     border[r + j] = cv::borderInterpolate(cols + j, cols, cv::BORDER_REFLECT_101);
   }
   const bool avx2 = cpu_has_avx2() && !baseline;
-  // strips of 32 rows at least, 64 at most, fixed by the size (the values do not depend on them)
+  // at most 64 strips of 32 rows or more, fixed by the size (the values do not depend on them)
   const int strips = std::max(1, std::min(64, rows / 32));
   cv::parallel_for_(cv::Range(0, strips), [&](const cv::Range& R) {
     std::vector<float> col(static_cast<size_t>(cols) + 2 * r);
