@@ -35,13 +35,14 @@ template <class V>
   std::memcpy(p, &v, sizeof v);
 }
 
-// out[x] = k[0] up[0][x] + sum over i = 1..r of k[i] (up[i][x] + down[i][x]), x in [0, n): the column
-// pass (up[i], down[i]: the source rows i above and below). Four vectors of output at a time, so that
-// four sums go on side by side; the columns past the last whole block one by one, in the same order
-// of operations as a lane.
+// out[x] = k[0] up[0][x] + sum over i = 1..r of k[i] (up[i][x] + down[i][x]), x in [0, n): a pass of the
+// symmetric kernel, up[i] and down[i] the samples at distance i on either side (the column pass: source
+// rows i above and below; the row pass: the row buffer shifted by -i and +i). Four vectors of output at
+// a time, so that four sums go on side by side; the pixels past the last whole block one by one, in the
+// same order of operations as a lane.
 template <int N>
-[[gnu::always_inline]] inline void column_pass(const float* const* up, const float* const* down, const float* k, int r, int n,
-                                               float* out) {
+[[gnu::always_inline]] inline void symmetric_pass(const float* const* up, const float* const* down, const float* k, int r, int n,
+                                                  float* out) {
   using V = typename Lanes<N>::type;
   constexpr int W = N / 4, B = 4 * W;
   int x = 0;
@@ -67,53 +68,26 @@ template <int N>
   }
 }
 
-// out[x] = k[0] p[x] + sum over i = 1..r of k[i] (p[x - i] + p[x + i]), x in [0, n): the row pass (p
-// readable from -r to n + r), organised as the column pass.
-template <int N>
-[[gnu::always_inline]] inline void row_pass(const float* p, const float* k, int r, int n, float* out) {
-  using V = typename Lanes<N>::type;
-  constexpr int W = N / 4, B = 4 * W;
-  int x = 0;
-  for (; x + B <= n; x += B) {
-    V a0 = k[0] * load<V>(p + x), a1 = k[0] * load<V>(p + x + W), a2 = k[0] * load<V>(p + x + 2 * W), a3 = k[0] * load<V>(p + x + 3 * W);
-    for (int i = 1; i <= r; ++i) {
-      const float ki = k[i];
-      a0 += ki * (load<V>(p + x - i) + load<V>(p + x + i));
-      a1 += ki * (load<V>(p + x + W - i) + load<V>(p + x + W + i));
-      a2 += ki * (load<V>(p + x + 2 * W - i) + load<V>(p + x + 2 * W + i));
-      a3 += ki * (load<V>(p + x + 3 * W - i) + load<V>(p + x + 3 * W + i));
-    }
-    store(out + x, a0);
-    store(out + x + W, a1);
-    store(out + x + 2 * W, a2);
-    store(out + x + 3 * W, a3);
-  }
-  for (; x < n; ++x) {
-    float a = k[0] * p[x];
-    for (int i = 1; i <= r; ++i) a += k[i] * (p[x - i] + p[x + i]);
-    out[x] = a;
-  }
-}
-
 // Output rows [a, b) of the blur: the column pass of each into `col` (cols + 2 r floats), its borders
 // filled by reflection, then the row pass.
 template <int N>
 [[gnu::always_inline]] inline void blur_rows(const cv::Mat& src, const std::vector<float>& k, const std::vector<int>& border, int a,
                                              int b, float* col, cv::Mat& dst) {
   const int rows = src.rows, cols = src.cols, r = static_cast<int>(k.size()) - 1;
-  std::vector<const float*> up(r + 1), down(r + 1);
+  std::vector<const float*> up(r + 1), down(r + 1), left(r + 1), right(r + 1);
   float* const c = col + r;  // c[x] for x in [-r, cols + r)
+  for (int i = 0; i <= r; ++i) left[i] = c - i, right[i] = c + i;
   for (int y = a; y < b; ++y) {
     for (int i = 0; i <= r; ++i) {
       up[i] = src.ptr<float>(cv::borderInterpolate(y - i, rows, cv::BORDER_REFLECT_101));
       down[i] = src.ptr<float>(cv::borderInterpolate(y + i, rows, cv::BORDER_REFLECT_101));
     }
-    column_pass<N>(up.data(), down.data(), k.data(), r, cols, c);
+    symmetric_pass<N>(up.data(), down.data(), k.data(), r, cols, c);
     for (int j = 0; j < r; ++j) {
       c[-1 - j] = c[border[j]];
       c[cols + j] = c[border[r + j]];
     }
-    row_pass<N>(c, k.data(), r, cols, dst.ptr<float>(y));
+    symmetric_pass<N>(left.data(), right.data(), k.data(), r, cols, dst.ptr<float>(y));
   }
 }
 

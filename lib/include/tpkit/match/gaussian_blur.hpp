@@ -6,7 +6,7 @@
 // product per pair of taps) and sum four vectors of output pixels at a time over the taps. OpenCV's row
 // pass chains one fused multiply-add per tap on a single accumulator, so that its speed is the adder's
 // latency: on the 2432² planes of a detection tile, blurs of 11 to 27 taps take 7-13 ms here against
-// OpenCV's 10-27 ms (one thread; 10-18 ms for the baseline x86-64 code). The values differ from OpenCV's
+// OpenCV's 10-27 ms (one thread; 8-21 ms for the baseline x86-64 code). The values differ from OpenCV's
 // by rounding only (the sums in another order: 1e-4 grey levels at most on 0..255).
 //
 // The result depends on the plane and sigma alone: not on the strips it is computed in (horizontal
