@@ -380,13 +380,17 @@ void row_bins(const float* __restrict m, const float* __restrict t, const float*
   }
 }
 
+// The radius of the descriptor window of a keypoint of scale `scl` (octave pixels): the rotated cells and
+// their half-cell border (larger than the orientation window's).
+int descriptor_radius(float scl) { return cvRound(kCellWidth * scl * 1.4142135623730951f * (kCells + 1) * 0.5f); }
+
 // The 4 x 4 x 8 descriptor at octave position (x, y) of scale `scl` and orientation `ori` (degrees):
 // magnitudes weighted by a Gaussian of half the window's width, spread trilinearly over the cells and
 // orientation bins; clamped at 0.2 of the norm, renormalised, scaled to 512 and saturated at 255.
 void descriptor(const Gradients& G, float x, float y, float ori, float scl, float* out) {
   const int rows = G.mag.rows, cols = G.mag.cols;
   const float width = kCellWidth * scl;
-  int R = cvRound(width * 1.4142135623730951f * (kCells + 1) * 0.5f);
+  int R = descriptor_radius(scl);
   R = std::min(R, static_cast<int>(std::sqrt(static_cast<double>(rows) * rows + static_cast<double>(cols) * cols)));
   const int px = cvRound(x), py = cvRound(y);
   const float fx = x - px, fy = y - py;
@@ -523,9 +527,8 @@ cv::Rect window_box(const std::vector<Extremum>& ext, const std::vector<int>& at
   for (int i : at) {
     const Extremum& e = ext[i];
     c0 = std::min(c0, e.c), c1 = std::max(c1, e.c), r0 = std::min(r0, e.r), r1 = std::max(r1, e.r);
-    // the descriptor's radius (larger than the orientation window's), around the nearest pixel (+-1 of the sample)
-    const float scl = octave_scale(e, o);
-    reach = std::max(reach, cvRound(kCellWidth * scl * 1.4142135623730951f * (kCells + 1) * 0.5f) + 1);
+    // the descriptor's window around the nearest pixel (+-1 of the sample)
+    reach = std::max(reach, descriptor_radius(octave_scale(e, o)) + 1);
   }
   return {c0 - reach, r0 - reach, c1 - c0 + 2 * reach + 1, r1 - r0 + 2 * reach + 1};
 }

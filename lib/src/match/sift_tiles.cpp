@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstring>
 #include <future>
-#include <system_error>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -163,18 +162,6 @@ std::vector<TileRow> tile_rows(const std::vector<Tile>& tiles) {
   }
   return rows;
 }
-
-// f(R) on a thread of its own when there are threads to spare and the system grants one, else when
-// the result is asked for.
-template <class F>
-std::future<Raster> read_ahead(F& f, const TileRow& R, int threads) {
-  if (threads > 1) try {
-      return std::async(std::launch::async, f, std::cref(R));
-    } catch (const std::system_error&) {
-      report_thread_shortfall(threads, 1);
-    }
-  return std::async(std::launch::deferred, f, std::cref(R));
-}
 }  // namespace
 
 std::vector<Keypoints> detect_tiles_ranked(const ImageSource& src, const SiftOptions& o, const Stretch& st,
@@ -186,13 +173,15 @@ std::vector<Keypoints> detect_tiles_ranked(const ImageSource& src, const SiftOpt
   // row, not once per tile (a 10000-pixel-wide strip image would otherwise be decoded ten times over).
   // The next row's band is read on a thread of its own while this row's tiles are detected: decoding
   // is serial (1.2 s of a 10000² deflate image's 23 s of detection on 2 threads), and it costs one more
-  // band in memory (10000 x 1216 floats, 49 MB).
+  // band in memory (10000 x 1216 floats, 49 MB). As the refinement reads its next bands (match_pair).
   const std::vector<TileRow> rows = tile_rows(tiles);
   auto read = [&](const TileRow& R) { return read_valid_region(src, R.x0, R.y0, R.x1 - R.x0, R.y1 - R.y0); };
   std::future<Raster> next;
   for (size_t i = 0; i < rows.size(); ++i) {
     const Raster band = i == 0 ? read(rows[0]) : next.get();
-    if (i + 1 < rows.size()) next = read_ahead(read, rows[i + 1], threads);
+    // on a thread of its own where there are threads to spare (or, where none can start, when needed)
+    if (i + 1 < rows.size())
+      next = std::async(threads > 1 ? std::launch::async | std::launch::deferred : std::launch::deferred, read, std::cref(rows[i + 1]));
     const size_t r0 = rows[i].first, r1 = rows[i].end;
     const int workers = std::min<int>(concurrent_sift_calls(threads), static_cast<int>(r1 - r0));
     // OpenCV parallelises inside each tile on its own pool, sized once per process (opencv_threads.hpp)
