@@ -138,7 +138,7 @@ std::vector<Tile> tiles_starting_in(const std::vector<Tile>& grid, long x0, long
 }
 
 Keypoints detect_sift_tiles(const ImageSource& src, const SiftOptions& o, int threads, Progress* progress) {
-  const Stretch st = percentile_stretch(src, o.stretch_lo, o.stretch_hi, 1 << 21, threads);
+  const Stretch st = percentile_stretch(src, o.stretch_lo, o.stretch_hi, kStretchSamples, threads);
   return detect_sift_tile_set(src, o, st, tile_grid(src.info.width, src.info.height, o.tile, o.overlap), threads, progress);
 }
 

@@ -36,7 +36,9 @@ struct Stretch {
   double lo = 0, hi = 1;
   long valid_samples = 0;
 };
-Stretch percentile_stretch(const ImageSource& src, double p_lo = 0.5, double p_hi = 99.5, long max_samples = 1 << 21, int threads = 1);
+constexpr long kStretchSamples = 1 << 21;
+Stretch percentile_stretch(const ImageSource& src, double p_lo = 0.5, double p_hi = 99.5, long max_samples = kStretchSamples,
+                           int threads = 1);
 
 // 8-bit rendering: round(255 (v - lo) / (hi - lo)) clipped to 0..255; NaN (invalid) -> 0.
 // `valid` (same size, may be null) receives 255 for valid pixels, 0 otherwise.
