@@ -339,3 +339,38 @@ TEST(Lsm, L1IgnoresOccludedCorner) {
   EXPECT_LT(err[err.size() / 2], 0.5 * plain_err[plain_err.size() / 2]);  // least squares: 0.064
   EXPECT_LT(iterations / static_cast<double>(err.size()), 8.0);
 }
+
+TEST(Lsm, BaselineAndAvx2CodeGiveTheSameResults) {
+  // where the CPU has AVX2, image 2 is interpolated two pixels at a time; the baseline code one at a
+  // time: the same operations lane by lane, so the same refinements to the bit, in every stage
+  Texture tex(21);
+  const long S = 160;
+  const Eigen::Vector2d c(80, 80);
+  Eigen::Matrix2d B;
+  B << 1.03, 0.05, -0.04, 0.96;
+  Raster I1 = render(tex, S, Eigen::Matrix2d::Identity(), c, 300, 1000, 2.0, 3);
+  Raster I2 = render(tex, S, B.inverse(), c + Eigen::Vector2d(0.3, -0.4), 260, 800, 2.0, 4);
+  int compared = 0;
+  for (bool quadratic : {false, true})
+    for (int window : {21, 20})  // an even window: an odd pixel count in the support and the window
+      for (double px : {50.2, 77.7, 104.9})
+        for (double py : {55.5, 81.3, 99.9}) {
+          LsmOptions o;
+          o.quadratic = quadratic;
+          o.window = window;
+          if (quadratic) o.epipolar_dir = Eigen::Vector2d(1, 0.2);
+          const Eigen::Vector2d p1(px, py), start = c + Eigen::Vector2d(0.3, -0.4) + B * (p1 - c) + Eigen::Vector2d(0.4, 0.3);
+          const LsmResult a = lsm_refine(I1, I2, p1, start, Eigen::Matrix2d::Identity(), o);
+          o.baseline_code = true;
+          const LsmResult b = lsm_refine(I1, I2, p1, start, Eigen::Matrix2d::Identity(), o);
+          ASSERT_EQ(a.status, b.status);
+          EXPECT_EQ(a.iterations, b.iterations);
+          EXPECT_EQ(a.p2, b.p2);
+          EXPECT_EQ(a.A, b.A);
+          EXPECT_EQ(a.H, b.H);
+          EXPECT_EQ(a.sigma, b.sigma);
+          EXPECT_EQ(a.corr, b.corr);
+          compared += a.ok();
+        }
+  EXPECT_GE(compared, 30);
+}

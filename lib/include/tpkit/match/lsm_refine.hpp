@@ -73,6 +73,9 @@ struct LsmOptions {
   // map only along it: q(d) = p2 + A d + e (K0 u^2 + K1 u v + K2 v^2), 3 curvature terms instead of 6.
   Eigen::Vector2d epipolar_dir = Eigen::Vector2d::Zero();
   bool epipolar_curvature = true;  // match_keypoints: pass the verified affine F's epipolar direction
+  // The interpolation of image 2 in the x86-64 baseline code even where the CPU has AVX2 (whose code
+  // interpolates two pixels at a time, cpu_dispatch.hpp): the same values; for the tests that compare them.
+  bool baseline_code = false;
 };
 
 // Why a refinement was rejected. OffEpipolar is set by match_keypoints (the refined position leaves the
