@@ -9,7 +9,8 @@
 // faults (a matrix that whole 2 MiB pages would round up by more than an eighth, such as a tile's
 // descriptors, is mapped in 4 KiB pages instead); smaller ones, and everything where huge pages are off,
 // are as before. A freed large block is
-// kept (up to 1 GiB) for the next matrix of about its size: the next tile's or image's pyramid then needs
+// kept (up to 1 GiB) for the next matrix that fits it (of about its size, or, from 4 MiB, up to five times
+// smaller: a higher octave in a first octave's plane): the next tile's or image's pyramid then needs
 // neither faults nor the kernel's zeroing of fresh pages.
 #pragma once
 
