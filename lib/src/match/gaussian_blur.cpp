@@ -68,26 +68,28 @@ template <int N>
   }
 }
 
-// Output rows [a, b) of the blur: the column pass of each into `col` (cols + 2 r floats), its borders
-// filled by reflection, then the row pass.
+// Output rows [a, b), columns [x0, x1) of the blur: the column pass of each into `col` (cols + 2 r floats)
+// over the columns the row pass reads, the row buffer's borders filled by reflection where it reaches
+// them, then the row pass. A pixel's value does not depend on the columns computed with it.
 template <int N>
 [[gnu::always_inline]] inline void blur_rows(const cv::Mat& src, const std::vector<float>& k, const std::vector<int>& border, int a,
-                                             int b, float* col, cv::Mat& dst) {
+                                             int b, int x0, int x1, float* col, cv::Mat& dst) {
   const int rows = src.rows, cols = src.cols, r = static_cast<int>(k.size()) - 1;
+  const int ca = std::max(0, x0 - r), cb = std::min(cols, x1 + r);  // the row buffer's computed columns
   std::vector<const float*> up(r + 1), down(r + 1), left(r + 1), right(r + 1);
   float* const c = col + r;  // c[x] for x in [-r, cols + r)
-  for (int i = 0; i <= r; ++i) left[i] = c - i, right[i] = c + i;
+  for (int i = 0; i <= r; ++i) left[i] = c + x0 - i, right[i] = c + x0 + i;
   for (int y = a; y < b; ++y) {
     for (int i = 0; i <= r; ++i) {
-      up[i] = src.ptr<float>(cv::borderInterpolate(y - i, rows, cv::BORDER_REFLECT_101));
-      down[i] = src.ptr<float>(cv::borderInterpolate(y + i, rows, cv::BORDER_REFLECT_101));
+      up[i] = src.ptr<float>(cv::borderInterpolate(y - i, rows, cv::BORDER_REFLECT_101)) + ca;
+      down[i] = src.ptr<float>(cv::borderInterpolate(y + i, rows, cv::BORDER_REFLECT_101)) + ca;
     }
-    symmetric_pass<N>(up.data(), down.data(), k.data(), r, cols, c);
+    symmetric_pass<N>(up.data(), down.data(), k.data(), r, cb - ca, c + ca);
     for (int j = 0; j < r; ++j) {
-      c[-1 - j] = c[border[j]];
-      c[cols + j] = c[border[r + j]];
+      if (x0 - r < 0) c[-1 - j] = c[border[j]];
+      if (x1 + r > cols) c[cols + j] = c[border[r + j]];
     }
-    symmetric_pass<N>(left.data(), right.data(), k.data(), r, cols, dst.ptr<float>(y));
+    symmetric_pass<N>(left.data(), right.data(), k.data(), r, x1 - x0, dst.ptr<float>(y) + x0);
   }
 }
 
@@ -95,20 +97,26 @@ template <int N>
 
 #if TPKIT_HAS_AVX2
 TPKIT_AVX2 void blur_rows_avx2(const cv::Mat& src, const std::vector<float>& k, const std::vector<int>& border, int a, int b,
-                               float* col, cv::Mat& dst) {
-  blur_rows<32>(src, k, border, a, b, col, dst);
+                               int x0, int x1, float* col, cv::Mat& dst) {
+  blur_rows<32>(src, k, border, a, b, x0, x1, col, dst);
 }
 #endif
 }  // namespace
 
+int gaussian_blur_radius(double sigma) { return (cvRound(sigma * 8 + 1) | 1) / 2; }  // OpenCV's size for floats (4 sigma each side)
+
 cv::Mat gaussian_blur(const cv::Mat& src, double sigma, bool baseline) {
+  return gaussian_blur(src, sigma, cv::Rect(0, 0, src.cols, src.rows), baseline);
+}
+
+cv::Mat gaussian_blur(const cv::Mat& src, double sigma, const cv::Rect& roi, bool baseline) {
   if (src.type() != CV_32F) throw std::invalid_argument("gaussian_blur: the plane must be CV_32F");
   if (!(sigma > 0)) throw std::invalid_argument("gaussian_blur: sigma must be > 0");
   cv::Mat dst(src.size(), CV_32F);
-  if (src.empty()) return dst;
-  const int rows = src.rows, cols = src.cols;
-  const int ksize = cvRound(sigma * 8 + 1) | 1, r = ksize / 2;  // OpenCV's size for floats (4 sigma each side)
-  const cv::Mat kernel = cv::getGaussianKernel(ksize, sigma, CV_32F);
+  const cv::Rect in = roi & cv::Rect(0, 0, src.cols, src.rows);
+  if (in.empty()) return dst;
+  const int cols = src.cols, r = gaussian_blur_radius(sigma);
+  const cv::Mat kernel = cv::getGaussianKernel(2 * r + 1, sigma, CV_32F);
   std::vector<float> k(r + 1);  // k[i]: the weight at distance i
   for (int i = 0; i <= r; ++i) k[i] = kernel.at<float>(r + i);
   // the columns that the border entries -1 .. -r and cols .. cols + r - 1 reflect
@@ -119,18 +127,19 @@ cv::Mat gaussian_blur(const cv::Mat& src, double sigma, bool baseline) {
   }
   const bool avx2 = cpu_has_avx2() && !baseline;
   // at most 64 strips of 32 rows or more, fixed by the size (the values do not depend on them)
-  const int strips = std::max(1, std::min(64, rows / 32));
+  const int strips = std::max(1, std::min(64, in.height / 32));
   cv::parallel_for_(cv::Range(0, strips), [&](const cv::Range& R) {
     std::vector<float> col(static_cast<size_t>(cols) + 2 * r);
     for (int s = R.start; s < R.end; ++s) {
-      const int a = static_cast<int>(static_cast<long>(rows) * s / strips), b = static_cast<int>(static_cast<long>(rows) * (s + 1) / strips);
+      const int a = in.y + static_cast<int>(static_cast<long>(in.height) * s / strips);
+      const int b = in.y + static_cast<int>(static_cast<long>(in.height) * (s + 1) / strips);
 #if TPKIT_HAS_AVX2
       if (avx2) {
-        blur_rows_avx2(src, k, border, a, b, col.data(), dst);
+        blur_rows_avx2(src, k, border, a, b, in.x, in.x + in.width, col.data(), dst);
         continue;
       }
 #endif
-      blur_rows<16>(src, k, border, a, b, col.data(), dst);
+      blur_rows<16>(src, k, border, a, b, in.x, in.x + in.width, col.data(), dst);
     }
   });
   (void)avx2;

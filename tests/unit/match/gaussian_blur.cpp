@@ -1,6 +1,6 @@
 // tpkit's Gaussian blur against OpenCV's (the same kernel and borders: values within rounding), on
 // planes wider and narrower than the kernel and its vector blocks; the AVX2 and baseline versions give
-// the same values, bit for bit.
+// the same values, bit for bit; a blur over part of the plane gives the whole plane's values there.
 #include "tpkit/match/gaussian_blur.hpp"
 
 #include <gtest/gtest.h>
@@ -32,4 +32,24 @@ TEST(GaussianBlur, ConstantStaysAndBadInput) {
   EXPECT_THROW(gaussian_blur(cv::Mat(10, 10, CV_8U), 1.0), std::invalid_argument);
   EXPECT_THROW(gaussian_blur(flat, 0.0), std::invalid_argument);
   EXPECT_TRUE(gaussian_blur(cv::Mat(0, 0, CV_32F), 1.0).empty());
+}
+
+TEST(GaussianBlur, PartOfThePlaneHasTheWholePlanesValues) {
+  cv::RNG rng(9);
+  cv::Mat src(300, 410, CV_32F);
+  rng.fill(src, cv::RNG::UNIFORM, 0, 255);
+  for (const double sigma : {1.23, 3.1})
+    for (const bool baseline : {false, true}) {
+      const cv::Mat whole = gaussian_blur(src, sigma, baseline);
+      // inside, at each edge and corner (the borders' reflections), narrower than a vector, past the plane
+      for (const cv::Rect roi : {cv::Rect(40, 30, 200, 150), cv::Rect(0, 0, 37, 300), cv::Rect(395, 280, 15, 20), cv::Rect(3, 100, 5, 3),
+                                 cv::Rect(200, 250, 300, 100), cv::Rect(1, 1, 408, 298)}) {
+        const cv::Mat part = gaussian_blur(src, sigma, roi, baseline);
+        ASSERT_EQ(part.size(), src.size());
+        const cv::Rect in = roi & cv::Rect(0, 0, src.cols, src.rows);
+        EXPECT_EQ(cv::norm(part(in), whole(in), cv::NORM_INF), 0) << roi << " sigma " << sigma << " baseline " << baseline;
+      }
+    }
+  EXPECT_EQ(gaussian_blur_radius(1.23), 5);
+  EXPECT_EQ(gaussian_blur_radius(3.1), 13);  // 27 taps
 }

@@ -20,5 +20,11 @@ namespace tpkit {
 // `src` blurred by `sigma` (pixels, > 0); src is CV_32F with one channel. `baseline` asks for the
 // baseline code where the CPU has AVX2 (tests compare the two).
 cv::Mat gaussian_blur(const cv::Mat& src, double sigma, bool baseline = false);
+// The same blur at the pixels of `roi` only (clipped to the plane), the values the whole plane's blur has
+// there; the plane returned has src's size, its other pixels undefined. For a scale space's layers that
+// only the extremum search reads, near the region wanted.
+cv::Mat gaussian_blur(const cv::Mat& src, double sigma, const cv::Rect& roi, bool baseline = false);
+// The kernel's radius: round(4 sigma) taps on each side of the centre (pixels).
+int gaussian_blur_radius(double sigma);
 
 }  // namespace tpkit
