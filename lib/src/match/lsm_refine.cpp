@@ -189,6 +189,20 @@ bool bicubic(const Raster& r, double x, double y, double& value, double* gx, dou
   return true;
 }
 namespace {
+// The sum of f(k), k in [0, n), in four interleaved partial sums: four chains of additions side by side
+// instead of one (the window's statistics: one chain of 441 dependent additions each took longer than
+// the arithmetic around it). Another order than one by one: the values move by rounding only (on the
+// 10000² pair, refined positions by 2e-6 px at most, no acceptance changed).
+template <class F>
+inline double sum4(int n, F f) {
+  double a[4] = {0, 0, 0, 0};
+  int k = 0;
+  for (; k + 4 <= n; k += 4)
+    for (int j = 0; j < 4; ++j) a[j] += f(k + j);
+  for (; k < n; ++k) a[0] += f(k);
+  return (a[0] + a[1]) + (a[2] + a[3]);
+}
+
 constexpr int kMaxP = 14;  // p2 (2), A (4), r0, r1, quadratic terms (6)
 
 // Per-thread scratch, so that a call allocates nothing once the thread has seen the window size.
@@ -404,7 +418,6 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   // template (fixed): image 1's own pixels around p1, no resampling; offsets d from p1 are fractional
   const long cx = std::lround(p1.x()), cy = std::lround(p1.y());
   const double fx = cx - p1.x(), fy = cy - p1.y();
-  double mt = 0;
   for (int k = 0; k < n; ++k) {
     const long X = cx + s.oi[k], Y = cy + s.oj[k];
     const long lx = X - img1.x0, ly = Y - img1.y0;
@@ -419,12 +432,9 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       res.status = LsmStatus::Invalid;
       return res;
     }
-    mt += s.t[k];
   }
-  mt /= n;
-  double st = 0;
-  for (int k = 0; k < n; ++k) st += (s.t[k] - mt) * (s.t[k] - mt);
-  st = std::sqrt(st / n);
+  const double mt = sum4(n, [&](int k) { return s.t[k]; }) / n;
+  const double st = std::sqrt(sum4(n, [&](int k) { return (s.t[k] - mt) * (s.t[k] - mt); }) / n);
   if (!(st > 1e-6 * (1 + std::abs(mt)))) {
     res.status = LsmStatus::Flat;
     return res;
@@ -451,7 +461,6 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   // image 2 scaled once by the initial window's statistics, so that r0 ~ 0 and r1 ~ 1. The first m
   // pixels' gradients are kept: they are the first iteration's (same positions, same operations).
   const double ox = p2.x() - img2.x0, oy = p2.y() - img2.y0;
-  double m2 = 0, s2 = 0;
   for (int k = 0; k < n; ++k) {
     const double u = s.du[k], v = s.dv[k];
     s.qx[k] = ox + A0(0, 0) * u + A0(0, 1) * v;
@@ -462,10 +471,8 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     res.status = LsmStatus::OutOfImage;
     return res;
   }
-  for (int k = 0; k < n; ++k) m2 += s.g[k];
-  m2 /= n;
-  for (int k = 0; k < n; ++k) s2 += (s.g[k] - m2) * (s.g[k] - m2);
-  s2 = std::sqrt(s2 / n);
+  const double m2 = sum4(n, [&](int k) { return s.g[k]; }) / n;
+  const double s2 = std::sqrt(sum4(n, [&](int k) { return (s.g[k] - m2) * (s.g[k] - m2); }) / n);
   if (!(s2 > 1e-6 * (1 + std::abs(m2)))) {
     res.status = LsmStatus::Flat;
     return res;
@@ -671,8 +678,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     return res;
   }
   {
-    double sum_wr2 = 0;
-    for (int k = 0; k < m; ++k) sum_wr2 += s.wt[k] * s.r[k] * s.r[k];
+    const double sum_wr2 = sum4(m, [&](int k) { return s.wt[k] * s.r[k] * s.r[k]; });
     double var;
     if (last_state) {
       var = P == 8 ? var_p2<8>(n8) : P == 11 ? var_p2<11>(n11) : var_p2<kMaxP>(n14);
@@ -691,15 +697,10 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     res.sigma = std::isfinite(var) ? std::sqrt(std::max(var, 0.0)) : std::numeric_limits<double>::infinity();
   }
   {
-    double mg = 0;
-    for (int k = 0; k < n; ++k) mg += s.g[k];
-    mg /= n;
-    double sgg = 0, stg = 0, stt = 0;
-    for (int k = 0; k < n; ++k) {
-      sgg += (s.g[k] - mg) * (s.g[k] - mg);
-      stg += (s.g[k] - mg) * s.t[k];
-      stt += s.t[k] * s.t[k];
-    }
+    const double mg = sum4(n, [&](int k) { return s.g[k]; }) / n;
+    const double sgg = sum4(n, [&](int k) { return (s.g[k] - mg) * (s.g[k] - mg); });
+    const double stg = sum4(n, [&](int k) { return (s.g[k] - mg) * s.t[k]; });
+    const double stt = sum4(n, [&](int k) { return s.t[k] * s.t[k]; });
     res.corr = sgg > 0 ? stg / std::sqrt(sgg * stt) : 0;
   }
   double det = res.A.determinant(), det0 = A0.determinant();
