@@ -22,26 +22,29 @@ constexpr size_t kPage = size_t(4) << 10;
 
 size_t round_up(size_t n, size_t unit) { return (n + unit - 1) / unit * unit; }
 
-// Huge pages where rounding the block up to whole 2 MiB wastes at most an eighth of it: a pyramid level
-// (23.7 MB for a 1024 tile with its overlap, 24 MiB mapped) but not a tile's descriptors (about 2.5 MB,
-// which 4 MiB would hold at 60% waste: on a 10000² pair, 200 tiles of them held about 150 MiB of nothing
-// at the end of detection).
-bool on_huge_pages(size_t n) { return round_up(n, kLargePage) - n <= n / 8; }
+// Huge pages where rounding the block up to whole 2 MiB wastes at most a quarter of it: a pyramid level
+// (23.7 MB for a 1024 tile with its overlap, 24 MiB mapped; 14.8 MB for a 768 tile, 16 MiB) but not a
+// tile's descriptors (about 2.5 MB, which 4 MiB would hold at 60% waste: on a 10000² pair, 200 tiles of
+// them held about 150 MiB of nothing at the end of detection). The 768 tile's planes were in 4 KiB pages
+// under an earlier limit of an eighth; on a virtual machine whose page faults cost much, a detection job
+// of nine 768 tiles (tp-plan's) then took 2.0 s, and 1.8 s on huge pages.
+bool on_huge_pages(size_t n) { return round_up(n, kLargePage) - n <= n / 4; }
 size_t block_size(size_t n) { return on_huge_pages(n) ? round_up(n, kLargePage) : round_up(n, kPage); }
 
-// A request of at least this many bytes may take a pooled block up to kShareRatio times its size (smaller
-// ones up to 5/4 times): a scale space's higher octaves (planes a quarter of the first octave's and less)
-// then run in the first octave's freed planes. With blocks of about their own size only, the next tile's
-// first octave found the pool full of the higher octaves' blocks and evicted them to map its own, every tile:
-// one 10000² image's detection mapped (and the kernel zeroed) 777 blocks, now 218 (its wall time on 2 threads
-// 18.2 -> 17.2 s, the same peak). Smaller requests, such as a tile's RootSIFT descriptors that live until
-// the image is gathered, never hold a block much larger than themselves.
-constexpr size_t kShareFrom = size_t(4) << 20;
+// A request may take a pooled block up to kShareRatio times its size: a scale space's higher octaves
+// (planes a quarter of the first octave's and less) then run in the first octave's freed planes. With
+// blocks of about their own size only, the next tile's first octave found the pool full of the higher
+// octaves' blocks and evicted them to map its own, every tile: one 10000² image's detection mapped (and
+// the kernel zeroed) 777 blocks, 218 once requests from 4 MiB shared (its wall time on 2 threads 18.2 ->
+// 17.2 s, the same peak). With 768 tiles the second octave's planes (3.7 MB) were below those 4 MiB: a
+// detection job of nine tiles mapped 83 blocks, now 9 (3.5 -> 2.2 s); the whole 10000² pair at 768 tiles
+// 117 -> 110 CPU s, its peak 1037 -> 941 MiB. At 1024 tiles, where a tile's descriptors (2.5 MB, which
+// live until the image is gathered) may now hold a freed octave plane, the pair's peak did not move.
 constexpr size_t kShareRatio = 5;
 
 // Large blocks: mapped 2 MiB-aligned and advised for huge pages (or, where that rounding would waste more
-// than an eighth of the block, in whole 4 KiB pages), and on free kept for the next request that fits
-// them (see kShareFrom) instead of unmapped. Blocks in use and in the pool together
+// than a quarter of the block, in whole 4 KiB pages), and on free kept for the next request that fits
+// them (see kShareRatio) instead of unmapped. Blocks in use and in the pool together
 // never exceed the most ever in use at once (pooled blocks are unmapped to make room), so the pool adds
 // nothing to the peak; it holds at most kMaxPooled bytes and is emptied by release_large_blocks(). Blocks are mapped and
 // unmapped directly rather than taken from malloc: from malloc's heaps, memory backed by huge pages
@@ -53,7 +56,7 @@ class LargeBlocks {
     {
       std::lock_guard<std::mutex> lock(m_);
       auto it = free_.lower_bound(size);
-      if (it != free_.end() && it->first <= (n >= kShareFrom ? kShareRatio * size : size + size / 4)) {
+      if (it != free_.end() && it->first <= kShareRatio * size) {
         void* p = it->second;
         pooled_ -= it->first;
         in_use_ += it->first;

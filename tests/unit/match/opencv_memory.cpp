@@ -1,6 +1,6 @@
 // The pool of large blocks behind OpenCV's matrices (opencv_memory.hpp): a freed block serves the next
-// matrix that fits it, of about its size or, from 4 MiB, up to five times smaller (a higher octave in a
-// first octave's plane); a matrix smaller than that gets a block of its own.
+// matrix that fits it, of its size or up to five times smaller (a higher octave in a first octave's
+// plane, for 1024 and 768 tiles alike); a matrix smaller than that gets a block of its own.
 #include "tpkit/match/opencv_memory.hpp"
 
 #include <gtest/gtest.h>
@@ -32,8 +32,18 @@ TEST(OpencvMemory, FreedPlanesServeTheMatricesThatFitThem) {
     EXPECT_NE(small.data, plane_block);
   }
   {
-    cv::Mat descriptors(20000, 128, CV_8U);  // 2.4 MB, below 4 MiB: never a block much larger than itself
+    cv::Mat descriptors(20000, 128, CV_8U);  // 2.4 MB: 24 MiB is more than five times that
     EXPECT_NE(descriptors.data, plane_block);
+  }
+  release_large_blocks();
+  // a 768 tile's (960² with its overlap): its second octave's planes, 3.7 MB, run in the first's
+  {
+    cv::Mat plane(1920, 1920, CV_32F);
+    plane_block = plane.data;
+  }
+  {
+    cv::Mat octave1(960, 960, CV_32F);
+    EXPECT_EQ(octave1.data, plane_block);
   }
   release_large_blocks();
 }

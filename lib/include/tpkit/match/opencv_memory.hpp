@@ -6,12 +6,11 @@
 // tp-match's time was 14 % (1.07 s of system time against 3.35 s of user time). Matrices of 2 MiB and more
 // are here allocated 2 MiB-aligned and marked MADV_HUGEPAGE, so that the kernel backs them with huge pages
 // where transparent huge pages are enabled ("always" or "madvise", Debian's default), 512 times fewer
-// faults (a matrix that whole 2 MiB pages would round up by more than an eighth, such as a tile's
+// faults (a matrix that whole 2 MiB pages would round up by more than a quarter, such as a tile's
 // descriptors, is mapped in 4 KiB pages instead); smaller ones, and everything where huge pages are off,
-// are as before. A freed large block is
-// kept (up to 1 GiB) for the next matrix that fits it (of about its size, or, from 4 MiB, up to five times
-// smaller: a higher octave in a first octave's plane): the next tile's or image's pyramid then needs
-// neither faults nor the kernel's zeroing of fresh pages.
+// are as before. A freed large block is kept (up to 1 GiB) for the next matrix that fits it (of its size
+// or up to five times smaller: a higher octave in a first octave's plane): the next tile's or image's
+// pyramid then needs neither faults nor the kernel's zeroing of fresh pages.
 #pragma once
 
 namespace tpkit {
