@@ -47,39 +47,27 @@ Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long 
   return r;
 }
 
-Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, long max_samples, int threads) {
-  const long W = src.info.width, H = src.info.height;
-  // regular subsample with step k in both directions
+long stretch_step(long width, long height, long max_samples) {
   long k = 1;
-  while ((W / k) * (H / k) > max_samples) ++k;
-  // strips of ~4 M pixels (a multiple of k rows), read side by side on `threads` workers (decoding a
-  // compressed file is most of the time: 1.1 s for a 10000² deflate image on one thread), their samples
-  // gathered in row order
-  const long strip = std::max(k, (k * std::max(1L, (1L << 22) / std::max(1L, W)) / k));
-  const size_t strips = static_cast<size_t>((H + strip - 1) / strip);
-  std::vector<std::vector<float>> per(strips);
-  parallel_for(strips, std::max(1, std::min(threads, 4)), [&](size_t i) {
-    const long y = static_cast<long>(i) * strip, h = std::min(strip, H - y);
-    Raster r = read_valid_region(src, 0, y, W, h);
-    for (long yy = 0; yy < h; ++yy) {
-      if ((y + yy) % k) continue;
-      for (long x = 0; x < W; x += k) {
-        float v = r.at(x, yy);
-        if (!std::isnan(v)) per[i].push_back(v);
-      }
+  while ((width / k) * (height / k) > max_samples) ++k;
+  return k;
+}
+
+void add_stretch_samples(const Raster& strip, long step, std::vector<float>& samples) {
+  for (long yy = 0; yy < strip.height; ++yy) {
+    if ((strip.y0 + yy) % step) continue;
+    for (long x = 0; x < strip.width; x += step) {
+      float v = strip.at(x, yy);
+      if (!std::isnan(v)) samples.push_back(v);
     }
-  });
-  std::vector<float> samples;
-  size_t n = 0;
-  for (const auto& p : per) n += p.size();
-  samples.reserve(n);
-  for (auto& p : per) {
-    samples.insert(samples.end(), p.begin(), p.end());
-    std::vector<float>().swap(p);
   }
+}
+
+Stretch stretch_of_samples(std::vector<float> samples, double p_lo, double p_hi, const ImageSource& src) {
   if (samples.empty()) throw InputError(src.path, 0, "every pixel of band " + std::to_string(src.band + 1) + " is nodata or masked");
   Stretch s;
   s.valid_samples = static_cast<long>(samples.size());
+  // the order of the samples does not matter: nth_element gives the value of rank i
   auto at = [&](double p) {
     size_t i = static_cast<size_t>(std::llround(p / 100.0 * static_cast<double>(samples.size() - 1)));
     i = std::min(i, samples.size() - 1);
@@ -89,6 +77,30 @@ Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, lon
   s.lo = at(p_lo);
   s.hi = at(p_hi);
   return s;
+}
+
+Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, long max_samples, int threads) {
+  const long W = src.info.width, H = src.info.height;
+  const long k = stretch_step(W, H, max_samples);
+  // strips of ~4 M pixels (a multiple of k rows), read side by side on `threads` workers (decoding a
+  // compressed file is most of the time: 1.1 s for a 10000² deflate image on one thread), their samples
+  // gathered in row order
+  const long strip = std::max(k, (k * std::max(1L, (1L << 22) / std::max(1L, W)) / k));
+  const size_t strips = static_cast<size_t>((H + strip - 1) / strip);
+  std::vector<std::vector<float>> per(strips);
+  parallel_for(strips, std::max(1, std::min(threads, 4)), [&](size_t i) {
+    const long y = static_cast<long>(i) * strip, h = std::min(strip, H - y);
+    add_stretch_samples(read_valid_region(src, 0, y, W, h), k, per[i]);
+  });
+  std::vector<float> samples;
+  size_t n = 0;
+  for (const auto& p : per) n += p.size();
+  samples.reserve(n);
+  for (auto& p : per) {
+    samples.insert(samples.end(), p.begin(), p.end());
+    std::vector<float>().swap(p);
+  }
+  return stretch_of_samples(std::move(samples), p_lo, p_hi, src);
 }
 
 std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<uint8_t>* valid) {

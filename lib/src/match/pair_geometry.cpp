@@ -21,8 +21,10 @@ namespace tpkit {
 
 namespace {
 
-// The image averaged in f x f blocks (see the header), read in strips of whole blocks.
-Raster decimated(const ImageSource& src, long f) {
+// The image averaged in f x f blocks (see the header), read in strips of whole blocks; on the way, the
+// samples of its percentile stretch (image_tiles.hpp: every `step`-th pixel of every step-th row, the
+// rows past the last whole block included), so that the image is decoded once for both.
+Raster decimated(const ImageSource& src, long f, long step, std::vector<float>& stretch_samples) {
   const long W = src.info.width, H = src.info.height;
   Raster out;
   out.width = std::max(1L, W / f);
@@ -32,6 +34,7 @@ Raster decimated(const ImageSource& src, long f) {
   for (long by = 0; by < out.height; by += blocks_per_strip) {
     const long nb = std::min(blocks_per_strip, out.height - by);
     const Raster r = read_valid_region(src, 0, by * f, W, nb * f);
+    add_stretch_samples(r, step, stretch_samples);
     for (long j = 0; j < nb; ++j)
       for (long i = 0; i < out.width; ++i) {
         double s = 0;
@@ -40,6 +43,7 @@ Raster decimated(const ImageSource& src, long f) {
         out.at(i, by + j) = static_cast<float>(s / static_cast<double>(f * f));
       }
   }
+  if (out.height * f < H) add_stretch_samples(read_valid_region(src, 0, out.height * f, W, H - out.height * f), step, stretch_samples);
   return out;
 }
 
@@ -48,8 +52,8 @@ struct CoarseFeatures {
   cv::Mat desc;
 };
 
-CoarseFeatures coarse_features(const ImageSource& src, const SiftOptions& o, const PairGeometryOptions& g, const Stretch& st, long f) {
-  Raster r = decimated(src, f);
+// `r`: the image decimated by f.
+CoarseFeatures coarse_features(const Raster& r, const SiftOptions& o, const PairGeometryOptions& g, const Stretch& st, long f) {
   std::vector<uint8_t> valid;
   std::vector<uint8_t> u8 = render_u8(r, st, &valid);
   cv::Mat img(static_cast<int>(r.height), static_cast<int>(r.width), CV_8U, u8.data());
@@ -91,12 +95,17 @@ PairGeometry estimate_pair_geometry(const ImageSource& a, const ImageSource& b, 
   G.image2 = {b.path, b.info.width, b.info.height};
   G.detector1 = detector_tag(sift, a);
   G.detector2 = detector_tag(sift, b);
-  G.stretch1 = percentile_stretch(a, sift.stretch_lo, sift.stretch_hi);
-  G.stretch2 = percentile_stretch(b, sift.stretch_lo, sift.stretch_hi);
   G.scale1 = decimation(a, g.max_side);
   G.scale2 = decimation(b, g.max_side);
-  const CoarseFeatures f1 = coarse_features(a, sift, g, G.stretch1, G.scale1);
-  const CoarseFeatures f2 = coarse_features(b, sift, g, G.stretch2, G.scale2);
+  // each image decoded once: its decimated copy and the samples of its stretch (as percentile_stretch's)
+  auto features = [&](const ImageSource& s, long f, Stretch& st) {
+    std::vector<float> samples;
+    const Raster r = decimated(s, f, stretch_step(s.info.width, s.info.height), samples);
+    st = stretch_of_samples(std::move(samples), sift.stretch_lo, sift.stretch_hi, s);
+    return coarse_features(r, sift, g, st, f);
+  };
+  const CoarseFeatures f1 = features(a, G.scale1, G.stretch1);
+  const CoarseFeatures f2 = features(b, G.scale2, G.stretch2);
   DescriptorMatchOptions dm;
   dm.exact_below = std::numeric_limits<long>::max();
   const std::vector<DescriptorMatch> put =

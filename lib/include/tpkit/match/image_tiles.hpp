@@ -40,6 +40,14 @@ constexpr long kStretchSamples = 1 << 21;
 Stretch percentile_stretch(const ImageSource& src, double p_lo = 0.5, double p_hi = 99.5, long max_samples = kStretchSamples,
                            int threads = 1);
 
+// percentile_stretch's stages, for a caller that reads the whole image for another purpose as well
+// (pair_geometry.cpp: its decimated copy) and samples it on the way: the subsample step (every
+// step-th pixel of every step-th row, counted from the image's origin); the samples of a strip of
+// whole rows (strip.y0 its first row), appended; the percentiles of the samples gathered, in any order.
+long stretch_step(long width, long height, long max_samples = kStretchSamples);
+void add_stretch_samples(const Raster& strip, long step, std::vector<float>& samples);
+Stretch stretch_of_samples(std::vector<float> samples, double p_lo, double p_hi, const ImageSource& src);
+
 // 8-bit rendering: round(255 (v - lo) / (hi - lo)) clipped to 0..255; NaN (invalid) -> 0.
 // `valid` (same size, may be null) receives 255 for valid pixels, 0 otherwise.
 std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<uint8_t>* valid = nullptr);
