@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
@@ -19,7 +20,7 @@
 namespace tpkit {
 
 namespace {
-constexpr const char* kMagic = "tpkit-sift 2";
+constexpr const char* kMagic = "tpkit-sift 3";
 
 uint64_t fnv1a(const std::string& s) {
   uint64_t h = 1469598103934665603ull;
@@ -85,12 +86,37 @@ bool short_line(std::istream& in, std::string& line, size_t max) {
   }
 }
 
-void fnv1a_bytes(uint64_t& h, const char* p, size_t n) {
-  for (size_t k = 0; k < n; ++k) {
-    h ^= static_cast<unsigned char>(p[k]);
-    h *= 1099511628211ull;
+// The records' checksum: FNV-1a over 8-byte words (native order) in four lanes (word k of each 32 bytes
+// to lane k), the lanes folded in order at the end, bytes after the last whole 32 into lane 0 one by one.
+// Each step is a bijection of the lane, so a change of any one word always changes the sum. Format 2's
+// byte-wise FNV-1a was one chain of 164 dependent multiplies per record: 0.2 s of a 2500² region job's
+// 4.3 s went to loading its 600 000 cached keypoints.
+class RecordsHash {
+ public:
+  // `n` a multiple of 32 in every call but the last
+  void add(const char* p, size_t n) {
+    size_t k = 0;
+    for (; k + 32 <= n; k += 32)
+      for (int l = 0; l < 4; ++l) {
+        uint64_t w;
+        std::memcpy(&w, p + k + 8 * l, 8);
+        h_[l] = (h_[l] ^ w) * kPrime;
+      }
+    for (; k < n; ++k) h_[0] = (h_[0] ^ static_cast<unsigned char>(p[k])) * kPrime;
   }
-}
+  uint64_t value() const {
+    uint64_t h = kBasis;
+    for (uint64_t l : h_) h = (h ^ l) * kPrime;
+    return h;
+  }
+
+ private:
+  static constexpr uint64_t kBasis = 1469598103934665603ull, kPrime = 1099511628211ull;
+  uint64_t h_[4] = {kBasis, kBasis + 1, kBasis + 2, kBasis + 3};
+};
+
+// Records are read, hashed and written this many at a time (a multiple of 8: 8 records are 41 x 32 bytes).
+constexpr size_t kChunkRecords = 8192;
 }  // namespace
 
 bool load_keypoints(const std::string& path, const std::string& identity, Keypoints& K) {
@@ -120,26 +146,31 @@ bool load_keypoints(const std::string& path, const std::string& identity, Keypoi
   out.kp.resize(static_cast<size_t>(n));
   out.id.resize(static_cast<size_t>(n));
   out.desc.create(static_cast<int>(n), 128, CV_8U);
-  uint64_t h = 1469598103934665603ull;
-  char rec[kRecordBytes];
-  for (long long i = 0; i < n; ++i) {
-    if (!in.read(rec, sizeof rec)) return false;
-    fnv1a_bytes(h, rec, sizeof rec);
-    float f[5];
-    int32_t oc[2];
-    int64_t id;
-    std::memcpy(f, rec, sizeof f);
-    std::memcpy(oc, rec + 20, sizeof oc);
-    std::memcpy(&id, rec + 28, 8);
-    for (float v : f)
-      if (!std::isfinite(v)) return false;
-    if (f[0] < -0.5f || f[1] < -0.5f || !(f[2] > 0) || id < 0) return false;
-    std::memcpy(out.desc.ptr<uint8_t>(static_cast<int>(i)), rec + 36, 128);
-    out.kp[static_cast<size_t>(i)] = cv::KeyPoint(f[0], f[1], f[2], f[3], f[4], oc[0], oc[1]);
-    out.id[static_cast<size_t>(i)] = id;
+  RecordsHash h;
+  std::vector<char> buf(std::min<size_t>(static_cast<size_t>(n), kChunkRecords) * kRecordBytes);
+  for (size_t i0 = 0; i0 < static_cast<size_t>(n); i0 += kChunkRecords) {
+    const size_t m = std::min<size_t>(kChunkRecords, static_cast<size_t>(n) - i0);
+    if (!in.read(buf.data(), static_cast<std::streamsize>(m * kRecordBytes))) return false;
+    h.add(buf.data(), m * kRecordBytes);
+    for (size_t j = 0; j < m; ++j) {
+      const char* rec = buf.data() + j * kRecordBytes;
+      const size_t i = i0 + j;
+      float f[5];
+      int32_t oc[2];
+      int64_t id;
+      std::memcpy(f, rec, sizeof f);
+      std::memcpy(oc, rec + 20, sizeof oc);
+      std::memcpy(&id, rec + 28, 8);
+      for (float v : f)
+        if (!std::isfinite(v)) return false;
+      if (f[0] < -0.5f || f[1] < -0.5f || !(f[2] > 0) || id < 0) return false;
+      std::memcpy(out.desc.ptr<uint8_t>(static_cast<int>(i)), rec + 36, 128);
+      out.kp[i] = cv::KeyPoint(f[0], f[1], f[2], f[3], f[4], oc[0], oc[1]);
+      out.id[i] = id;
+    }
   }
   uint64_t stored = 0;
-  if (!in.read(reinterpret_cast<char*>(&stored), 8) || stored != h) return false;
+  if (!in.read(reinterpret_cast<char*>(&stored), 8) || stored != h.value()) return false;
   K = std::move(out);
   return true;
 }
@@ -148,14 +179,18 @@ void save_keypoints(const std::string& path, const std::string& identity, const 
   AtomicOutput out(path, /*transactional=*/false);  // a cache entry, not an output of the run
   std::ostream& s = out.stream();
   s << kMagic << "\n" << identity << " count=" << K.kp.size() << "\n";
-  uint64_t h = 1469598103934665603ull;
-  char rec[kRecordBytes];
-  for (size_t i = 0; i < K.kp.size(); ++i) {
-    pack(K.kp[i], K.id[i], K.desc.ptr<uint8_t>(static_cast<int>(i)), rec);
-    fnv1a_bytes(h, rec, sizeof rec);
-    s.write(rec, sizeof rec);
+  RecordsHash h;
+  const size_t n = K.kp.size();
+  std::vector<char> buf(std::min(n, kChunkRecords) * kRecordBytes);
+  for (size_t i0 = 0; i0 < n; i0 += kChunkRecords) {
+    const size_t m = std::min(kChunkRecords, n - i0);
+    for (size_t j = 0; j < m; ++j)
+      pack(K.kp[i0 + j], K.id[i0 + j], K.desc.ptr<uint8_t>(static_cast<int>(i0 + j)), buf.data() + j * kRecordBytes);
+    h.add(buf.data(), m * kRecordBytes);
+    s.write(buf.data(), static_cast<std::streamsize>(m * kRecordBytes));
   }
-  s.write(reinterpret_cast<const char*>(&h), 8);
+  const uint64_t sum = h.value();
+  s.write(reinterpret_cast<const char*>(&sum), 8);
   out.commit();
 }
 

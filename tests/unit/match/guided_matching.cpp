@@ -177,3 +177,32 @@ TEST(KeypointCache, UntrustedEntriesAreRefused) {
   EXPECT_FALSE(load_keypoints(f, id, K)) << "NaN with a valid checksum";
   std::filesystem::remove_all(dir);
 }
+
+TEST(KeypointCache, LargeEntriesAreReadInChunksAndEveryByteIsChecked) {
+  // 20001 records: read and hashed 8192 at a time (three chunks, the last of 3617 records, whose bytes
+  // end in a part of 32 that is hashed byte by byte); a flipped bit anywhere in the records is refused
+  const auto dir = std::filesystem::temp_directory_path() / ("tpkit_kpcache_big_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const Pair p = make_pair(20001, 0, 6);
+  const std::string f = (dir / "a.sift").string();
+  const std::string id = "image=a detector=x";
+  save_keypoints(f, id, p.K1);
+  Keypoints K;
+  ASSERT_TRUE(load_keypoints(f, id, K));
+  ASSERT_EQ(K.kp.size(), p.K1.kp.size());
+  for (size_t i = 0; i < K.kp.size(); ++i) {
+    ASSERT_EQ(K.kp[i].pt, p.K1.kp[i].pt);
+    ASSERT_EQ(K.id[i], p.K1.id[i]);
+  }
+  EXPECT_EQ(cv::norm(K.desc, p.K1.desc, cv::NORM_INF), 0.0);
+  const std::string good = slurp_bytes(f);
+  const size_t records = good.size() - 8 - 20001 * 164;  // where the records start
+  // in the first chunk, in the second, in the last whole 32 bytes and in the bytes after them
+  for (size_t at : {records + 100, records + 8192 * 164 + 5, good.size() - 8 - 40, good.size() - 8 - 3}) {
+    std::string flipped = good;
+    flipped[at] ^= 0x01;
+    spill_bytes(f, flipped);
+    EXPECT_FALSE(load_keypoints(f, id, K)) << "byte " << at;
+  }
+  std::filesystem::remove_all(dir);
+}

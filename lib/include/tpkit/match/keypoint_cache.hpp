@@ -3,10 +3,11 @@
 //
 // One binary file per image and detector: DIR/<file name>.<16 hex digits>.sift, the digits a hash of
 // the image's absolute path, size, modification time and the detector tag (detector_tag(): every
-// option that changes the keypoints). Layout: a text line "tpkit-sift 2\n", a line with the identity
+// option that changes the keypoints). Layout: a text line "tpkit-sift 3\n", a line with the identity
 // string (path, size, mtime, tag) and the count, then per keypoint x y size angle response (float32),
 // octave class_id (int32), id (int64), descriptor (128 bytes), packed (164 bytes) in the machine's byte
-// order, then the 64-bit FNV-1a hash of all record bytes. A cache file is untrusted input: one whose
+// order, then a 64-bit checksum of all record bytes (FNV-1a over 8-byte words in four lanes; format 2
+// hashed byte by byte, and its files are detected again). A cache file is untrusted input: one whose
 // identity line differs (edited image, other options, hash collision), whose count disagrees with its
 // size, whose hash does not match, or that holds a non-finite value or a negative position, size or
 // id counts as missing (with a warning) and is detected again and rewritten. Written atomically (temporary file + rename), so
