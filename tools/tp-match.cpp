@@ -58,7 +58,7 @@ struct Opts {
   bool no_refine = false, drop_unrefined = false, no_mutual = false, global = false, l2 = false, quiet = false;
   tpkit::PairMatchOptions p;
   std::vector<long> region;  // --region X0 Y0 W H
-  double region_margin = 256;
+  double region_margin = 128;
   int detect = 0;  // --detect N: image N's detection tiles into the cache
   std::string geometry, write_geometry;
   std::vector<std::string> rpc_files;  // --rpc IMG=FILE

@@ -26,7 +26,10 @@ namespace tpkit {
 
 struct RegionOptions {
   std::array<long, 4> window{0, 0, 0, 0};  // X0 Y0 W H, image-1 pixels
-  double margin = 256;                     // pixels (image 1 and image 2) matched beyond the window
+  // pixels (image 1 and image 2) matched beyond the window. On the 10000² tp-synth pair, a 2500² region
+  // gave 99.90-99.91% of its records equal to the whole run's at 256, 192, 128 and 96 px; at 128 instead of
+  // 256 it matches 170 626 image-1 keypoints instead of 202 538, in 3.8 s instead of 4.2 s.
+  double margin = 128;
 };
 
 struct RegionStats {
