@@ -8,7 +8,7 @@
 # --detect-tile, default 768: keypoint ids depend on it) and with tp-match's default (1024); per job
 # of the plan (geometry, detection, regions, and the merge, chain, rpc-adjust and tp-ground jobs) peak
 # memory and CPU time; CPU of the matching jobs (geometry, detection, regions, tp-merge) against the whole
-# tp-match run's, and of the jobs after them; the array's wall time; the share of the whole run's matches found with the same ids
+# tp-match run's (the mean of a run before the plan and one after it), and of the jobs after them; the array's wall time; the share of the whole run's matches found with the same ids
 # and positions (1e-6 px); and for regions of 2000 and 4000 pixels in each scene given, the memory and
 # time of a detection job on such a block, of a region job that detects its own tiles, and of the same
 # region job once the cache holds them (as in a plan); these with --no-rpc, so that a scene with RPC
@@ -77,7 +77,15 @@ bash "$T/work/submit-slurm.sh" --wait >/dev/null
 t1=$(date +%s.%N)
 echo "slurm array wall (geometry, detection, 16 regions, merge, chain, adjust, ground; 2 jobs at a time): $(awk -v a="$t0" -v b="$t1" "BEGIN { printf \"%.1f\", b - a }") s"
 cat "$T"/times/* > "$T/all.times"
-awk -v wu="$wu" -v ws="$wsys" '
+# the whole run again, after the plan: this machine's speed drifts by 5-15% over minutes, so the plan is
+# compared with the mean of a run before it and one after it (and each is printed)
+wu2=$wu wsys2=$wsys
+if [ -z "${WHOLE_MATCHES:-}" ]; then
+  read -r _ ww2 wu2 wsys2 wrss2 < <(timed whole "$BIN/tp-match" --threads 2 --tile "$DT" -q "$V1" "$V2" -o "$T/whole-again.matches")
+  echo "whole again, after the plan, tile $DT: wall ${ww2} s, cpu $(awk -v a="$wu2" -v b="$wsys2" "BEGIN { print a + b }") s, peak $(( wrss2 / 1024 )) MB"
+  rm -f "$T/whole-again.matches"
+fi
+awk -v w1="$(awk -v a="$wu" -v b="$wsys" 'BEGIN { print a + b }')" -v w2="$(awk -v a="$wu2" -v b="$wsys2" 'BEGIN { print a + b }')" '
   { cpu = $3 + $4; total += cpu
     k = $1; if ($0 ~ /--write-geometry/) k = "geometry"; else if ($0 ~ /--detect/) k = "detect"; else if ($0 ~ /--region/) k = "region"
     n[k]++; c[k] += cpu; if ($5 > rss[k]) rss[k] = $5; if ($5 > peak) peak = $5; if (cpu > mx[k]) mx[k] = cpu }
@@ -87,7 +95,8 @@ awk -v wu="$wu" -v ws="$wsys" '
     # the whole run is tp-match alone: it compares with the matching jobs of the plan; the jobs after them
     # (tp-chain, rpc-adjust, tp-ground) have no counterpart in it
     m = c["geometry"] + c["detect"] + c["region"] + c["tp-merge"]
-    printf "matching jobs (geometry, detection, regions, tp-merge) cpu %.1f s, whole tp-match run %.1f s: %+.1f%%\n", m, wu + ws, 100 * (m / (wu + ws) - 1)
+    w = (w1 + w2) / 2
+    printf "matching jobs (geometry, detection, regions, tp-merge) cpu %.1f s, whole tp-match run %.1f s (mean of %.1f before and %.1f after): %+.1f%%\n", m, w, w1, w2, 100 * (m / w - 1)
     printf "jobs after the matching (tp-chain, rpc-adjust, tp-ground) cpu %.1f s; every job %.1f s\n", total - m, total
   }' "$T/all.times"
 awk 'FNR == 1 { f++ } /^#/ { next }
