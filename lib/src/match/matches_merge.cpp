@@ -79,10 +79,8 @@ Matches merge_matches(const std::vector<Matches>& files, MergeStats* stats, cons
   st.records = static_cast<long>(all.size());
   // the best of each run of equal keys (the first on ties), in the order of `v`
   auto best_of_runs = [&](std::vector<Candidate>& v, auto same_key, auto on_repeat) {
-    size_t runs = 0;
-    for (size_t a = 0; a < v.size(); ++a) runs += a == 0 || !same_key(v[a - 1], v[a]);
     std::vector<Candidate> kept;
-    kept.reserve(runs);
+    kept.reserve(v.size());  // at most one a record; pages past those written are never touched
     for (size_t a = 0, b; a < v.size(); a = b) {
       Candidate best = v[a];
       for (b = a + 1; b < v.size() && same_key(v[a], v[b]); ++b) {
