@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
         app.add_option("--overlap", o->p.overlap, "regions grown by this on every side, pixels")->check(tpkit::NonNegative);
         app.add_option("--detect-tile", o->p.detect_tile, "tp-match --tile (detection tile, pixels) of every job; 0 = tp-match's default")
             ->check(tpkit::NonNegative);
+        app.add_option("--detect-regions", o->p.detect_regions, "regions of a row per detection job (default 4)")->check(CLI::Range(1L, 1L << 20));
         app.add_option("--threads", o->p.threads, "threads of each tp-match, rpc-adjust and tp-ground job (Slurm --cpus-per-task)")->check(CLI::Range(1, 1024));
         app.add_option("--bin", o->p.bin, "folder of the tpkit tools on the machines (default: on PATH)");
         app.add_option("--match-options", o->match_options, "more tp-match options for every match job, space separated");

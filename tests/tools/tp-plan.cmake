@@ -4,10 +4,17 @@
 set(_imgs "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 >/dev/null && mkdir -p 'my imgs' && cp s/view1.tif \"my imgs/it's 1.tif\" && cp s/view2.tif 'my imgs/$x 2.tif'")
 tpkit_tool_test(tp-plan.files
   COMMAND "${_imgs} && tp-plan -q -o 'w d' --tile 256 \"my imgs/it's 1.tif\" 'my imgs/$x 2.tif' && cat 'w d/jobs/tiles.jobs' 'w d/plan.mk' 'w d/jobs/chain.jobs' && bash -n 'w d/submit-slurm.sh' && bash -n 'w d/run-parallel.sh' && bash -n 'w d/slurm-array.sbatch'"
-  STDOUT_MATCH "^tp-match -q --threads 1 --tile 768 --geometry '[^']*/w d/geometry/pair-1-2.geometry' --region 0 0 256 256 --cache '[^']*/w d/cache' -o '[^']*/w d/tiles/pair-1-2/tile-1.matches' '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/my imgs/[$]x 2.tif'\n.*--region 256 256 44 44 .*tile-4.matches.*\ntpkit-all: ground.points\n.*detect/image-2/block-1.detection: geometry/pair-1-2.geometry\n\t[^\n]*--detect 2 --region 0 0 256 256 [^\n]*\n.*tiles/pair-1-2/tile-1.matches: geometry/pair-1-2.geometry [$][(]detect-image-1[)] [$][(]detect-image-2[)]\n\t.*'[^']*/my imgs/[$][$]x 2.tif'\n.*tracks.tracks: pairs/pair-1-2.matches\n\ttp-chain -q --images [^\n]*\nadjusted/rpc.bias: tracks.tracks\n\trpc-adjust '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/my imgs/[$][$]x 2.tif' --tracks ")
+  STDOUT_MATCH "^tp-match -q --threads 1 --tile 768 --geometry '[^']*/w d/geometry/pair-1-2.geometry' --region 0 0 256 256 --cache '[^']*/w d/cache' -o '[^']*/w d/tiles/pair-1-2/tile-1.matches' '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/my imgs/[$]x 2.tif'\n.*--region 256 256 44 44 .*tile-4.matches.*\ntpkit-all: ground.points\n.*detect/image-2/block-1.detection: geometry/pair-1-2.geometry\n\t[^\n]*--detect 2 --region 0 0 300 256 [^\n]*\n.*tiles/pair-1-2/tile-1.matches: geometry/pair-1-2.geometry [$][(]detect-image-1[)] [$][(]detect-image-2[)]\n\t.*'[^']*/my imgs/[$][$]x 2.tif'\n.*tracks.tracks: pairs/pair-1-2.matches\n\ttp-chain -q --images [^\n]*\nadjusted/rpc.bias: tracks.tracks\n\trpc-adjust '[^']*/my imgs/it'\\\\''s 1.tif' '[^']*/my imgs/[$][$]x 2.tif' --tracks ")
 tpkit_tool_test(tp-plan.make-dry-run
   COMMAND "${_imgs} && tp-plan -q -o w --tile 256 --overlap 16 --threads 2 s/view1.tif s/view2.tif s/view3.tif && make -n -C w -f plan.mk > n && grep -c '^tp-match .*--region' n && grep -c '^tp-match .*--detect' n"
   STDOUT_MATCH "^15\n3\n$")
+# detection jobs: blocks of up to --detect-regions regions of a row; a 600² pair, regions and detection
+# tiles of 256 px (2 x 2 detection tiles an image): one job per tile with 1, one per row of tiles with 2
+tpkit_tool_test(tp-plan.detect-regions
+  COMMAND "tp-synth --out s --size 600 --seed 2 --threads 2 --supersample 1 >/dev/null && for r in 1 2; do tp-plan -q -o w$r --tile 256 --detect-tile 256 --detect-regions $r s/view1.tif s/view2.tif && wc -l < w$r/jobs/detect.jobs && grep -o -- '--detect 2 --region [0-9 ]*' w$r/jobs/detect.jobs; done"
+  STDOUT_MATCH "^8\n--detect 2 --region 0 0 256 256 \n--detect 2 --region 256 0 256 256 \n--detect 2 --region 0 256 256 256 \n--detect 2 --region 256 256 256 256 \n4\n--detect 2 --region 0 0 512 256 \n--detect 2 --region 0 256 512 256 \n$")
+tpkit_tool_test(tp-plan.detect-regions-zero
+  COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 >/dev/null && tp-plan -o w --detect-regions 0 s/view1.tif s/view2.tif" EXPECT_FAIL STDERR_MATCH "\ntp-plan: --detect-regions: " NO_FILE w)
 tpkit_tool_test(tp-plan.list
   COMMAND "${_imgs} && printf '# views\\n%s\\n\\n%s\\n' \"$PWD/my imgs/it's 1.tif\" s/view2.tif > list && tp-plan -o w --list list"
   STDERR_MATCH "2 images, 1 pairs, 2 detection jobs, 1 region jobs")

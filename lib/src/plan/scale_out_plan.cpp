@@ -154,6 +154,14 @@ std::vector<std::array<long, 4>> plan_regions(long width, long height, long tile
   return out;
 }
 
+std::vector<std::array<long, 4>> detection_blocks(long width, long height, long tile, long regions) {
+  std::vector<std::array<long, 4>> out;
+  const long w = tile * regions;
+  for (long y = 0; y < height; y += tile)
+    for (long x = 0; x < width; x += w) out.push_back({x, y, std::min(w, width - x), std::min(tile, height - y)});
+  return out;
+}
+
 std::string shell_quote(const std::string& text) {
   if (text.find('\n') != std::string::npos || text.find('\r') != std::string::npos || text.find('\0') != std::string::npos)
     throw UsageError("a path with a line break cannot go into a job file: " + text.substr(0, text.find_first_of("\r\n")) + "...");
@@ -256,6 +264,7 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
   if (!(o.min_overlap >= 0 && o.min_overlap <= 1)) throw UsageError("--min-overlap must be between 0 and 1");
   if (o.overlap < 0) throw UsageError("--overlap must be >= 0");
   if (o.detect_tile != 0 && o.detect_tile < 256) throw UsageError("--detect-tile must be 0 or at least 256 pixels");
+  if (o.detect_regions < 1) throw UsageError("--detect-regions must be at least 1");
   Plan p;
   for (size_t i = 0; i < images.size(); ++i)
     for (size_t j = i + 1; j < images.size(); ++j)
@@ -291,14 +300,14 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
     p.merge.push_back(merge);
   }
   // detection: every image of a pair once, through the geometry of its first pair (which holds its
-  // stretch), in the regions of its own pixels; the region jobs of a pair need all of its two images'
+  // stretch), in blocks of its own pixels (detection_blocks); the region jobs of a pair need all of its two images'
   p.image_detections.resize(images.size());
   for (size_t i = 0; i < images.size(); ++i) {
     const auto pr = std::find_if(p.pairs.begin(), p.pairs.end(), [&](const auto& q) { return q[0] == i || q[1] == i; });
     if (pr == p.pairs.end()) continue;
     const std::string geo = "geometry/" + pair_name(*pr) + ".geometry";
     const std::string imgs = " " + shell_quote(images[(*pr)[0]].path) + " " + shell_quote(images[(*pr)[1]].path);
-    const auto regions = plan_regions(images[i].width, images[i].height, o.tile, 0);
+    const auto regions = detection_blocks(images[i].width, images[i].height, o.tile, o.detect_regions);
     const long dt = o.detect_tile > 0 ? o.detect_tile : SiftOptions{}.tile;
     const auto grid = tile_grid(images[i].width, images[i].height, dt, 0);
     for (size_t k = 0; k < regions.size(); ++k) {

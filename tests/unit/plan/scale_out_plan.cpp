@@ -74,35 +74,48 @@ TEST(ScaleOutPlan, MakefileDoublesDollars) {
             std::string::npos);
   EXPECT_NE(mk.find("pairs/pair-1-2.matches: tiles/pair-1-2/tile-1.matches\n"), std::string::npos);
   EXPECT_THROW(make_plan({a}, o), UsageError);
+  o.detect_regions = 0;
+  EXPECT_THROW(make_plan({a, b}, o), UsageError);
 }
 
-// The detect stage: every detection tile of every image in exactly one job, and no job without one.
+// The detect stage: every detection tile of every image in exactly one job, and no job without one;
+// a job's block is up to detect_regions regions of a row.
 TEST(ScaleOutPlan, DetectionTilesOnce) {
   PlanImage a{"/a", 5000, 3000, std::nullopt}, b{"/b", 4000, 4100, std::nullopt};
   for (long detect_tile : {0L, 512L, 768L, 3000L}) {
-    PlanOptions o;
-    o.work = "/w";
-    o.tile = 1100;
-    o.detect_tile = detect_tile;
-    const Plan p = make_plan({a, b}, o);
-    for (size_t i = 0; i < 2; ++i) {
-      const PlanImage& im = i == 0 ? a : b;
-      const auto grid = tile_grid(im.width, im.height, detect_tile > 0 ? detect_tile : SiftOptions{}.tile, 0);
-      std::vector<int> seen(grid.size(), 0);
-      long jobs = 0;
-      for (const PlanJob& j : p.detect) {
-        if (j.target.rfind("detect/image-" + std::to_string(i + 1) + "/", 0) != 0) continue;
-        ++jobs;
-        long x, y, w, h;
-        const size_t at = j.command.find("--region ");
-        ASSERT_NE(at, std::string::npos);
-        ASSERT_EQ(std::sscanf(j.command.c_str() + at, "--region %ld %ld %ld %ld", &x, &y, &w, &h), 4);
-        const auto t = tiles_starting_in(grid, x, y, w, h);
-        EXPECT_FALSE(t.empty()) << j.command;
-        for (const Tile& k : t) ++seen[static_cast<size_t>(k.index)];
+    for (long detect_regions : {1L, 2L, 4L, 100L}) {
+      PlanOptions o;
+      o.work = "/w";
+      o.tile = 1100;
+      o.detect_tile = detect_tile;
+      o.detect_regions = detect_regions;
+      const Plan p = make_plan({a, b}, o);
+      for (size_t i = 0; i < 2; ++i) {
+        const PlanImage& im = i == 0 ? a : b;
+        const auto grid = tile_grid(im.width, im.height, detect_tile > 0 ? detect_tile : SiftOptions{}.tile, 0);
+        std::vector<int> seen(grid.size(), 0);
+        long jobs = 0;
+        for (const PlanJob& j : p.detect) {
+          if (j.target.rfind("detect/image-" + std::to_string(i + 1) + "/", 0) != 0) continue;
+          ++jobs;
+          long x, y, w, h;
+          const size_t at = j.command.find("--region ");
+          ASSERT_NE(at, std::string::npos);
+          ASSERT_EQ(std::sscanf(j.command.c_str() + at, "--region %ld %ld %ld %ld", &x, &y, &w, &h), 4);
+          const auto t = tiles_starting_in(grid, x, y, w, h);
+          EXPECT_FALSE(t.empty()) << j.command;
+          EXPECT_EQ(y % o.tile, 0) << j.command;
+          EXPECT_LE(h, o.tile) << j.command;
+          EXPECT_LE(w, o.tile * detect_regions) << j.command;
+          // a whole row of regions when it holds them all (the widest image has 5 a row)
+          if (detect_regions >= 5) {
+            EXPECT_TRUE(x == 0 && w == im.width) << j.command;
+          }
+          for (const Tile& k : t) ++seen[static_cast<size_t>(k.index)];
+        }
+        EXPECT_GT(jobs, 0);
+        for (int s : seen) EXPECT_EQ(s, 1) << "detect tile " << detect_tile << ", regions " << detect_regions << ", image " << i + 1;
       }
-      EXPECT_GT(jobs, 0);
-      for (int s : seen) EXPECT_EQ(s, 1) << "detect tile " << detect_tile << ", image " << i + 1;
     }
   }
 }
