@@ -174,7 +174,8 @@ struct Rec {
 // o.refine_hold_pixels (4096²: 64 MiB as float), it is read once and every pass cuts its bands from
 // memory; a larger one is read band by band on every pass (bounded memory), but the estimates' passes
 // read only the windows of their samples' records, all once (windows(): on a 10000² pair the refinement stage,
-// whose two estimates took 9.7 s of its 39.4, now takes 32.2 s).
+// whose two estimates took 9.7 s of its 39.4, now takes 32.2 s). The estimates refine each sampled
+// record on its own window, cut from the held pixels or from windows().
 struct PixelRect {
   long x0, y0, w, h;
 };
@@ -287,9 +288,9 @@ RefineGroup refine_group(std::vector<size_t> js, const std::vector<Rec>& recs, c
 // strip-stored file is decoded about once in all), and the band's points are refined in parallel while
 // the next band's regions are read. A band whose image-2 region would be too large (strong rotation
 // between the images) is split along x until it fits. With `per_record`, each record is a group of its
-// own and the groups are refined in parallel (a sample of a large image's records, whose pixels
-// px.windows() holds: filtering whole bands for a few windows each would cost more than the
-// refinement). A0 holds each record's initial local map (keypoint_affine). With `F`, a refined
+// own and the groups are refined in parallel (the estimates' samples, their windows cut from the pixels
+// px holds or read by px.windows(): filtering whole bands for a few windows each costs more than the
+// refinement; a 2500² region job's two estimates took 0.18 s in bands, 0.05 s window by window). A0 holds each record's initial local map (keypoint_affine). With `F`, a refined
 // position farther than `max_residual` pixels (R^4) from the verified pair model is rejected
 // (OffEpipolar): the keypoint match passed that test, so the refinement moved it off the geometry.
 void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
@@ -429,9 +430,9 @@ std::optional<RefinePixels> estimate_pixels(const RefinePixels& px, const std::v
 
 // 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
 // 200 records spread evenly over the list, each candidate a refinement of that sample scored by the
-// median final correlation (a failed refinement counts its correlation too, 0 when none).
-// px: the pixels of its sample (estimate_pixels when per_record: refined window by window).
-RelativeBlur choose_relative_blur(const RefinePixels& px, bool per_record, const std::vector<Rec>& recs,
+// median final correlation (a failed refinement counts its correlation too, 0 when none), record by
+// record on its own window. px: pixels that hold the sample's windows (estimate_pixels, or all held).
+RelativeBlur choose_relative_blur(const RefinePixels& px, const std::vector<Rec>& recs,
                                   const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
                                   const AffineFundamental* F) {
   RelativeBlur rb;
@@ -443,7 +444,7 @@ RelativeBlur choose_relative_blur(const RefinePixels& px, bool per_record, const
   const RecordSample sample = sample_records(recs, A0, kBlurSample);
   auto score = [&](double sigma) {
     std::vector<Rec> s = sample.recs;
-    refine_records(px, s, sample.A0, lsm, o, F, o.ransac_threshold, sigma, 0, false, per_record);
+    refine_records(px, s, sample.A0, lsm, o, F, o.ransac_threshold, sigma, 0, false, /*per_record=*/true);
     std::vector<double> c;
     for (const Rec& r : s) c.push_back(r.corr);
     std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
@@ -456,8 +457,8 @@ RelativeBlur choose_relative_blur(const RefinePixels& px, bool per_record, const
 // chosen on up to 300 records spread evenly over the list (after the relative blur), each candidate a
 // refinement of that sample scored by the spread of its refined positions about their own affine
 // epipolar geometry. Needs the pair's epipolar geometry (F) and 50 records: otherwise none.
-// px, per_record: as for choose_relative_blur.
-HighpassChoice choose_pair_highpass(const RefinePixels& px, bool per_record, const std::vector<Rec>& recs,
+// px: as for choose_relative_blur.
+HighpassChoice choose_pair_highpass(const RefinePixels& px, const std::vector<Rec>& recs,
                                const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm, const PairMatchOptions& o,
                                const AffineFundamental* F, double blur) {
   HighpassChoice hc;
@@ -469,7 +470,7 @@ HighpassChoice choose_pair_highpass(const RefinePixels& px, bool per_record, con
   const RecordSample sample = sample_records(recs, A0, kHighpassSample);
   hc = choose_highpass([&](double sigma) {
     std::vector<Rec> s = sample.recs;
-    refine_records(px, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false, per_record);
+    refine_records(px, s, sample.A0, lsm, o, F, o.ransac_threshold, blur, sigma, false, /*per_record=*/true);
     std::vector<int> ok;
     for (size_t k = 0; k < s.size(); ++k)
       if (s[k].ok) ok.push_back(static_cast<int>(k));
@@ -675,8 +676,8 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     const RefinePixels px(a, b, {reach.a, reach.b}, o.refine_hold_pixels);
     const std::optional<RefinePixels> windows = estimate_pixels(px, recs, A0, o);
     const RefinePixels& epx = windows ? *windows : px;
-    st.blur = choose_relative_blur(epx, windows.has_value(), recs, A0, lsm, o, F);
-    st.highpass = choose_pair_highpass(epx, windows.has_value(), recs, A0, lsm, o, F, st.blur.sigma);
+    st.blur = choose_relative_blur(epx, recs, A0, lsm, o, F);
+    st.highpass = choose_pair_highpass(epx, recs, A0, lsm, o, F, st.blur.sigma);
     refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);
   }
   lap(st.seconds[3]);
