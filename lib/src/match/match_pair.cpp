@@ -290,9 +290,10 @@ RefineGroup refine_group(std::vector<size_t> js, const std::vector<Rec>& recs, c
 // between the images) is split along x until it fits. With `per_record`, each record is a group of its
 // own and the groups are refined in parallel (the estimates' samples, their windows cut from the pixels
 // px holds or read by px.windows(): filtering whole bands for a few windows each costs more than the
-// refinement; a 2500² region job's two estimates took 0.18 s in bands, 0.05 s window by window). A0 holds each record's initial local map (keypoint_affine). With `F`, a refined
-// position farther than `max_residual` pixels (R^4) from the verified pair model is rejected
-// (OffEpipolar): the keypoint match passed that test, so the refinement moved it off the geometry.
+// refinement; a 2500² region job's two estimates took 0.18 s in bands, 0.05 s window by window). A0
+// holds each record's initial local map (keypoint_affine). With `F`, a refined position farther than
+// `max_residual` pixels (R^4) from the verified pair model is rejected (OffEpipolar): the keypoint
+// match passed that test, so the refinement moved it off the geometry.
 void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                     const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual,
                     double blur, double highpass, bool progress, bool per_record = false) {
