@@ -38,8 +38,9 @@ size_t block_size(size_t n) { return on_huge_pages(n) ? round_up(n, kLargePage) 
 // the kernel zeroed) 777 blocks, 218 once requests from 4 MiB shared (its wall time on 2 threads 18.2 ->
 // 17.2 s, the same peak). With 768 tiles the second octave's planes (3.7 MB) were below those 4 MiB: a
 // detection job of nine tiles mapped 83 blocks, now 9 (3.5 -> 2.2 s); the whole 10000² pair at 768 tiles
-// 117 -> 110 CPU s at the same peak (953-1060 MiB over runs of both). At 1024 tiles, where a tile's descriptors (2.5 MB, which
-// live until the image is gathered) may now hold a freed octave plane, the pair's peak did not move.
+// 117 -> 110 CPU s at the same peak (953-1060 MiB over runs of both). At 1024 tiles, where a tile's
+// descriptors (2.5 MB, which live until the image is gathered) may now hold a freed octave plane, the
+// pair's peak did not move.
 constexpr size_t kShareRatio = 5;
 
 // Large blocks: mapped 2 MiB-aligned and advised for huge pages (or, where that rounding would waste more

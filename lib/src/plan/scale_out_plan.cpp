@@ -300,18 +300,19 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
     p.merge.push_back(merge);
   }
   // detection: every image of a pair once, through the geometry of its first pair (which holds its
-  // stretch), in blocks of its own pixels (detection_blocks); the region jobs of a pair need all of its two images'
+  // stretch), in blocks of its own pixels (detection_blocks); the region jobs of a pair need all of its
+  // two images'
   p.image_detections.resize(images.size());
   for (size_t i = 0; i < images.size(); ++i) {
     const auto pr = std::find_if(p.pairs.begin(), p.pairs.end(), [&](const auto& q) { return q[0] == i || q[1] == i; });
     if (pr == p.pairs.end()) continue;
     const std::string geo = "geometry/" + pair_name(*pr) + ".geometry";
     const std::string imgs = " " + shell_quote(images[(*pr)[0]].path) + " " + shell_quote(images[(*pr)[1]].path);
-    const auto regions = detection_blocks(images[i].width, images[i].height, o.tile, o.detect_regions);
+    const auto blocks = detection_blocks(images[i].width, images[i].height, o.tile, o.detect_regions);
     const long dt = o.detect_tile > 0 ? o.detect_tile : SiftOptions{}.tile;
     const auto grid = tile_grid(images[i].width, images[i].height, dt, 0);
-    for (size_t k = 0; k < regions.size(); ++k) {
-      const auto& r = regions[k];
+    for (size_t k = 0; k < blocks.size(); ++k) {
+      const auto& r = blocks[k];
       if (tiles_starting_in(grid, r[0], r[1], r[2], r[3]).empty()) continue;  // a block without a tile of its own
       const std::string out = "detect/image-" + std::to_string(i + 1) + "/block-" + std::to_string(k + 1) + ".detection";
       p.detect.push_back({out, {geo}, {},
