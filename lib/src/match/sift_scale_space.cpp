@@ -35,6 +35,7 @@ constexpr int kOriBins = 36;
 constexpr float kOriSigma = 1.5f;   // orientation window: Gaussian of 1.5 scales, radius 3 of its sigmas
 constexpr float kOriRadius = 3 * kOriSigma;
 constexpr float kOriPeak = 0.8f;    // further orientations: local peaks above 0.8 x the highest
+constexpr int kAhead = 5;            // window rows asked for ahead of their use (ask_rows)
 constexpr int kCells = 4, kBins = 8;  // descriptor: kCells x kCells cells of kBins orientations
 constexpr float kCellWidth = 3.f;     // a cell's width, in scales
 constexpr float kClamp = 0.2f;        // entries clamped at 0.2 x the descriptor's norm, then renormalised
@@ -253,6 +254,18 @@ struct Gradients {
   cv::Mat mag, ori;
 };
 
+// Asks the memory for row y of both maps over columns [x0, x1] and returns at once (one request per
+// cache line). A window's rows lie a plane's width apart in the maps, and waiting for each row's lines
+// took a fifth of the descriptors' time and two fifths of the orientations': their loops ask for a row
+// kAhead rows before they read it (for the window's first rows, before the loop).
+inline void ask_rows(const Gradients& G, int y, int x0, int x1) {
+  const float *m = G.mag.ptr<float>(y), *t = G.ori.ptr<float>(y);
+  for (int x = x0; x <= x1; x += 16) {
+    __builtin_prefetch(m + x);
+    __builtin_prefetch(t + x);
+  }
+}
+
 Gradients gradients(const cv::Mat& g, cv::Rect box) {
   const int rows = g.rows, cols = g.cols;
   Gradients out{cv::Mat(g.size(), CV_32F), cv::Mat(g.size(), CV_32F)};
@@ -300,9 +313,12 @@ int orientations(const Gradients& G, int px, int py, float scl, float* peaks) {
   float raw[kOriBins + 4] = {};
   float* h = raw + 2;
   const int x0 = std::max(1, px - R), x1 = std::min(cols - 2, px + R);
+  for (int i = -R; i <= std::min(R, -R + kAhead - 1); ++i)
+    if (py + i > 0 && py + i < rows - 1) ask_rows(G, py + i, x0, x1);
   for (int i = -R; i <= R; ++i) {
     const int y = py + i;
     if (y <= 0 || y >= rows - 1) continue;
+    if (i + kAhead <= R && y + kAhead < rows - 1) ask_rows(G, y + kAhead, x0, x1);
     const float *m = G.mag.ptr<float>(y), *t = G.ori.ptr<float>(y);
     for (int x = x0; x <= x1; ++x) {
       int bin = cvRound(t[x] * (kOriBins / 360.f));
@@ -412,9 +428,13 @@ void descriptor(const Gradients& G, float x, float y, float ori, float scl, floa
   entry.resize(static_cast<size_t>(2 * R + 1));
   float *dr = buf.data(), *dc = dr + (2 * R + 1), *dob = dc + (2 * R + 1), *mg = dob + (2 * R + 1);
   int* at = entry.data();
+  const int xa = std::max(0, px - R), xb = std::min(cols - 1, px + R), ahead = kAhead * kStride;
+  for (int i = -R; i <= std::min(R, -R + ahead - kStride); i += kStride)
+    if (py + i > 0 && py + i < rows - 1) ask_rows(G, py + i, xa, xb);
   for (int i = -R; i <= R; i += kStride) {
     const int yy = py + i;
     if (yy <= 0 || yy >= rows - 1) continue;
+    if (i + ahead <= R && yy + ahead < rows - 1) ask_rows(G, yy + ahead, xa, xb);
     const float v = i - fy;
     // columns whose rotated position lies in the cells: cbin = u ca - v sa + half, rbin = u sa + v ca + half
     float lo = static_cast<float>(std::max(-R, 1 - px)) - fx, hi = static_cast<float>(std::min(R, cols - 2 - px)) - fx;
