@@ -209,6 +209,11 @@ std::vector<Extremum> extrema(const std::vector<cv::Mat>& G, int layers, const S
     auto rmax = [&](int y, int k) { return rmax0 + at(y, k) * cw - c0; };
     auto rmin = [&](int y, int k) { return rmin0 + at(y, k) * cw - c0; };
     auto fill_rows = [&](int y) {
+      if (y + 1 < rows)  // the next row of each layer asked for now: the layers are planes of megabytes
+        for (int k = 0; k <= nd; ++k) {
+          const float* next = G[k].ptr<float>(y + 1);
+          for (int c = x0; c < x1; c += 16) __builtin_prefetch(next + c);
+        }
       for (int k = 0; k < nd; ++k) {
         const float *hi = G[k + 1].ptr<float>(y), *lo = G[k].ptr<float>(y);
         float* to = d_row(y, k);
