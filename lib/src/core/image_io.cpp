@@ -34,19 +34,20 @@ ImageInfo image_info(const std::string& path) {
   return oiio_image_info(path);
 }
 
-Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h) {
+Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse) {
   check_input_file(path);
   note_input(path);
   if (is_nitf_file(path)) return read_nitf_region(read_nitf_image(path), band, x0, y0, w, h);
   if (is_tiff_file(path))
-    if (auto r = read_tiff_region(path, band, x0, y0, w, h)) return std::move(*r);
+    if (auto r = read_tiff_region(path, band, x0, y0, w, h, std::move(reuse))) return std::move(*r);
   return oiio_read_region(path, band, x0, y0, w, h);
 }
 
-Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h) {
+Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h,
+                      Raster reuse) {
   if (band < 0 || band >= bands)
     throw InputError(path, 0, "band " + std::to_string(band + 1) + " does not exist (the image has " + std::to_string(bands) + ")");
-  Raster r;
+  Raster r = std::move(reuse);
   r.x0 = std::max(0L, x0);
   r.y0 = std::max(0L, y0);
   r.width = std::max(0L, std::min(width, x0 + w) - r.x0);

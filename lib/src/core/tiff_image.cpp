@@ -153,12 +153,13 @@ std::optional<ImageInfo> tiff_image_info(const std::string& path) {
   return info;
 }
 
-std::optional<Raster> read_tiff_region(const std::string& path, int band, long x0, long y0, long w, long h) {
+std::optional<Raster> read_tiff_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse) {
   TiffHandle t(open_tiff(path));
   TIFF* tif = t.tif;
   const Layout L = layout_of(tif);
   if (!handled(L)) return std::nullopt;
-  Raster r = clipped_raster(path, L.width, L.height, L.spp, band, x0, y0, w, h);
+  // every branch below writes every sample of the region (or throws)
+  Raster r = clipped_raster(path, L.width, L.height, L.spp, band, x0, y0, w, h, std::move(reuse));
   if (r.data.empty()) return r;
   const long xa = r.x0, ya = r.y0, xb = r.x0 + r.width, yb = r.y0 + r.height;
 

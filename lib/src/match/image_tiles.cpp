@@ -29,8 +29,8 @@ ImageSource open_image_source(const std::string& path, int band, std::optional<d
   return s;
 }
 
-Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h) {
-  Raster r = read_region(src.path, src.band, x0, y0, w, h);
+Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h, Raster reuse) {
+  Raster r = read_region(src.path, src.band, x0, y0, w, h, std::move(reuse));
   const float nan = std::numeric_limits<float>::quiet_NaN();
   if (src.nodata) {
     const double nd = *src.nodata;

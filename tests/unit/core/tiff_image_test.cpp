@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
@@ -140,6 +141,21 @@ TEST(TiffImage, EveryLayoutReadsItsValuesAndAgreesWithOpenImageIO) {
           ASSERT_EQ(r->at(x, y), static_cast<float>(value(L, 29 + x, 13 + y, b))) << "band " << b << " at " << x << "," << y;
           ASSERT_EQ(o.at(x, y), r->at(x, y));
         }
+      // read into the memory of a raster done with (NaN-filled, larger or smaller than the region): the
+      // same raster, every sample written
+      for (size_t held : {r->data.size() + 500, r->data.size() / 3}) {
+        Raster reuse;
+        reuse.x0 = 7, reuse.width = 3;
+        reuse.data.assign(held, std::numeric_limits<float>::quiet_NaN());
+        auto q = read_tiff_region(p, b, 29, 13, 60, 40, std::move(reuse));
+        ASSERT_TRUE(q.has_value());
+        EXPECT_EQ(q->x0, r->x0);
+        EXPECT_EQ(q->y0, r->y0);
+        EXPECT_EQ(q->width, r->width);
+        EXPECT_EQ(q->height, r->height);
+        ASSERT_EQ(q->data.size(), r->data.size());
+        for (size_t i = 0; i < r->data.size(); ++i) ASSERT_EQ(q->data[i], r->data[i]) << "sample " << i << ", reused " << held;
+      }
     }
     try {
       read_tiff_region(p, L.bands, 0, 0, 4, 4);

@@ -40,12 +40,17 @@ Raster crop_region(const Raster& r, long x0, long y0, long w, long h);
 
 // Reads band `band` (0-based) of the region, clipped to the image; values as float in the image's own
 // radiometry (no scaling). Throws InputError for an unreadable file or a band that does not exist.
-Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h);
+// `reuse`: a raster done with, whose samples' memory the TIFF reader fills in place of fresh memory (a
+// band of a large image is tens of megabytes: fresh, each of its pages costs a fault and the kernel's
+// and the vector's zeroing); the result is the same.
+Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse = {});
 // Whole band.
 Raster read_band(const std::string& path, int band = 0);
 // For the readers: the raster of the region's part inside a width x height image (its samples
-// allocated, zero), after checking that `band` is one of the image's `bands` (InputError naming `path`).
-Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h);
+// allocated: zero, or in `reuse`'s memory whatever it held, for a reader that writes every sample),
+// after checking that `band` is one of the image's `bands` (InputError naming `path`).
+Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h,
+                      Raster reuse = {});
 
 // Writes a single-band 16-bit TIFF given strip of rows by strip of rows (bounded memory; the file is tiled
 // as TiffRowWriter writes it), atomically: rows go to a temporary file that replaces `path` on close().

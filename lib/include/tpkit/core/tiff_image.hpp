@@ -30,8 +30,8 @@ std::optional<ImageInfo> tiff_image_info(const std::string& path);
 // Band `band` (0-based) of the region; nothing under the same condition as tiff_image_info. InputError
 // for a missing band, a strip or tile beyond the end of the file (a truncated file, or a header that
 // declares more samples than the file holds: refused before anything that size is allocated) and a
-// chunk that cannot be decoded.
-std::optional<Raster> read_tiff_region(const std::string& path, int band, long x0, long y0, long w, long h);
+// chunk that cannot be decoded. `reuse` as read_region's.
+std::optional<Raster> read_tiff_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse = {});
 
 // libtiff's field definitions for the tags tpkit reads and writes beyond the baseline: RPC tag 50844,
 // the GeoTIFF tags and GDAL_NODATA; libtiff's own warnings silenced (errors are reported by the callers).

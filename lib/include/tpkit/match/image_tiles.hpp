@@ -25,8 +25,9 @@ struct ImageSource {
 // another size.
 ImageSource open_image_source(const std::string& path, int band, std::optional<double> nodata, const std::string& mask);
 
-// Region [x0, x0 + w) x [y0, y0 + h) clipped to the image, as float, invalid pixels NaN.
-Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h);
+// Region [x0, x0 + w) x [y0, y0 + h) clipped to the image, as float, invalid pixels NaN. `reuse` as
+// read_region's.
+Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h, Raster reuse = {});
 
 // Grey levels at the low and high percentiles (0..100) of the valid pixels, from a regular subsample
 // of at most ~`max_samples` pixels read strip by strip (bounded memory: a strip of 4 M pixels per
