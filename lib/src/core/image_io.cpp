@@ -52,7 +52,9 @@ Raster clipped_raster(const std::string& path, long width, long height, int band
   r.y0 = std::max(0L, y0);
   r.width = std::max(0L, std::min(width, x0 + w) - r.x0);
   r.height = std::max(0L, std::min(height, y0 + h) - r.y0);
-  r.data.resize(static_cast<size_t>(r.width) * r.height);
+  const size_t n = static_cast<size_t>(r.width) * static_cast<size_t>(r.height);
+  if (n > r.data.capacity()) r.data = std::vector<float>();  // larger than the memory given: fresh, not grown by a copy
+  r.data.resize(n);
   return r;
 }
 

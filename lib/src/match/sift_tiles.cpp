@@ -172,10 +172,19 @@ std::vector<Keypoints> detect_tiles_ranked(const ImageSource& src, const SiftOpt
   auto read = [&](const TileRow& R, Raster reuse) {
     return read_valid_region(src, R.x0, R.y0, R.x1 - R.x0, R.y1 - R.y0, std::move(reuse));
   };
+  // Both buffers are reserved at the largest band's size (a reservation touches no page), so that no
+  // band outgrows the memory it is given (the first row's band lacks the overlap above it).
+  auto reserved = [&] {
+    size_t most = 0;
+    for (const TileRow& R : rows) most = std::max(most, static_cast<size_t>(R.x1 - R.x0) * static_cast<size_t>(R.y1 - R.y0));
+    Raster r;
+    r.data.reserve(most);
+    return r;
+  };
   std::future<Raster> next;
-  Raster spare;
+  Raster spare = rows.size() > 1 ? reserved() : Raster{};
   for (size_t i = 0; i < rows.size(); ++i) {
-    Raster band = i == 0 ? read(rows[0], Raster{}) : next.get();
+    Raster band = i == 0 ? read(rows[0], rows.size() > 1 ? reserved() : Raster{}) : next.get();
     // on a thread of its own where there are threads to spare (or, where none can start, when needed)
     if (i + 1 < rows.size())
       next = std::async(threads > 1 ? std::launch::async | std::launch::deferred : std::launch::deferred, read, std::cref(rows[i + 1]),
