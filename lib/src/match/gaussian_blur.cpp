@@ -80,10 +80,7 @@ template <int N>
   float* const c = col + r;  // c[x] for x in [-r, cols + r)
   for (int i = 0; i <= r; ++i) left[i] = c + x0 - i, right[i] = c + x0 + i;
   for (int y = a; y < b; ++y) {
-    if (y + r + 2 < rows) {  // the source row that the row after next brings in, asked for now
-      const float* next = src.ptr<float>(y + r + 2);
-      for (int x = ca; x < cb; x += 16) __builtin_prefetch(next + x);
-    }
+    if (y + r + 2 < rows) prefetch_floats(src.ptr<float>(y + r + 2) + ca, cb - ca);  // the row the row after next brings in
     for (int i = 0; i <= r; ++i) {
       up[i] = src.ptr<float>(cv::borderInterpolate(y - i, rows, cv::BORDER_REFLECT_101)) + ca;
       down[i] = src.ptr<float>(cv::borderInterpolate(y + i, rows, cv::BORDER_REFLECT_101)) + ca;

@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "tpkit/core/cpu_dispatch.hpp"
 #include "tpkit/match/gaussian_blur.hpp"
 
 namespace tpkit {
@@ -210,10 +211,7 @@ std::vector<Extremum> extrema(const std::vector<cv::Mat>& G, int layers, const S
     auto rmin = [&](int y, int k) { return rmin0 + at(y, k) * cw - c0; };
     auto fill_rows = [&](int y) {
       if (y + 1 < rows)  // the next row of each layer asked for now: the layers are planes of megabytes
-        for (int k = 0; k <= nd; ++k) {
-          const float* next = G[k].ptr<float>(y + 1);
-          for (int c = x0; c < x1; c += 16) __builtin_prefetch(next + c);
-        }
+        for (int k = 0; k <= nd; ++k) prefetch_floats(G[k].ptr<float>(y + 1) + x0, x1 - x0);
       for (int k = 0; k < nd; ++k) {
         const float *hi = G[k + 1].ptr<float>(y), *lo = G[k].ptr<float>(y);
         float* to = d_row(y, k);
@@ -264,11 +262,8 @@ struct Gradients {
 // took a fifth of the descriptors' time and two fifths of the orientations': their loops ask for a row
 // kAhead rows before they read it (for the window's first rows, before the loop).
 inline void ask_rows(const Gradients& G, int y, int x0, int x1) {
-  const float *m = G.mag.ptr<float>(y), *t = G.ori.ptr<float>(y);
-  for (int x = x0; x <= x1; x += 16) {
-    __builtin_prefetch(m + x);
-    __builtin_prefetch(t + x);
-  }
+  prefetch_floats(G.mag.ptr<float>(y) + x0, x1 - x0 + 1);
+  prefetch_floats(G.ori.ptr<float>(y) + x0, x1 - x0 + 1);
 }
 
 Gradients gradients(const cv::Mat& g, cv::Rect box) {

@@ -300,8 +300,8 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
     p.merge.push_back(merge);
   }
   // detection: every image of a pair once, through the geometry of its first pair (which holds its
-  // stretch), in blocks of its own pixels (detection_blocks); the region jobs of a pair need all of its
-  // two images'
+  // stretch), in blocks of its own pixels (detection_blocks); the region jobs of a pair wait for every
+  // block of both its images
   p.image_detections.resize(images.size());
   for (size_t i = 0; i < images.size(); ++i) {
     const auto pr = std::find_if(p.pairs.begin(), p.pairs.end(), [&](const auto& q) { return q[0] == i || q[1] == i; });
