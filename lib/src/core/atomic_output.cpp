@@ -1,5 +1,6 @@
 #include "tpkit/core/atomic_output.hpp"
 
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -13,6 +14,7 @@
 #include <iostream>
 #include <mutex>
 #include <random>
+#include <streambuf>
 #include <system_error>
 
 #include "tpkit/core/error.hpp"
@@ -20,6 +22,59 @@
 namespace tpkit {
 
 namespace fs = std::filesystem;
+
+// What a run writes to standard output (or to a device or FIFO), held until the run commits: a list of
+// 2 MiB chunks filled in turn, not one string. An ostringstream doubled its string as it grew and then
+// copied it whole for the commit: for the 188 MB of a 10000² pair's matches, 730 MB of fresh memory
+// written (182 thousand page faults, one in three of the run's), where the chunks take the text once.
+// Each chunk is 2 MiB-aligned and advised for transparent huge pages: on Debian ("madvise") a chunk is then
+// one fault, not 512; where huge pages are off, ordinary pages.
+class OutputBuffer : public std::streambuf {
+ public:
+  OutputBuffer() = default;
+  OutputBuffer(const OutputBuffer&) = delete;
+  OutputBuffer& operator=(const OutputBuffer&) = delete;
+  ~OutputBuffer() override {
+    for (char* c : chunks_) std::free(c);
+  }
+  // the text, chunk by chunk
+  void write_to(std::ostream& os) const {
+    for (size_t i = 0; i < chunks_.size() && os; ++i)
+      os.write(chunks_[i], static_cast<std::streamsize>(i + 1 < chunks_.size() ? kChunk : pptr() - chunks_[i]));
+  }
+
+ protected:
+  int_type overflow(int_type ch) override {
+    if (traits_type::eq_int_type(ch, traits_type::eof())) return traits_type::not_eof(ch);
+    if (!grow()) return traits_type::eof();
+    *pptr() = traits_type::to_char_type(ch);
+    pbump(1);
+    return ch;
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    std::streamsize done = 0;
+    while (done < n) {
+      if (pptr() == epptr() && !grow()) break;
+      const std::streamsize k = std::min<std::streamsize>(n - done, epptr() - pptr());
+      std::memcpy(pptr(), s + done, static_cast<size_t>(k));
+      pbump(static_cast<int>(k));
+      done += k;
+    }
+    return done;
+  }
+
+ private:
+  static constexpr size_t kChunk = size_t(2) << 20;
+  bool grow() {
+    void* c = std::aligned_alloc(kChunk, kChunk);
+    if (!c) return false;
+    ::madvise(c, kChunk, MADV_HUGEPAGE);  // advice only
+    chunks_.push_back(static_cast<char*>(c));
+    setp(chunks_.back(), chunks_.back() + kChunk);
+    return true;
+  }
+  std::vector<char*> chunks_;
+};
 
 namespace {
 
@@ -79,7 +134,8 @@ extern "C" void remove_temps_on_signal(int sig) {
 }
 
 struct Pending {
-  std::string tmp, target, text;
+  std::string tmp, target;
+  std::unique_ptr<OutputBuffer> text;
   bool to_stdout = false;  // text for stdout, or (direct) for a device or FIFO named by target
   bool direct = false;
 };
@@ -92,10 +148,12 @@ bool is_special(const std::string& path) {
   return !ec && fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st);
 }
 
-void write_direct(const std::string& target, const std::string& text) {
+// put(f) writes the text into the opened target
+template <class Put>
+void write_direct(const std::string& target, Put&& put) {
   std::ofstream f(target, std::ios::out | std::ios::binary);
   if (!f) throw InputError(target, 0, "cannot open for writing: " + std::string(std::strerror(errno)));
-  f << text;
+  put(f);
   f.flush();
   if (!f) throw InputError(target, 0, "write error: " + std::string(std::strerror(errno)));
 }
@@ -136,12 +194,14 @@ std::string errno_text() { return std::strerror(errno); }
 
 void rename_now(const std::string& tmp, const std::string& target) {
   if (is_special(target)) {  // never replace a device node: copy the finished file into it
-    std::ifstream in(tmp, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
+    {
+      std::ifstream in(tmp, std::ios::binary);
+      write_direct(target, [&](std::ostream& f) {
+        if (in.peek() != std::ifstream::traits_type::eof()) f << in.rdbuf();
+      });
+    }
     std::remove(tmp.c_str());
     unregister_temp(tmp);
-    write_direct(target, text.str());
     return;
   }
   if (std::rename(tmp.c_str(), target.c_str()) != 0) {
@@ -185,7 +245,7 @@ void finish_output(const std::string& tmp, const std::string& target) {
   {
     std::lock_guard<std::mutex> lock(tx().m);
     if (tx().active) {
-      tx().pending.push_back({tmp, target, "", false});
+      tx().pending.push_back({tmp, target, nullptr, false});
       return;
     }
   }
@@ -354,8 +414,8 @@ void commit_pending(std::vector<Pending>& pending, const std::vector<std::string
   }
   for (const auto& p : pending)
     if (p.to_stdout) {
-      if (p.direct) write_direct(p.target, p.text);
-      else std::cout << p.text;
+      if (p.direct) write_direct(p.target, [&](std::ostream& f) { p.text->write_to(f); });
+      else p.text->write_to(std::cout);
     }
   std::cout.flush();
   if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
@@ -388,6 +448,8 @@ AtomicOutput::AtomicOutput(const std::string& path, bool transactional) : path_(
   if (path == "-" || is_special(path)) {
     to_stdout_ = true;  // buffered, written at commit: to stdout, or in place to a device or FIFO
     direct_ = path != "-";
+    buffer_ = std::make_unique<OutputBuffer>();
+    buffer_stream_.rdbuf(buffer_.get());
     return;
   }
   tmp_ = claim_temp(path);
@@ -406,7 +468,7 @@ AtomicOutput::~AtomicOutput() {
   }
 }
 
-std::ostream& AtomicOutput::stream() { return to_stdout_ ? static_cast<std::ostream&>(buffer_) : static_cast<std::ostream&>(file_); }
+std::ostream& AtomicOutput::stream() { return to_stdout_ ? buffer_stream_ : static_cast<std::ostream&>(file_); }
 
 void AtomicOutput::commit() {
   if (committed_) return;
@@ -414,14 +476,15 @@ void AtomicOutput::commit() {
     {
       std::lock_guard<std::mutex> lock(tx().m);
       if (transactional_ && tx().active) {
-        tx().pending.push_back({"", direct_ ? path_ : "-", buffer_.str(), true, direct_});
+        tx().pending.push_back({"", direct_ ? path_ : "-", std::move(buffer_), true, direct_});
+        buffer_stream_.rdbuf(nullptr);  // the text is the transaction's now
         committed_ = true;
         return;
       }
     }
     committed_ = true;
-    if (direct_) return write_direct(path_, buffer_.str());
-    std::cout << buffer_.str();
+    if (direct_) return write_direct(path_, [&](std::ostream& f) { buffer_->write_to(f); });
+    buffer_->write_to(std::cout);
     std::cout.flush();
     if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
     return;

@@ -1,8 +1,12 @@
 // Round trips and rejections of every file kind, and atomic writing.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -187,6 +191,95 @@ TEST(Formats, AtomicOutputLeavesNoFileOnFailure) {
   auto pt = scratch("zero.trifocal");
   EXPECT_THROW(save_trifocal(pt.string(), t), NumericalError);
   EXPECT_FALSE(fs::exists(pt));
+}
+
+namespace {
+// Runs f with the process's standard output sent to a file; returns what was written there.
+template <class F>
+std::string captured_stdout(F&& f) {
+  const fs::path p = scratch("stdout.txt");
+  std::cout.flush();
+  std::fflush(stdout);
+  const int saved = ::dup(1), fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  ::dup2(fd, 1);
+  ::close(fd);
+  try {
+    f();
+  } catch (...) {
+    std::cout.flush();
+    ::dup2(saved, 1);
+    ::close(saved);
+    throw;
+  }
+  std::cout.flush();
+  ::dup2(saved, 1);
+  ::close(saved);
+  return slurp(p);
+}
+}  // namespace
+
+// Standard output is held until the commit (in a transaction, until the run commits; nothing when it
+// aborts), then written whole and in order: here 5.3 MB, across the 2 MiB chunks that hold it, by
+// characters, short strings, and a write of 3 MB that spans chunks.
+TEST(Formats, AtomicOutputHoldsStandardOutputUntilTheCommit) {
+  std::string expected;
+  std::string before_commit = "unset";
+  const std::string out = captured_stdout([&] {
+    AtomicOutput o("-");
+    for (int i = 0; i < 150000; ++i) {
+      const std::string line = "record " + std::to_string(i) + " " + std::to_string(i * 7919 % 100003) + "\n";
+      o.stream() << line;
+      expected += line;
+      o.stream().put(static_cast<char>('a' + i % 26));
+      expected += static_cast<char>('a' + i % 26);
+    }
+    std::string big(3u << 20, ' ');
+    for (size_t k = 0; k < big.size(); ++k) big[k] = static_cast<char>('0' + k % 10);
+    o.stream().write(big.data(), static_cast<std::streamsize>(big.size()));
+    expected += big;
+    o.stream() << "end\n";
+    expected += "end\n";
+    std::cout.flush();
+    before_commit = slurp(scratch("stdout.txt"));
+    o.commit();
+  });
+  EXPECT_EQ(before_commit, "");
+  ASSERT_GT(expected.size(), size_t(5) << 20);
+  ASSERT_EQ(out.size(), expected.size());
+  EXPECT_TRUE(out == expected);
+
+  // in a transaction: written when the run commits, not at all when it aborts
+  std::string pending = "unset";
+  const std::string committed = captured_stdout([&] {
+    begin_outputs();
+    {
+      AtomicOutput o("-");
+      o.stream() << "first\n";
+      o.commit();
+    }
+    std::cout.flush();
+    pending = slurp(scratch("stdout.txt"));
+    commit_outputs();
+  });
+  EXPECT_EQ(pending, "");
+  EXPECT_EQ(committed, "first\n");
+  const std::string aborted = captured_stdout([&] {
+    begin_outputs();
+    AtomicOutput o("-");
+    o.stream() << "never\n";
+    o.commit();
+    abort_outputs();
+  });
+  EXPECT_EQ(aborted, "");
+  const std::string empty = captured_stdout([&] {
+    AtomicOutput o("-");
+    o.commit();
+  });
+  EXPECT_EQ(empty, "");
+  // a device is written in place, at the commit
+  AtomicOutput dev("/dev/null");
+  dev.stream() << expected;
+  EXPECT_NO_THROW(dev.commit());
 }
 
 TEST(Formats, MissingFileIsAnInputError) {

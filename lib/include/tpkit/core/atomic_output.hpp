@@ -18,6 +18,8 @@
 
 namespace tpkit {
 
+class OutputBuffer;
+
 class AtomicOutput {
  public:
   // `transactional` = false: the file (a cache entry, say) is committed at once even in a transaction.
@@ -35,7 +37,8 @@ class AtomicOutput {
   std::string path_;
   std::string tmp_;
   std::ofstream file_;
-  std::ostringstream buffer_;  // stdout
+  std::unique_ptr<OutputBuffer> buffer_;  // stdout, a device or a FIFO: held until commit
+  std::ostream buffer_stream_{nullptr};
   bool to_stdout_ = false;  // buffered and written at commit: to stdout, or (direct_) in place
   bool direct_ = false;     // the target is an existing device or FIFO (/dev/null): no rename onto it
   bool transactional_ = true;
