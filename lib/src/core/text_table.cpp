@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <memory>
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
@@ -225,11 +226,23 @@ TextTable read_table_file(const std::string& path, const ReadOptions& opt) {
   return read_table(f, path, opt);
 }
 
+namespace {
+// Room for one number as put_number writes it: the shortest round-trip form of a double is at most 24
+// characters ("-2.2250738585072014e-308").
+constexpr size_t kNumberChars = 32;
+// v as format_number writes it, at p (kNumberChars of room); returns the end
+char* put_number(char* p, double v) {
+  if (v == 0) {  // also folds -0
+    *p = '0';
+    return p + 1;
+  }
+  return std::to_chars(p, p + kNumberChars, v).ptr;
+}
+}  // namespace
+
 std::string format_number(double v) {
-  if (v == 0) return "0";  // also folds -0
-  char buf[64];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
+  char buf[kNumberChars];
+  return std::string(buf, put_number(buf, v));
 }
 
 std::string format_figure(double v, int digits) {
@@ -264,12 +277,24 @@ void write_header(std::ostream& os, const std::string& kind, int version, const 
   }
 }
 
+// The record's line is made in a buffer and written at once, not a string and two stream insertions a
+// number: the 10000² pair's 1.1 million matches (11 numbers each) are written in 0.56-0.71 s instead of
+// 0.80-0.95 s, the same bytes; to_chars itself is most of what is left.
 void write_record(std::ostream& os, const std::vector<double>& values) {
-  for (size_t i = 0; i < values.size(); ++i) {
-    if (i) os << ' ';
-    os << format_number(values[i]);
+  char local[64 * (kNumberChars + 1)];
+  std::unique_ptr<char[]> wide;
+  char* line = local;
+  if (values.size() > 64) {  // a track of many views
+    wide.reset(new char[values.size() * (kNumberChars + 1)]);
+    line = wide.get();
   }
-  os << '\n';
+  char* p = line;
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (i) *p++ = ' ';
+    p = put_number(p, values[i]);
+  }
+  *p++ = '\n';
+  os.write(line, p - line);
 }
 
 }  // namespace tpkit
