@@ -1,6 +1,5 @@
 #include "tpkit/core/atomic_output.hpp"
 
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -18,6 +17,7 @@
 #include <system_error>
 
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/huge_pages.hpp"
 
 namespace tpkit {
 
@@ -64,11 +64,11 @@ class OutputBuffer : public std::streambuf {
   }
 
  private:
-  static constexpr size_t kChunk = size_t(2) << 20;
+  static constexpr size_t kChunk = kHugePage;
   bool grow() {
     void* c = std::aligned_alloc(kChunk, kChunk);
     if (!c) return false;
-    ::madvise(c, kChunk, MADV_HUGEPAGE);  // advice only
+    advise_huge_pages(c, kChunk);
     chunks_.push_back(static_cast<char*>(c));
     setp(chunks_.back(), chunks_.back() + kChunk);
     return true;
