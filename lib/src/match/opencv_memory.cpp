@@ -11,10 +11,12 @@
 #include <opencv2/core.hpp>
 #include <unordered_map>
 
+#include "tpkit/core/huge_pages.hpp"
+
 namespace tpkit {
 
 namespace {
-constexpr size_t kLargePage = size_t(2) << 20;
+constexpr size_t kLargePage = kHugePage;
 // At most this much freed memory is kept for reuse; more goes back to the system at once.
 constexpr size_t kMaxPooled = size_t(1) << 30;
 
@@ -22,10 +24,11 @@ constexpr size_t kPage = size_t(4) << 10;
 
 size_t round_up(size_t n, size_t unit) { return (n + unit - 1) / unit * unit; }
 
-// Huge pages where rounding the block up to whole 2 MiB wastes at most a quarter of it: a pyramid level
+// Rounded up to whole 2 MiB pages where that wastes at most a quarter of the block: a pyramid level
 // (23.7 MB for a 1024 tile with its overlap, 24 MiB mapped; 14.8 MB for a 768 tile, 16 MiB) but not a
 // tile's descriptors (about 2.5 MB, which 4 MiB would hold at 60% waste: on a 10000² pair, 200 tiles of
-// them held about 150 MiB of nothing at the end of detection). The 768 tile's planes were in 4 KiB pages
+// them held about 150 MiB of nothing at the end of detection); those are rounded to 4 KiB pages, and only
+// their whole 2 MiB pages are huge (map_block). The 768 tile's planes were in 4 KiB pages
 // under an earlier limit of an eighth; on a virtual machine whose page faults cost much, a detection job
 // of nine 768 tiles (tp-plan's) then took 2.0 s, and 1.8 s on huge pages.
 bool on_huge_pages(size_t n) { return round_up(n, kLargePage) - n <= n / 4; }
@@ -75,7 +78,7 @@ class LargeBlocks {
         free_.erase(big);
       }
     }
-    void* p = map_block(size, on_huge_pages(n));
+    void* p = map_block(size);
     if (!p) return nullptr;
     std::lock_guard<std::mutex> lock(m_);
     mapped_[p] = size;
@@ -105,18 +108,19 @@ class LargeBlocks {
   }
 
  private:
-  // `size` bytes of fresh memory: 2 MiB-aligned and advised for huge pages when `huge`, else page-aligned.
-  static void* map_block(size_t size, bool huge) {
-    const size_t len = huge ? size + kLargePage : size;
+  // `size` bytes of fresh memory, 2 MiB-aligned, its whole 2 MiB pages advised for huge pages: all of a
+  // block rounded to them, the head of one that is not (a tile's 2.5 MB of descriptors: one fault for its
+  // first 2 MiB, 4 KiB pages for the rest, where all 4 KiB pages took 101 thousand of a 10000² pair's faults)
+  static void* map_block(size_t size) {
+    const size_t len = size + kLargePage;
     void* p = ::mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) return nullptr;
-    if (!huge) return p;
     // keep the 2 MiB-aligned part, give back the rest
     const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kLargePage - 1) & ~(uintptr_t(kLargePage) - 1);
     const size_t head = aligned - start, tail = len - head - size;
     if (head) ::munmap(p, head);
     if (tail) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
-    ::madvise(reinterpret_cast<void*>(aligned), size, MADV_HUGEPAGE);  // advice only: without huge pages, ordinary memory
+    advise_huge_pages(reinterpret_cast<void*>(aligned), size);  // advice only: without huge pages, ordinary memory
     return reinterpret_cast<void*>(aligned);
   }
 

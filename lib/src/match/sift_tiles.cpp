@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/huge_pages.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
@@ -180,6 +181,7 @@ std::vector<Keypoints> detect_tiles_ranked(const ImageSource& src, const SiftOpt
   auto reserved = [most] {
     Raster r;
     r.data.reserve(most);
+    advise_huge_pages(r.data.data(), most * sizeof(float));
     return r;
   };
   std::future<Raster> next;

@@ -7,7 +7,33 @@
 
 #include <opencv2/core.hpp>
 
+#include <cstdint>
+#include <fstream>
+#include <sstream>
+#include <string>
+
 using namespace tpkit;
+
+namespace {
+// The VmFlags of the mapping that holds address a (/proc/self/smaps), "" if none
+std::string vm_flags(const void* a) {
+  std::ifstream f("/proc/self/smaps");
+  const uintptr_t x = reinterpret_cast<uintptr_t>(a);
+  bool inside = false;
+  for (std::string line; std::getline(f, line);) {
+    uintptr_t lo = 0, hi = 0;
+    char dash = 0;
+    std::istringstream head(line);
+    if (head >> std::hex >> lo >> dash >> hi && dash == '-') {
+      inside = lo <= x && x < hi;
+      continue;
+    }
+    if (inside && line.rfind("VmFlags:", 0) == 0) return line;
+  }
+  return "";
+}
+bool advised_huge(const void* a) { return vm_flags(a).find(" hg") != std::string::npos; }
+}  // namespace
 
 TEST(OpencvMemory, FreedPlanesServeTheMatricesThatFitThem) {
   use_large_page_mat_allocator();
@@ -44,6 +70,31 @@ TEST(OpencvMemory, FreedPlanesServeTheMatricesThatFitThem) {
   {
     cv::Mat octave1(960, 960, CV_32F);
     EXPECT_EQ(octave1.data, plane_block);
+  }
+  release_large_blocks();
+}
+
+// Every large block starts on a 2 MiB boundary and its whole 2 MiB pages are advised for huge pages:
+// all of a plane rounded to them, the first 2 MiB of a tile's 2.5 MB of descriptors and not the rest.
+TEST(OpencvMemory, LargeBlocksAreAdvisedForHugePagesByWhole2MiBPages) {
+  use_large_page_mat_allocator();
+  release_large_blocks();
+  const uintptr_t huge = uintptr_t(2) << 20;
+  {
+    cv::Mat plane(2432, 2432, CV_32F);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(plane.data) % huge, 0u);
+    EXPECT_TRUE(advised_huge(plane.data)) << vm_flags(plane.data);
+    EXPECT_TRUE(advised_huge(plane.data + plane.total() * plane.elemSize() - 1)) << vm_flags(plane.data);
+  }
+  release_large_blocks();
+  {
+    cv::Mat descriptors(20000, 128, CV_8U);  // 2.56 MB: one 2 MiB page and 4 KiB pages
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(descriptors.data) % huge, 0u);
+    EXPECT_TRUE(advised_huge(descriptors.data)) << vm_flags(descriptors.data);
+    EXPECT_TRUE(advised_huge(descriptors.data + huge - 1));
+    EXPECT_FALSE(advised_huge(descriptors.data + huge)) << vm_flags(descriptors.data + huge);
+    descriptors.setTo(7);
+    EXPECT_EQ(descriptors.at<uchar>(19999, 127), 7);
   }
   release_large_blocks();
 }
