@@ -194,14 +194,20 @@ std::string errno_text() { return std::strerror(errno); }
 
 void rename_now(const std::string& tmp, const std::string& target) {
   if (is_special(target)) {  // never replace a device node: copy the finished file into it
-    {
+    auto drop_tmp = [&] {
+      std::remove(tmp.c_str());
+      unregister_temp(tmp);
+    };
+    try {
       std::ifstream in(tmp, std::ios::binary);
       write_direct(target, [&](std::ostream& f) {
         if (in.peek() != std::ifstream::traits_type::eof()) f << in.rdbuf();
       });
+    } catch (...) {
+      drop_tmp();
+      throw;
     }
-    std::remove(tmp.c_str());
-    unregister_temp(tmp);
+    drop_tmp();
     return;
   }
   if (std::rename(tmp.c_str(), target.c_str()) != 0) {
@@ -473,6 +479,8 @@ std::ostream& AtomicOutput::stream() { return to_stdout_ ? buffer_stream_ : stat
 void AtomicOutput::commit() {
   if (committed_) return;
   if (to_stdout_) {
+    // a chunk that could not be had leaves the stream bad: the text is not whole
+    if (!buffer_stream_) throw InputError(path_, 0, "write error: no memory left to hold the output");
     {
       std::lock_guard<std::mutex> lock(tx().m);
       if (transactional_ && tx().active) {

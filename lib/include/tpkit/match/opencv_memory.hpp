@@ -7,10 +7,11 @@
 // are here allocated 2 MiB-aligned and marked MADV_HUGEPAGE, so that the kernel backs them with huge pages
 // where transparent huge pages are enabled ("always" or "madvise", Debian's default), 512 times fewer
 // faults (a matrix that whole 2 MiB pages would round up by more than a quarter, such as a tile's
-// descriptors, is mapped to the next 4 KiB page instead, huge pages for its whole 2 MiB pages and 4 KiB
-// pages for the rest); smaller ones, and everything where huge pages are off, are as before. A freed large block is kept (up to 1 GiB) for the next matrix that fits it (of its size
-// or up to five times smaller: a higher octave in a first octave's plane): the next tile's or image's
-// pyramid then needs neither faults nor the kernel's zeroing of fresh pages.
+// descriptors, is mapped to the next 4 KiB page instead: huge pages for its whole 2 MiB pages, 4 KiB pages
+// for the rest); smaller ones, and everything where huge pages are off, are as before. A freed large
+// block is kept (up to 1 GiB) for the next matrix that fits it (of its size or up to five times smaller:
+// a higher octave in a first octave's plane): the next tile's or image's pyramid then needs neither
+// faults nor the kernel's zeroing of fresh pages.
 #pragma once
 
 namespace tpkit {
