@@ -16,7 +16,6 @@
 namespace tpkit {
 
 namespace {
-constexpr size_t kLargePage = kHugePage;
 // At most this much freed memory is kept for reuse; more goes back to the system at once.
 constexpr size_t kMaxPooled = size_t(1) << 30;
 
@@ -31,8 +30,8 @@ size_t round_up(size_t n, size_t unit) { return (n + unit - 1) / unit * unit; }
 // their whole 2 MiB pages are huge (map_block). The 768 tile's planes were in 4 KiB pages
 // under an earlier limit of an eighth; on a virtual machine whose page faults cost much, a detection job
 // of nine 768 tiles (tp-plan's) then took 2.0 s, and 1.8 s on huge pages.
-bool on_huge_pages(size_t n) { return round_up(n, kLargePage) - n <= n / 4; }
-size_t block_size(size_t n) { return on_huge_pages(n) ? round_up(n, kLargePage) : round_up(n, kPage); }
+bool on_huge_pages(size_t n) { return round_up(n, kHugePage) - n <= n / 4; }
+size_t block_size(size_t n) { return on_huge_pages(n) ? round_up(n, kHugePage) : round_up(n, kPage); }
 
 // A request may take a pooled block up to kShareRatio times its size: a scale space's higher octaves
 // (planes a quarter of the first octave's and less) then run in the first octave's freed planes. With
@@ -112,11 +111,11 @@ class LargeBlocks {
   // block rounded to them, the head of one that is not (a tile's 2.5 MB of descriptors: one fault for its
   // first 2 MiB, 4 KiB pages for the rest, where all 4 KiB pages took 101 thousand of a 10000² pair's faults)
   static void* map_block(size_t size) {
-    const size_t len = size + kLargePage;
+    const size_t len = size + kHugePage;
     void* p = ::mmap(nullptr, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) return nullptr;
     // keep the 2 MiB-aligned part, give back the rest
-    const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kLargePage - 1) & ~(uintptr_t(kLargePage) - 1);
+    const uintptr_t start = reinterpret_cast<uintptr_t>(p), aligned = (start + kHugePage - 1) & ~(uintptr_t(kHugePage) - 1);
     const size_t head = aligned - start, tail = len - head - size;
     if (head) ::munmap(p, head);
     if (tail) ::munmap(reinterpret_cast<void*>(aligned + size), tail);
@@ -165,7 +164,7 @@ class LargePageMatAllocator : public cv::MatAllocator {
     CV_Assert(u->urefcount == 0);
     CV_Assert(u->refcount == 0);
     if (!(u->flags & cv::UMatData::USER_ALLOCATED)) {
-      if (u->size >= kLargePage) large_blocks().give(u->origdata);
+      if (u->size >= kHugePage) large_blocks().give(u->origdata);
       else cv::fastFree(u->origdata);
       u->origdata = nullptr;
     }
@@ -174,7 +173,7 @@ class LargePageMatAllocator : public cv::MatAllocator {
 
  private:
   static uchar* allocate_bytes(size_t n) {
-    if (n < kLargePage) return static_cast<uchar*>(cv::fastMalloc(n));
+    if (n < kHugePage) return static_cast<uchar*>(cv::fastMalloc(n));
     void* p = large_blocks().take(n);
     if (!p) CV_Error(cv::Error::StsNoMem, "out of memory");
     return static_cast<uchar*>(p);

@@ -7,32 +7,13 @@
 
 #include <cstdint>
 #include <cstring>
-#include <fstream>
-#include <sstream>
-#include <string>
+
+#include "../support/process_maps.hpp"
 
 using namespace tpkit;
 
-namespace {
-// The VmFlags of the mapping that holds address a, "" if none
-std::string vm_flags(const void* a) {
-  std::ifstream f("/proc/self/smaps");
-  const uintptr_t x = reinterpret_cast<uintptr_t>(a);
-  bool inside = false;
-  for (std::string line; std::getline(f, line);) {
-    uintptr_t lo = 0, hi = 0;
-    char dash = 0;
-    std::istringstream head(line);
-    if (head >> std::hex >> lo >> dash >> hi && dash == '-') {
-      inside = lo <= x && x < hi;
-      continue;
-    }
-    if (inside && line.rfind("VmFlags:", 0) == 0) return line;
-  }
-  return "";
-}
-bool advised_huge(const void* a) { return vm_flags(a).find(" hg") != std::string::npos; }
-}  // namespace
+using tpkit_test::advised_huge;
+using tpkit_test::vm_flags;
 
 TEST(HugePages, OnlyTheWhole2MiBPagesInsideTheRangeAreAdvised) {
   const size_t H = kHugePage;
