@@ -616,7 +616,12 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       res.status = LsmStatus::Diverged;
       return res;
     }
-    if (step < (stage == 0 ? o.tolerance : o.stage_tolerance) && (!o.l1 || it >= 3)) {
+    // With L1, the affine stage may stop after its first L1 iteration, whose step is below the tolerance
+    // in 54% of the 10000² pair's windows: waiting for a second one (as before) took 4.38 iterations on
+    // average instead of 3.84, with no gain in accuracy (synthetic default scene 0.0666 / 0.1830 ->
+    // 0.0667 / 0.1829 px, relief scene unchanged; Marseille ML fit 0.0987 px either way). The quadratic
+    // stages, which start from the affine solution, keep the two.
+    if (step < (stage == 0 ? o.tolerance : o.stage_tolerance) && (!o.l1 || it >= (stage == 0 ? 2 : 3))) {
       if (stage == 0 && o.quadratic) {
         stage = 1;
         stage_start = it + 1;

@@ -14,7 +14,8 @@
 // squares (the first two iterations L2), weights taper / max(|r|, eps) (residuals of contrast-normalised
 // grey levels); an L1 step along the last one and shorter by rho is stretched by min(2, 1 / (1 - rho))
 // (over-relaxation: the same fixed point, reached in fewer iterations). Converged when the IRLS update of
-// p2 is below `tolerance` pixels (not before iteration 4 with L1).
+// p2 is below `tolerance` pixels; with L1, not before the first L1 iteration (the third) in the affine
+// stage, and not before the fourth iteration in the quadratic stages.
 //
 // Stages: (0) affine, as above. With `quadratic`: (1) the quadratic model from the affine solution; with
 // `adaptive`: (2) the quadratic model again with the taper taper * (c / curvature_ref)^(-1/4) clamped to
