@@ -7,6 +7,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <array>
+#include <climits>
 #include <random>
 
 #include "tpkit/match/keypoint_cache.hpp"
@@ -205,4 +207,93 @@ TEST(KeypointCache, LargeEntriesAreReadInChunksAndEveryByteIsChecked) {
     EXPECT_FALSE(load_keypoints(f, id, K)) << "byte " << at;
   }
   std::filesystem::remove_all(dir);
+}
+
+// match_in_regions against the definition, written out with nothing shared: for every image-1
+// keypoint, the exact integer L2 distance to every image-2 keypoint, which lie in its region and its
+// wider region decided by the region's own frame; the nearest in the region, the ratio test against
+// the second nearest in the wider region, and the mutual check over all the image-1 keypoints whose
+// wider region holds the match (ties to the lower index). Descriptors mix 0s and 255s with random bytes,
+// so that components differ by 255 (the largest square the vector code adds in pairs).
+TEST(GuidedMatch, RegionSearchIsTheExactDefinition) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> pos(0, 400), unit(0, 1);
+  std::uniform_int_distribution<int> byte(0, 255), pick(0, 3);
+  const int n1 = 1200, n2 = 1500;
+  Keypoints K1, K2;
+  K1.desc.create(n1, 128, CV_8U);
+  K2.desc.create(n2, 128, CV_8U);
+  auto extreme_byte = [&] { const int c = pick(rng); return c == 0 ? 0 : c == 1 ? 255 : byte(rng); };
+  for (int j = 0; j < n2; ++j) {
+    K2.kp.emplace_back(static_cast<float>(pos(rng)), static_cast<float>(pos(rng)), 4.f);
+    for (int k = 0; k < 128; ++k) K2.desc.at<uint8_t>(j, k) = static_cast<uint8_t>(extreme_byte());
+  }
+  std::vector<SearchRegion> regions(n1);
+  for (int i = 0; i < n1; ++i) {
+    K1.kp.emplace_back(static_cast<float>(pos(rng)), static_cast<float>(pos(rng)), 4.f);
+    // most keypoints near a copy of an image-2 descriptor with a few bytes flipped between 0 and 255
+    const int src = i % n2;
+    for (int k = 0; k < 128; ++k) {
+      int v = K2.desc.at<uint8_t>(src, k);
+      if (unit(rng) < 0.04 + 0.3 * (i % 3 == 0)) v = 255 - v;
+      K1.desc.at<uint8_t>(i, k) = static_cast<uint8_t>(v);
+    }
+    const double a = 0.2 + 0.1 * unit(rng);  // directions near one another, as along epipolar curves
+    SearchRegion& R = regions[i];
+    R.u = Eigen::Vector2d(std::cos(a), std::sin(a));
+    R.length = i % 50 == 0 ? -1 : 5 + 40 * unit(rng);
+    R.band = 1 + 3 * unit(rng);
+    const Eigen::Vector2d x2(K2.kp[src].pt.x, K2.kp[src].pt.y), n(R.u.y(), -R.u.x());
+    R.a = x2 - R.length * unit(rng) * R.u + (unit(rng) - 0.5) * R.band * n;
+  }
+  DescriptorMatchOptions desc;
+  const double margin = 24;
+  // the definition
+  auto dist = [&](int i, int j) {
+    int s = 0;
+    for (int k = 0; k < 128; ++k) {
+      const int d = K1.desc.at<uint8_t>(i, k) - K2.desc.at<uint8_t>(j, k);
+      s += d * d;
+    }
+    return s;
+  };
+  auto where = [&](int i, int j, bool wide) {
+    const SearchRegion& R = regions[i];
+    const double vx = K2.kp[j].pt.x - R.a.x(), vy = K2.kp[j].pt.y - R.a.y();
+    const double across = R.u.y() * vx - R.u.x() * vy, along = R.u.x() * vx + R.u.y() * vy;
+    const double w = wide ? margin : 0;
+    return std::abs(across) <= R.band + w && along >= -w && along <= R.length + w;
+  };
+  std::vector<std::pair<int, int>> nearest_of_j(n2, {INT_MAX, -1});  // (distance, i)
+  std::vector<std::array<int, 3>> fwd;                                  // i, j, distance
+  for (int i = 0; i < n1; ++i) {
+    if (regions[i].length < 0) continue;
+    std::pair<int, int> acc{INT_MAX, -1}, m1{INT_MAX, -1}, m2{INT_MAX, -1};
+    for (int j = 0; j < n2; ++j) {
+      if (!where(i, j, true)) continue;
+      const std::pair<int, int> d{dist(i, j), j};
+      if (d < m1) m2 = m1, m1 = d;
+      else if (d < m2) m2 = d;
+      if (where(i, j, false) && d < acc) acc = d;
+      nearest_of_j[j] = std::min(nearest_of_j[j], std::pair<int, int>{d.first, i});
+    }
+    if (acc.second < 0) continue;
+    const std::pair<int, int> second = m1.second == acc.second ? m2 : m1;
+    const float ratio2 = static_cast<float>(desc.ratio * desc.ratio);
+    if (second.second >= 0 && !(static_cast<float>(acc.first) < ratio2 * static_cast<float>(second.first))) continue;
+    fwd.push_back({i, acc.second, acc.first});
+  }
+  std::vector<std::array<int, 3>> want;
+  for (const auto& f : fwd)
+    if (nearest_of_j[f[1]].second == f[0]) want.push_back(f);
+  ASSERT_GT(want.size(), 300u);  // enough matches to mean something
+  for (int threads : {1, 3}) {
+    const RegionMatchResult got = match_in_regions(K1, K2, regions, desc, margin, threads);
+    ASSERT_EQ(got.matches.size(), want.size()) << threads << " threads";
+    for (size_t k = 0; k < want.size(); ++k) {
+      EXPECT_EQ(got.matches[k].i1, want[k][0]);
+      EXPECT_EQ(got.matches[k].i2, want[k][1]);
+      EXPECT_EQ(got.matches[k].distance, std::sqrt(static_cast<float>(want[k][2])));
+    }
+  }
 }

@@ -11,7 +11,8 @@
 // vector extension, 16 bytes in the baseline version, 32 in the AVX2 one) that cpu_has_avx2() chooses
 // between at run time; the same rule holds (no FMA, the same operations in the same order in each lane).
 // Where TPKIT_HOT is an ordinary function, TPKIT_HAS_AVX2 is 0 and cpu_has_avx2() false.
-// User: the Gaussian blur of the SIFT scale space (gaussian_blur).
+// Users: the Gaussian blur of the SIFT scale space (gaussian_blur); the guided search's descriptor
+// distances (guided_matching, AVX2 intrinsics: the same integers).
 #pragma once
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
