@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/core.hpp>
+#include <stdexcept>
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/parallel_for.hpp"
@@ -104,22 +106,35 @@ Stretch percentile_stretch(const ImageSource& src, double p_lo, double p_hi, lon
 }
 
 std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<uint8_t>* valid) {
-  std::vector<uint8_t> out(r.data.size());
+  return render_u8(r, r.x0, r.y0, r.width, r.height, s, valid);
+}
+
+std::vector<uint8_t> render_u8(const Raster& r, long x0, long y0, long w, long h, const Stretch& s, std::vector<uint8_t>* valid) {
+  if (x0 < r.x0 || y0 < r.y0 || w < 0 || h < 0 || x0 + w > r.x0 + r.width || y0 + h > r.y0 + r.height)
+    throw std::invalid_argument("render_u8: the window must lie within the raster");
+  const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
+  std::vector<uint8_t> out(n);
+  if (valid) valid->resize(n);
   const double span = s.hi - s.lo;
   const double g = span > 0 ? 255.0 / span : 0.0;
-  // the grey level rounded half up (x + 0.5 truncated: std::round's value for x >= 0; below 0 the clamp
-  // gives 0 either way), NaN 0: a loop the compiler vectorises
-  const size_t n = r.data.size();
-  const float* in = r.data.data();
-  uint8_t* o = out.data();
-  for (size_t i = 0; i < n; ++i) {
-    const double x = (static_cast<double>(in[i]) - s.lo) * g;
-    o[i] = x > 0 ? static_cast<uint8_t>(std::min(x, 255.0) + 0.5) : 0;  // NaN: x > 0 is false
-  }
-  if (valid) {
-    valid->resize(n);
-    for (size_t i = 0; i < n; ++i) (*valid)[i] = std::isnan(in[i]) ? 0 : 255;
-  }
+  // rows side by side on OpenCV's pool: a detection tile's 1.5 million pixels took 4 ms on one thread
+  // while the other waited (0.8 s of a 10000² pair's detection, with the crop this replaces)
+  cv::parallel_for_(cv::Range(0, static_cast<int>(h)), [&](const cv::Range& rows) {
+    for (long y = rows.start; y < rows.end; ++y) {
+      const float* in = r.data.data() + static_cast<size_t>(y0 - r.y0 + y) * static_cast<size_t>(r.width) + static_cast<size_t>(x0 - r.x0);
+      uint8_t* o = out.data() + static_cast<size_t>(y) * static_cast<size_t>(w);
+      // the grey level rounded half up (x + 0.5 truncated: std::round's value for x >= 0; below 0 the
+      // clamp gives 0 either way), NaN 0: a loop the compiler vectorises
+      for (long i = 0; i < w; ++i) {
+        const double x = (static_cast<double>(in[i]) - s.lo) * g;
+        o[i] = x > 0 ? static_cast<uint8_t>(std::min(x, 255.0) + 0.5) : 0;  // NaN: x > 0 is false
+      }
+      if (valid) {
+        uint8_t* v = valid->data() + static_cast<size_t>(y) * static_cast<size_t>(w);
+        for (long i = 0; i < w; ++i) v[i] = std::isnan(in[i]) ? 0 : 255;
+      }
+    }
+  }, std::max(1.0, static_cast<double>(h) / 64));
   return out;
 }
 

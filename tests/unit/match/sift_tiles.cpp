@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <random>
 #include <set>
 
 #include "tpkit/core/error.hpp"
@@ -57,6 +58,79 @@ TEST(ImageTiles, StretchAndNodata) {
   EXPECT_THROW(percentile_stretch(open_image_source(zpath, 0, 0.0, ""), 1, 99), InputError);
   EXPECT_THROW(open_image_source(zpath, 1, std::nullopt, ""), InputError);  // no band 2
   std::filesystem::remove_all(dir);
+}
+
+// A window of a raster renders as the rendering of its crop, pixel for pixel: grey levels rounded half
+// up, clipped at both ends, NaN 0 and invalid; a window outside the raster is refused.
+TEST(ImageTiles, WindowRendersAsItsCrop) {
+  Raster r;
+  r.x0 = 300, r.y0 = 40, r.width = 257, r.height = 131;
+  r.data.resize(static_cast<size_t>(r.width * r.height));
+  for (size_t i = 0; i < r.data.size(); ++i) r.data[i] = static_cast<float>((i * 7919) % 1300) - 50.f;  // below lo, above hi
+  for (size_t i = 0; i < r.data.size(); i += 37) r.data[i] = std::nanf("");
+  const Stretch st{100.0, 1100.0, 0};
+  const long x0 = 311, y0 = 45, w = 201, h = 117;
+  std::vector<uint8_t> valid, crop_valid;
+  const std::vector<uint8_t> u8 = render_u8(r, x0, y0, w, h, st, &valid);
+  const std::vector<uint8_t> want = render_u8(crop_region(r, x0, y0, w, h), st, &crop_valid);
+  ASSERT_EQ(u8.size(), static_cast<size_t>(w * h));
+  EXPECT_EQ(u8, want);
+  EXPECT_EQ(valid, crop_valid);
+  for (long y = 0; y < h; y += 13)
+    for (long x = 0; x < w; x += 11) {
+      const float v = r.at(x0 - r.x0 + x, y0 - r.y0 + y);
+      const double g = std::clamp((v - 100.0) * 255.0 / 1000.0, 0.0, 255.0);
+      EXPECT_EQ(u8[static_cast<size_t>(y * w + x)], std::isnan(v) ? 0 : static_cast<int>(std::floor(g + 0.5)));
+      EXPECT_EQ(valid[static_cast<size_t>(y * w + x)], std::isnan(v) ? 0 : 255);
+    }
+  long zeros = 0, full = 0;
+  for (uint8_t v : u8) zeros += v == 0, full += v == 255;
+  EXPECT_GT(zeros, 100);  // NaN and below lo
+  EXPECT_GT(full, 100);   // above hi
+  EXPECT_THROW(render_u8(r, x0, y0, w + 100, h, st), std::invalid_argument);
+  EXPECT_THROW(render_u8(r, r.x0 - 1, y0, 10, 10, st), std::invalid_argument);
+}
+
+// Gathering: the keypoints of a band of tiles in (y, x, ...) order, their descriptors and ids with
+// them, whether each tile comes in that order (a merge) or not (a sort).
+TEST(SiftTiles, GatheringOrdersEachBandWhateverTheTilesOrder) {
+  const std::vector<Tile> tiles = tile_grid(400, 400, 200, 16);  // two bands of two tiles
+  ASSERT_EQ(tiles.size(), 4u);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  auto make = [&](bool sorted) {
+    std::vector<Keypoints> per(tiles.size());
+    for (size_t t = 0; t < tiles.size(); ++t) {
+      const Tile& T = tiles[t];
+      std::vector<cv::KeyPoint> kp;
+      for (int k = 0; k < 300; ++k)
+        kp.emplace_back(T.cx0 + u(rng) * (T.cx1 - T.cx0 - 1), std::floor(T.cy0 + u(rng) * (T.cy1 - T.cy0 - 1)), 2.f + k % 3);
+      if (sorted)
+        std::stable_sort(kp.begin(), kp.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) {
+          return a.pt.y != b.pt.y ? a.pt.y < b.pt.y : a.pt.x != b.pt.x ? a.pt.x < b.pt.x : a.size < b.size;
+        });
+      per[t].kp = kp;
+      per[t].desc.create(static_cast<int>(kp.size()), 128, CV_8U);
+      for (int k = 0; k < static_cast<int>(kp.size()); ++k) {
+        per[t].id.push_back(static_cast<long long>(t) * kIdsPerTile + k);
+        for (int c = 0; c < 128; ++c) per[t].desc.at<uint8_t>(k, c) = static_cast<uint8_t>(static_cast<int>(kp[k].pt.x * 3 + kp[k].pt.y + c) & 255);
+      }
+    }
+    return per;
+  };
+  for (bool sorted : {true, false}) {
+    const Keypoints K = gather_tiles(make(sorted), tiles, Stretch{});
+    ASSERT_EQ(K.kp.size(), 1200u);
+    for (size_t i = 1; i < K.kp.size(); ++i) {
+      const cv::KeyPoint &p = K.kp[i - 1], &q = K.kp[i];
+      ASSERT_TRUE(p.pt.y < q.pt.y || (p.pt.y == q.pt.y && (p.pt.x < q.pt.x || (p.pt.x == q.pt.x && p.size <= q.size)))) << sorted << " at " << i;
+    }
+    for (size_t i = 0; i < K.kp.size(); ++i)  // each descriptor and id travelled with its keypoint
+      for (int c = 0; c < 128; c += 31)
+        ASSERT_EQ(K.desc.at<uint8_t>(static_cast<int>(i), c), static_cast<uint8_t>(static_cast<int>(K.kp[i].pt.x * 3 + K.kp[i].pt.y + c) & 255));
+    std::set<long long> ids(K.id.begin(), K.id.end());
+    EXPECT_EQ(ids.size(), 1200u);
+  }
 }
 
 TEST(DescriptorMatch, RatioMutualAndGrid) {

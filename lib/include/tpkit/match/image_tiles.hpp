@@ -52,6 +52,9 @@ Stretch stretch_of_samples(std::vector<float> samples, double p_lo, double p_hi,
 // 8-bit rendering: round(255 (v - lo) / (hi - lo)) clipped to 0..255; NaN (invalid) -> 0.
 // `valid` (same size, may be null) receives 255 for valid pixels, 0 otherwise.
 std::vector<uint8_t> render_u8(const Raster& r, const Stretch& s, std::vector<uint8_t>* valid = nullptr);
+// The same for the window [x0, x0 + w) x [y0, y0 + h) of r (full-image pixels, within r), row-major.
+std::vector<uint8_t> render_u8(const Raster& r, long x0, long y0, long w, long h, const Stretch& s,
+                               std::vector<uint8_t>* valid = nullptr);
 
 // A tile: the core [cx0, cx1) x [cy0, cy1) that owns the features found in it, and the read region
 // [rx0, rx1) x [ry0, ry1) = core grown by `overlap` on every side, clipped to the image.
