@@ -240,7 +240,8 @@ Keypoints gather_tiles(std::vector<Keypoints> res, const std::vector<Tile>& tile
     size_t t1 = t0;
     while (t1 < tiles.size() && tiles[t1].cy0 == tiles[t0].cy0) ++t1;
     // detect_tile gives each tile's keypoints in this order (its rank is the id's low digits): then the
-    // band is a merge of its tiles (a 10000² image's sorts took 0.2 s on one thread), else a sort
+    // band is a merge of its tiles, else a sort (with the copies below side by side, a 10000² pair's two
+    // gatherings 0.87 -> 0.56 s)
     refs.clear();
     bool tiles_sorted = true;
     for (size_t t = t0; t < t1 && tiles_sorted; ++t)
@@ -263,7 +264,7 @@ Keypoints gather_tiles(std::vector<Keypoints> res, const std::vector<Tile>& tile
         for (int r = 0; r < static_cast<int>(res[t].kp.size()); ++r) refs.push_back({t, r});
       std::sort(refs.begin(), refs.end(), before);
     }
-    // the copies side by side on OpenCV's pool (with one thread, a 10000² image's gathering took 0.4 s)
+    // the copies side by side on OpenCV's pool
     const size_t base = K.kp.size();
     K.kp.resize(base + refs.size());
     K.id.resize(base + refs.size());
