@@ -109,6 +109,7 @@ void parse_tres(const std::string& path, const std::string& area, uint64_t offse
   FieldCursor c(path, area, offset);
   while (c.pos() < area.size()) {
     NitfTre t;
+    t.offset = c.file_offset();
     t.tag = c.trimmed(6, "CETAG");
     const uint64_t len = c.number(5, "CEL");
     t.data = c.text(static_cast<size_t>(len), "CEDATA");

@@ -17,18 +17,27 @@ namespace {
 
 constexpr size_t kTreLength = 1041;
 
+// How STDI-0002 writes a numeric field: digits, with a sign (its form starts with +-), a decimal point
+// and an exponent (E+d) only where the field's form has them.
+struct NumberForm {
+  bool sign, point, exponent;
+};
+constexpr NumberForm kUnsigned{false, false, false}, kUnsignedPoint{false, true, false}, kSigned{true, false, false},
+    kSignedPoint{true, true, false}, kCoefficient{true, true, true};
+
 struct ScalarField {
   const char* name;
   size_t offset, width;
   double RpcModel::*member;
+  NumberForm form;
 };
 const ScalarField kFields[] = {
-    {"ERR_BIAS", 1, 7, &RpcModel::err_bias},       {"ERR_RAND", 8, 7, &RpcModel::err_rand},
-    {"LINE_OFF", 15, 6, &RpcModel::line_off},      {"SAMP_OFF", 21, 5, &RpcModel::samp_off},
-    {"LAT_OFF", 26, 8, &RpcModel::lat_off},        {"LONG_OFF", 34, 9, &RpcModel::lon_off},
-    {"HEIGHT_OFF", 43, 5, &RpcModel::height_off},  {"LINE_SCALE", 48, 6, &RpcModel::line_scale},
-    {"SAMP_SCALE", 54, 5, &RpcModel::samp_scale},  {"LAT_SCALE", 59, 8, &RpcModel::lat_scale},
-    {"LONG_SCALE", 67, 9, &RpcModel::lon_scale},   {"HEIGHT_SCALE", 76, 5, &RpcModel::height_scale},
+    {"ERR_BIAS", 1, 7, &RpcModel::err_bias, kUnsignedPoint},      {"ERR_RAND", 8, 7, &RpcModel::err_rand, kUnsignedPoint},
+    {"LINE_OFF", 15, 6, &RpcModel::line_off, kUnsigned},          {"SAMP_OFF", 21, 5, &RpcModel::samp_off, kUnsigned},
+    {"LAT_OFF", 26, 8, &RpcModel::lat_off, kSignedPoint},         {"LONG_OFF", 34, 9, &RpcModel::lon_off, kSignedPoint},
+    {"HEIGHT_OFF", 43, 5, &RpcModel::height_off, kSigned},        {"LINE_SCALE", 48, 6, &RpcModel::line_scale, kUnsigned},
+    {"SAMP_SCALE", 54, 5, &RpcModel::samp_scale, kUnsigned},      {"LAT_SCALE", 59, 8, &RpcModel::lat_scale, kSignedPoint},
+    {"LONG_SCALE", 67, 9, &RpcModel::lon_scale, kSignedPoint},    {"HEIGHT_SCALE", 76, 5, &RpcModel::height_scale, kSigned},
 };
 struct PolyField {
   const char* name;
@@ -43,15 +52,48 @@ const PolyField kPolys[] = {{"LINE_NUM_COEFF", 81, &RpcModel::line_num},
 // ticket #2040).
 constexpr int kRpc00aTerm[20] = {0, 1, 2, 3, 4, 5, 6, 10, 7, 8, 9, 11, 14, 17, 12, 15, 18, 13, 16, 19};
 
-double field_value(const NitfTre& tre, const std::string& path, size_t offset, size_t width, const std::string& name) {
+// True when t is written in `form`: [sign] digits [. digits] [E sign digits], each part only where the
+// form has it, at least one digit before the exponent. strtod alone would also take "0x00fa" (250),
+// "inf" or "1e3" in a field of digits.
+bool in_form(const std::string& t, NumberForm form) {
+  size_t i = 0;
+  auto sign = [&] {
+    if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+  };
+  auto run = [&] {
+    const size_t a = i;
+    while (i < t.size() && t[i] >= '0' && t[i] <= '9') ++i;
+    return i - a;
+  };
+  if (form.sign) sign();
+  size_t digits = run();
+  if (form.point && i < t.size() && t[i] == '.') {
+    ++i;
+    digits += run();
+  }
+  if (digits == 0) return false;
+  if (form.exponent && i < t.size() && t[i] == 'E') {
+    ++i;
+    sign();
+    if (run() == 0) return false;
+  }
+  return i == t.size();
+}
+
+// A field's number; blanks around it are passed over (some producers pad with them), anything else
+// outside its form is refused with the field's name and characters.
+double field_value(const NitfTre& tre, const std::string& path, size_t offset, size_t width, const std::string& name,
+                   NumberForm form) {
   const std::string text = tre.data.substr(offset, width);
   const size_t a = text.find_first_not_of(' ');
   const std::string t = a == std::string::npos ? std::string() : text.substr(a, text.find_last_not_of(' ') - a + 1);
-  char* end = nullptr;
-  const double v = t.empty() ? 0.0 : std::strtod(t.c_str(), &end);
-  if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v))
+  const bool ok = in_form(t, form);
+  const double v = ok ? std::strtod(t.c_str(), nullptr) : 0.0;
+  if (!ok || !std::isfinite(v))
     throw InputError(path, 0, tre.tag + " TRE: " + name + " (characters " + std::to_string(offset + 1) + " to " +
-                                  std::to_string(offset + width) + ") is '" + text + "', not a number");
+                                  std::to_string(offset + width) + ") is '" + text + "', not a number of its form (digits" +
+                                  (form.sign ? ", a sign" : "") + (form.point ? ", a decimal point" : "") +
+                                  (form.exponent ? ", an exponent E+d" : "") + ")");
   return v;
 }
 
@@ -86,12 +128,12 @@ RpcModel parse_rpc_tre(const NitfTre& tre, const std::string& path) {
   if (tre.data[0] != '1')
     throw InputError(path, 0, tre.tag + " TRE: SUCCESS is '" + tre.data.substr(0, 1) + "': the producer marks the model as not valid");
   RpcModel m;
-  for (const auto& f : kFields) m.*(f.member) = field_value(tre, path, f.offset, f.width, f.name);
+  for (const auto& f : kFields) m.*(f.member) = field_value(tre, path, f.offset, f.width, f.name, f.form);
   const bool a = tre.tag == "RPC00A";
   for (const auto& p : kPolys)
     for (int i = 0; i < 20; ++i) {
       const int src = a ? kRpc00aTerm[i] : i;
-      (m.*(p.member))[i] = field_value(tre, path, p.offset + 12 * src, 12, std::string(p.name) + "_" + std::to_string(src + 1));
+      (m.*(p.member))[i] = field_value(tre, path, p.offset + 12 * src, 12, std::string(p.name) + "_" + std::to_string(src + 1), kCoefficient);
     }
   for (const auto& f : kFields)
     if (std::string(f.name).find("SCALE") != std::string::npos && !(m.*(f.member) > 0))
@@ -100,10 +142,21 @@ RpcModel parse_rpc_tre(const NitfTre& tre, const std::string& path) {
 }
 
 std::optional<RpcModel> read_rpc_nitf(const NitfImage& image) {
-  const NitfTre* t = find_nitf_tre(image, "RPC00B");
-  if (!t) t = find_nitf_tre(image, "RPC00A");
-  if (!t) return std::nullopt;
-  return parse_rpc_tre(*t, image.path);
+  for (const char* tag : {"RPC00B", "RPC00A"}) {
+    // a second TRE of the tag: the same bytes say nothing new; other bytes are another model, and which
+    // one is the image's is not guessed
+    const NitfTre* first = nullptr;
+    for (const auto& t : image.tres) {
+      if (t.tag != tag) continue;
+      if (!first)
+        first = &t;
+      else if (t.data != first->data)
+        throw InputError(image.path, 0, std::string("two ") + tag + " TREs that disagree (at bytes " + std::to_string(first->offset) +
+                                            " and " + std::to_string(t.offset) + "): which model is the image's is not guessed");
+    }
+    if (first) return parse_rpc_tre(*first, image.path);
+  }
+  return std::nullopt;
 }
 
 RpcTre format_rpc00b_tre(const RpcModel& m) {

@@ -4,6 +4,8 @@
 // keeps, and models the TRE cannot hold or that the producer marks as not valid.
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/core/nitf_image.hpp"
@@ -130,6 +132,28 @@ TEST(RpcNitf, BadTresRefused) {
   NitfTre nan = good;
   nan.data.replace(15, 6, "01x495");
   EXPECT_NE(message(nan).find("f.ntf: RPC00B TRE: LINE_OFF (characters 16 to 21) is '01x495', not a number"), std::string::npos);
+  // issue 50: strtod read these as numbers; STDI-0002's fields are digits, with a sign, a decimal point or
+  // an exponent only where the field's form has one
+  const std::tuple<size_t, std::string, std::string> forged[] = {
+      {15, "0x00fa", "LINE_OFF (characters 16 to 21) is '0x00fa', not a number of its form (digits)"},
+      {15, "+17495", "LINE_OFF (characters 16 to 21) is '+17495'"},
+      {15, "174 95", "LINE_OFF (characters 16 to 21) is '174 95'"},
+      {1, "0x0.fp1", "ERR_BIAS (characters 2 to 8) is '0x0.fp1', not a number of its form (digits, a decimal point)"},
+      {26, "-34.5e-0", "LAT_OFF (characters 27 to 34) is '-34.5e-0'"},
+      {43, "+3E01", "HEIGHT_OFF (characters 44 to 48) is '+3E01', not a number of its form (digits, a sign)"},
+      {48, "infini", "LINE_SCALE (characters 49 to 54) is 'infini'"},
+      {81, "+0x1.33p-9  ", "LINE_NUM_COEFF_1 (characters 82 to 93) is '+0x1.33p-9  '"},
+      {93, "-2.429637e-3", "LINE_NUM_COEFF_2 (characters 94 to 105) is '-2.429637e-3', not a number of its form (digits, a sign, a "
+                           "decimal point, an exponent E+d)"}};
+  for (const auto& [at, text, what] : forged) {
+    NitfTre t = good;
+    t.data.replace(at, text.size(), text);
+    EXPECT_NE(message(t).find(what), std::string::npos) << text << ": " << message(t);
+  }
+  // blanks around a number are passed over
+  NitfTre padded = good;
+  padded.data.replace(43, 5, "  +31");
+  EXPECT_EQ(parse_rpc_tre(padded, "p").height_off, 31);
   NitfTre zero = good;
   zero.data.replace(76, 5, "+0000");
   EXPECT_NE(message(zero).find("HEIGHT_SCALE"), std::string::npos);
@@ -137,4 +161,23 @@ TEST(RpcNitf, BadTresRefused) {
   RpcModel m = parse_rpc_tre(good, "g");
   m.line_off = -40;
   EXPECT_THROW(format_rpc00b_tre(m), InputError);
+}
+
+// Issue 50: a second RPC00B that differs was passed over for the first; the same bytes twice are one model.
+TEST(RpcNitf, TwoTresThatDisagreeRefused) {
+  NitfImage im = read_nitf_image(kWv3);
+  const NitfTre first = *find_nitf_tre(im, "RPC00B");
+  EXPECT_EQ(first.offset, 404u + 502u);  // the image subheader's CETAG
+  NitfTre second = first;
+  second.offset = 9999;
+  im.tres.push_back(NitfTre{"TESTAA", "x", 8888});
+  im.tres.push_back(second);
+  EXPECT_EQ(*read_rpc_nitf(im), parse_rpc_tre(first, "f"));
+  im.tres.back().data.replace(15, 6, "017496");
+  try {
+    read_rpc_nitf(im);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("two RPC00B TREs that disagree (at bytes 906 and 9999)"), std::string::npos) << e.what();
+  }
 }

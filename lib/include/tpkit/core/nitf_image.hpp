@@ -21,9 +21,11 @@
 
 namespace tpkit {
 
-// A tagged record extension: its 6-character tag (CETAG) and its data (CEDATA, CEL bytes).
+// A tagged record extension: its 6-character tag (CETAG) and its data (CEDATA, CEL bytes); `offset` is
+// where its CETAG lies in the file it was read from (0 for one made in memory), for messages.
 struct NitfTre {
   std::string tag, data;
+  uint64_t offset = 0;
 };
 
 // The first image segment of a NITF file, as its subheader describes it.

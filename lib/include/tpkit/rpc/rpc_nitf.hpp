@@ -17,10 +17,13 @@
 namespace tpkit {
 
 // The model in an RPC00B or RPC00A TRE. InputError(path: RPC00B: reason) for a short TRE, a field that
-// is not a number, or SUCCESS = 0 (the producer says the model is not valid).
+// is not a number in its field's form (digits; a sign, a decimal point, an exponent only where the
+// field's form has one: no "0x00fa", no "+" before LINE_OFF, no blank inside), or SUCCESS = 0 (the
+// producer says the model is not valid).
 RpcModel parse_rpc_tre(const NitfTre& tre, const std::string& path);
 
-// The model of a NITF image (RPC00B, else RPC00A); nothing when it has neither.
+// The model of a NITF image (RPC00B, else RPC00A); nothing when it has neither. A second TRE of the tag
+// is accepted when it repeats the first byte for byte, and refused (naming both) when it differs.
 std::optional<RpcModel> read_rpc_nitf(const NitfImage& image);
 
 // The RPC00B TRE of a model, the model it holds (what a reader gets back) and the largest difference of

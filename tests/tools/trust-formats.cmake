@@ -1,0 +1,11 @@
+# Issue 50, the format readers: NITF RPC00B fields and TREs, JPEG 2000 corruption, the XML forms of an
+# RPC model (DIMAP, GDAL .aux.xml), tag 50844, the peer formats (COLMAP, OpenMVG) and the pair geometry
+# of a region run. Each case: what a forged file did before (taken without a word), refused or read right.
+set(_wv3 "$SHARED/data/nitf-wv3")
+
+# Item 12: an RPC00B field in hexadecimal (LINE_OFF "0x00fa", read as 250 by strtod) is not STDI-0002's
+# form (digits): refused, naming the field.
+tpkit_tool_test(trust-formats.nitf-hex-field
+  COMMAND "LC_ALL=C sed 's/0000.330174952074/0000.330x00fa2074/' ${_wv3}/wv3_20.NTF > hex.ntf && cmp -s hex.ntf ${_wv3}/wv3_20.NTF@SEMI@ test $? = 1 && echo '-58.52 -34.55 20' | tp-rpc project hex.ntf -o p.txt"
+  EXPECT_FAIL STDERR_MATCH "tp-rpc: hex.ntf: RPC00B TRE: LINE_OFF [(]characters 16 to 21[)] is '0x00fa', not a number of its form [(]digits[)]"
+  NO_FILE p.txt)
