@@ -326,29 +326,67 @@ RpcModel parse_rpb(const std::string& text, const std::string& file) {
 
 // ---------------------------------------------------------------- XML (DIMAP, GDAL's .aux.xml)
 
-// An element open on the way from the document's root to a leaf: its name, its attributes, its tag's line.
+// An element open on the way from the document's root to a leaf: its name, its attributes, its tag's line
+// and byte offset (which tells two elements of the same name and line apart).
 struct XmlOpen {
   std::string name;
   std::map<std::string, std::string> attributes;
   long line;
+  size_t at;
 };
 
-// Text with XML's five predefined entities replaced by their characters.
-std::string xml_unescape(const std::string& s) {
+// Text or an attribute value with its references replaced by their characters: XML's five predefined
+// entities and character references (&#45; &#x2d;, written as UTF-8). Any other '&' (an entity a DTD
+// would define, a bare '&') is refused: a document whose text is not what it says is not guessed.
+std::string xml_unescape(const std::string& s, const std::string& file, long line) {
   static const std::pair<const char*, char> kEntities[] = {
-      {"&lt;", '<'}, {"&gt;", '>'}, {"&quot;", '"'}, {"&apos;", '\''}, {"&amp;", '&'}};
+      {"lt", '<'}, {"gt", '>'}, {"quot", '"'}, {"apos", '\''}, {"amp", '&'}};
   std::string out;
   for (size_t i = 0; i < s.size(); ++i) {
-    bool replaced = false;
-    if (s[i] == '&')
-      for (const auto& [entity, c] : kEntities)
-        if (s.compare(i, std::strlen(entity), entity) == 0) {
-          out += c;
-          i += std::strlen(entity) - 1;
-          replaced = true;
-          break;
-        }
-    if (!replaced) out += s[i];
+    if (s[i] != '&') {
+      out += s[i];
+      continue;
+    }
+    const size_t semi = s.find(';', i);
+    const std::string ref = semi == std::string::npos ? std::string() : s.substr(i + 1, semi - i - 1);
+    auto refused = [&]() -> InputError {
+      return InputError(file, line, "'" + s.substr(i, std::min<size_t>(12, s.size() - i)) +
+                                        "': not one of XML's five entities (&lt; &gt; &amp; &quot; &apos;) or a character reference (&#45; &#x2d;)");
+    };
+    bool known = false;
+    for (const auto& [name, c] : kEntities)
+      if (ref == name) {
+        out += c;
+        known = true;
+      }
+    if (!known) {
+      const bool hex = ref.size() > 2 && ref[1] == 'x';
+      const std::string digits = ref.size() > 1 && ref[0] == '#' ? ref.substr(hex ? 2 : 1) : std::string();
+      if (digits.empty() || digits.size() > 8 ||
+          digits.find_first_not_of(hex ? "0123456789abcdefABCDEF" : "0123456789") != std::string::npos)
+        throw refused();
+      const unsigned long c = std::stoul(digits, nullptr, hex ? 16 : 10);
+      // XML's Char production: a reference to anything else is not well-formed
+      if (!(c == 0x9 || c == 0xA || c == 0xD || (c >= 0x20 && c <= 0xD7FF) || (c >= 0xE000 && c <= 0xFFFD) ||
+            (c >= 0x10000 && c <= 0x10FFFF)))
+        throw refused();
+      if (c < 0x80) {
+        out += static_cast<char>(c);
+      } else if (c < 0x800) {
+        out += static_cast<char>(0xC0 | (c >> 6));
+        out += static_cast<char>(0x80 | (c & 0x3F));
+      } else if (c < 0x10000) {
+        out += static_cast<char>(0xE0 | (c >> 12));
+        out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+        out += static_cast<char>(0x80 | (c & 0x3F));
+      } else {
+        out += static_cast<char>(0xF0 | (c >> 18));
+        out += static_cast<char>(0x80 | ((c >> 12) & 0x3F));
+        out += static_cast<char>(0x80 | ((c >> 6) & 0x3F));
+        out += static_cast<char>(0x80 | (c & 0x3F));
+      }
+    }
+    i = semi;
   }
   return out;
 }
@@ -365,15 +403,15 @@ std::map<std::string, std::string> xml_attributes(const std::string& s, const st
     const std::string name = end == std::string::npos ? std::string() : trim(s.substr(i, eq - i));
     if (name.empty() || name.find_first_of(blank) != std::string::npos)
       throw InputError(file, line, "malformed attributes in <" + element + ">");
-    out[name] = xml_unescape(s.substr(q + 1, end - q - 1));
+    out[name] = xml_unescape(s.substr(q + 1, end - q - 1), file, line);
     i = end + 1;
   }
   return out;
 }
 
 // Walks an XML document, calling leaf(path, text, line) for every element without child elements, in
-// document order: `path` the elements from the root down to it, `text` its trimmed text, `line` the line
-// of its end tag. Comments, processing instructions and declarations are skipped; unbalanced or
+// document order: `path` the elements from the root down to it, `text` its trimmed text (references
+// replaced, CDATA sections taken as they are), `line` the line of its end tag. Comments, processing instructions and declarations are skipped; unbalanced or
 // unterminated markup is refused with its line.
 using XmlLeafVisitor = std::function<void(const std::vector<XmlOpen>& path, const std::string& text, long line)>;
 void xml_walk(const std::string& s, const std::string& file, const XmlLeafVisitor& leaf) {
@@ -389,12 +427,20 @@ void xml_walk(const std::string& s, const std::string& file, const XmlLeafVisito
     if (s[i] != '<') {
       size_t e = s.find('<', i);
       if (e == std::string::npos) e = s.size();
-      text += s.substr(i, e - i);
+      text += xml_unescape(s.substr(i, e - i), file, line);
       count_lines(i, e);
       i = e;
       continue;
     }
     long tag_line = line;
+    if (s.compare(i, 9, "<![CDATA[") == 0) {  // text as it is, references and all
+      const size_t e = s.find("]]>", i + 9);
+      if (e == std::string::npos) throw InputError(file, tag_line, "unterminated CDATA section");
+      text += s.substr(i + 9, e - i - 9);
+      count_lines(i, e + 3);
+      i = e + 3;
+      continue;
+    }
     auto skip_to = [&](const char* end) {
       size_t e = s.find(end, i);
       if (e == std::string::npos) throw InputError(file, tag_line, "unterminated markup");
@@ -413,8 +459,14 @@ void xml_walk(const std::string& s, const std::string& file, const XmlLeafVisito
       skip_to(">");
       continue;
     }
-    size_t e = s.find('>', i);
-    if (e == std::string::npos) throw InputError(file, tag_line, "unterminated tag");
+    // the tag ends at the first '>' outside its quoted attribute values (where '>' may stand)
+    size_t e = i + 1;
+    char quote = 0;
+    for (; e < s.size() && (quote || s[e] != '>'); ++e)
+      if (s[e] == '"' || s[e] == '\'') quote = quote == s[e] ? 0 : quote ? quote : s[e];
+    if (quote) e = s.find('>', i);  // a quote never closed: its attributes are refused as malformed below
+    if (e >= s.size()) throw InputError(file, tag_line, "unterminated tag");
+    const size_t tag_at = i;
     std::string tag = s.substr(i + 1, e - i - 1);
     count_lines(i, e + 1);
     i = e + 1;
@@ -436,7 +488,7 @@ void xml_walk(const std::string& s, const std::string& file, const XmlLeafVisito
       had_child = true;
     } else {
       stack.push_back({name, xml_attributes(name_end == std::string::npos ? "" : body.substr(name_end), name, file, tag_line),
-                       tag_line});
+                       tag_line, tag_at});
       had_child = false;
       text.clear();
     }
@@ -450,9 +502,11 @@ struct XmlLeaf {
   long line;
   long repeated_at = 0;  // the line of a second leaf of the same path (0: none)
 };
-std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file) {
+// `also`, when given, sees every leaf too.
+std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file, const XmlLeafVisitor& also = nullptr) {
   std::map<std::string, XmlLeaf> out;
   xml_walk(s, file, [&](const std::vector<XmlOpen>& path, const std::string& text, long line) {
+    if (also) also(path, text, line);
     std::string p;
     for (size_t k = 1; k < path.size(); ++k) p += (k > 1 ? "." : "") + path[k].name;
     auto [it, fresh] = out.emplace(p, XmlLeaf{text, line});
@@ -470,7 +524,7 @@ std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::strin
 // double offset has a decimal that reads back to it exactly.
 bool dimap_offset_value(const std::string& text, double& v, long double origin = 1.0L) {
   std::string t = trim(text);
-  if (t.empty()) return false;
+  if (!parse_double(t, v)) return false;  // a decimal number (strtold alone would take "0x1F4" too)
   char* end = nullptr;
   long double x = std::strtold(t.c_str(), &end);
   if (end != t.c_str() + t.size()) return false;
@@ -525,11 +579,14 @@ struct DimapRpc {
   }
 };
 
+// The RPC elements a DIMAP document may hold its model in, in the order they are looked for.
+const char* const kDimapRpcElements[] = {"Global_RFM", "Rational_Function_Model"};
+
 std::string dimap_rpc_base(const std::map<std::string, XmlLeaf>& leaves) {
-  for (const std::string element : {"Global_RFM.", "Rational_Function_Model."})
+  for (const std::string element : kDimapRpcElements)
     for (const auto& kv : leaves) {
-      const size_t k = kv.first.find(element);
-      if (k != std::string::npos) return kv.first.substr(0, k + element.size());
+      const size_t k = kv.first.find(element + ".");
+      if (k != std::string::npos) return kv.first.substr(0, k + element.size() + 1);
     }
   return "";
 }
@@ -637,9 +694,27 @@ RpcModel dimap_v1_model(const DimapRpc& d) {
 }
 
 RpcModel parse_dimap(const std::string& text, const std::string& file) {
-  DimapRpc d{xml_leaves(text, file), "", file};
+  // the RPC elements met (name -> their tags' byte offsets and lines): a second one is a second model,
+  // and which is the image's is not guessed (a path's leaves seen twice are refused too, but the second
+  // element may stand elsewhere in the document)
+  std::map<std::string, std::map<size_t, long>> rpc_elements;
+  DimapRpc d{xml_leaves(text, file,
+                        [&](const std::vector<XmlOpen>& path, const std::string&, long) {
+                          for (const auto& e : path)
+                            for (const char* name : kDimapRpcElements)
+                              if (e.name == name) rpc_elements[name].emplace(e.at, e.line);
+                        }),
+             "", file};
   d.base = dimap_rpc_base(d.leaves);
   if (d.base.empty()) throw InputError(file, 0, "no Global_RFM element (not a DIMAP RPC file)");
+  for (const char* name : kDimapRpcElements) {
+    const auto& seen = rpc_elements[name];
+    if (seen.size() > 1)
+      throw InputError(file, std::next(seen.begin())->second, std::string("a second ") + name + " element (the first at line " +
+                                                                  std::to_string(seen.begin()->second) +
+                                                                  "): two models, and which is the image's is not guessed");
+    if (!seen.empty()) break;  // the element the model is read from
+  }
   const bool v1 = d.leaves.count(d.base + "Inverse_Model.F_COL") || d.leaves.count(d.base + "Inverse_Model.F_ROW");
   const RpcModel m = v1 ? dimap_v1_model(d) : dimap_v2_model(d);
   check_model(m, file);

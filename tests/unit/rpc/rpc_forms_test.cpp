@@ -466,3 +466,48 @@ TEST(RpcForms, SidecarsAreFoundBesideTheImage) {
   EXPECT_EQ(s.path, (dir / "PHRDIMAP.XML").string());
   EXPECT_TRUE(s.model.has_direct);
 }
+
+// Issue 50: valid XML read as XML reads it, and what cannot be read refused with what it is. Before: a
+// value in a CDATA section was empty, a character reference (&#45;) stayed in the text or key, a second
+// Global_RFM elsewhere in the document was passed over for the one first in path order, a hexadecimal
+// SAMP_OFF was taken (strtold), and '>' inside a quoted attribute ended the tag.
+TEST(RpcForms, XmlReadAsXml) {
+  const RpcModel m = pinned_from_txt();
+  // GDAL's .aux.xml: single-quoted attributes, references in keys and values, a CDATA value, a '>' in an
+  // attribute value, a comment inside a value
+  std::string x = pinned_aux();
+  x = std::regex_replace(x, std::regex("<Metadata domain=\"RPC\">"), "<Metadata note='a > b' domain='RPC'>");
+  x = std::regex_replace(x, std::regex("<MDI key=\"LAT_OFF\">43<"), "<MDI key='LAT&#95;OFF'>4&#x33;<");
+  x = std::regex_replace(x, std::regex("<MDI key=\"LINE_OFF\">10<"), "<MDI key=\"LINE_OFF\"><![CDATA[1]]><!-- ten -->0<");
+  x = std::regex_replace(x, std::regex("<MDI key=\"SAMP_OFF\">20<"), "<MDI key=\"SAMP&#x5f;OFF\">&#50;0&#x2E;0<");
+  auto p = scratch("refs.tif.aux.xml");
+  write(p, x);
+  EXPECT_EQ(read_rpc_file(p.string()), m);
+  // DIMAP v2: every value of RFM_Validity in a CDATA section, one offset written with references
+  const std::string v2 = format_rpc_dimap(m);
+  auto d = scratch("RPC_cdata.XML");
+  std::string cdata = std::regex_replace(v2, std::regex("<([A-Z_]+_(OFF|SCALE))>([^<]*)</"), "<$1><![CDATA[ $3 ]]></");
+  cdata = std::regex_replace(cdata, std::regex("<LINE_OFF><!\\[CDATA\\[ 11 \\]\\]>"), "<LINE_OFF>&#49;1");
+  ASSERT_NE(cdata, v2);
+  write(d, cdata);
+  write(scratch("RPC_plain.XML"), v2);
+  EXPECT_EQ(read_rpc_dimap(d.string()), read_rpc_dimap(scratch("RPC_plain.XML").string()));
+  // what is not XML's is refused with the line
+  expect_error(p, std::regex_replace(x, std::regex("4&#x33;"), "4&three;"),
+               "refs.tif.aux.xml:10: '&three;': not one of XML's five entities (&lt; &gt; &amp; &quot; &apos;) or a character reference");
+  expect_error(p, std::regex_replace(x, std::regex("4&#x33;"), "4 & 3"), "refs.tif.aux.xml:10: '& 3': not one of XML's five entities");
+  expect_error(p, std::regex_replace(x, std::regex("4&#x33;"), "4&#0;"), "refs.tif.aux.xml:10: '&#0;': not one of");
+  expect_error(p, std::regex_replace(x, std::regex("LAT&#95;OFF"), "LAT&#x;OFF"), "refs.tif.aux.xml:10: '&#x;OFF': not one of");
+  expect_error(p, std::regex_replace(x, std::regex("\\]\\]>"), "]>"), "refs.tif.aux.xml:14: unterminated CDATA section");
+  // DIMAP: a second Global_RFM, at the same path or elsewhere, is a second model
+  const std::string rfm = v2.substr(v2.find("    <Global_RFM>"), v2.find("</Global_RFM>") + 14 - v2.find("    <Global_RFM>"));
+  const long second = 1 + std::count(v2.begin(), v2.begin() + static_cast<long>(v2.find("</Rational_Function_Model>")), '\n');
+  expect_error(d, std::regex_replace(v2, std::regex("  </Rational_Function_Model>\n"), rfm + "  </Rational_Function_Model>\n"),
+               "RPC_cdata.XML:" + std::to_string(second) + ": a second Global_RFM element (the first at line 9): two models");
+  const std::string elsewhere = std::regex_replace(v2, std::regex("</Dimap_Document>"), "  <Other>\n" + rfm + "  </Other>\n</Dimap_Document>");
+  expect_error(d, elsewhere, "a second Global_RFM element (the first at line 9)");
+  // a hexadecimal pixel offset is not DIMAP's number
+  expect_error(d, std::regex_replace(v2, std::regex("<SAMP_OFF>21<"), "<SAMP_OFF>0x15<"),
+               "RPC_cdata.XML:" + std::to_string(1 + std::count(v2.begin(), v2.begin() + static_cast<long>(v2.find("<SAMP_OFF>")), '\n')) +
+                   ": Rational_Function_Model.Global_RFM.RFM_Validity.SAMP_OFF: '0x15' is not a number");
+}
