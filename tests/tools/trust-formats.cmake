@@ -9,3 +9,9 @@ tpkit_tool_test(trust-formats.nitf-hex-field
   COMMAND "LC_ALL=C sed 's/0000.330174952074/0000.330x00fa2074/' ${_wv3}/wv3_20.NTF > hex.ntf && cmp -s hex.ntf ${_wv3}/wv3_20.NTF@SEMI@ test $? = 1 && echo '-58.52 -34.55 20' | tp-rpc project hex.ntf -o p.txt"
   EXPECT_FAIL STDERR_MATCH "tp-rpc: hex.ntf: RPC00B TRE: LINE_OFF [(]characters 16 to 21[)] is '0x00fa', not a number of its form [(]digits[)]"
   NO_FILE p.txt)
+
+# Item 17: a tag 50844 whose 92 doubles run past the end of the file (libtiff passes over it as if it
+# were absent) was reported as "no tag 50844": it is a corrupt tag, said so with where it lies.
+tpkit_tool_test(trust-formats.tag-50844-past-the-end
+  COMMAND "tp-synth --out s --size 128 --seed 1 --supersample 1 --relief 10 >/dev/null 2>&1 && head -c $(( $(wc -c < s/view1.tif) - 100 )) s/view1.tif > cut.tif && echo '0 0 0' | tp-rpc project cut.tif"
+  EXPECT_FAIL STDERR_MATCH "tp-rpc: cut.tif: RPC tag 50844 is corrupt: its 92 values of TIFF type 12 [(]736 bytes from byte [0-9]+[)] run past the end of the file [(][0-9]+ bytes[)]: give the model with --rpc")

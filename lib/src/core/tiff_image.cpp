@@ -133,6 +133,42 @@ bool is_tiff_file(const std::string& path) {
          (h[0] == 'M' && h[1] == 'M' && h[2] == 0 && (h[3] == 42 || h[3] == 43));
 }
 
+std::optional<TiffTagEntry> tiff_first_ifd_tag(const std::string& path, uint16_t tag) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char h[16];
+  if (!in.read(reinterpret_cast<char*>(h), 16)) return std::nullopt;
+  const bool le = h[0] == 'I';
+  auto u = [&](const unsigned char* p, int n) {
+    uint64_t v = 0;
+    for (int k = 0; k < n; ++k) v |= uint64_t(p[le ? k : n - 1 - k]) << (8 * k);
+    return v;
+  };
+  const uint64_t magic = u(h + 2, 2);
+  if (magic != 42 && magic != 43) return std::nullopt;
+  const bool big = magic == 43;
+  const uint64_t ifd = big ? u(h + 8, 8) : u(h + 4, 4);
+  const int count_size = big ? 8 : 2, entry_size = big ? 20 : 12, value_size = big ? 8 : 4;
+  unsigned char c[8];
+  if (!in.seekg(static_cast<std::streamoff>(ifd)) || !in.read(reinterpret_cast<char*>(c), count_size)) return std::nullopt;
+  const uint64_t n = u(c, count_size);
+  for (uint64_t e = 0; e < n && e < 65536; ++e) {
+    unsigned char d[20];
+    if (!in.read(reinterpret_cast<char*>(d), entry_size)) return std::nullopt;
+    if (u(d, 2) != tag) continue;
+    TiffTagEntry t;
+    t.type = static_cast<int>(u(d + 2, 2));
+    t.count = u(d + 4, big ? 8 : 4);
+    // bytes per value of TIFF 6 and BigTIFF's types 1 .. 18
+    static const int kTypeBytes[19] = {0, 1, 1, 2, 4, 8, 1, 1, 2, 4, 8, 4, 8, 4, 0, 0, 8, 8, 8};
+    const uint64_t size = t.type >= 1 && t.type <= 18 ? static_cast<uint64_t>(kTypeBytes[t.type]) : 0;
+    t.bytes = size == 0 ? 0 : t.count <= UINT64_MAX / size ? t.count * size : UINT64_MAX;
+    const uint64_t entry_at = ifd + count_size + e * entry_size;
+    t.offset = t.bytes <= static_cast<uint64_t>(value_size) ? entry_at + entry_size - value_size : u(d + entry_size - value_size, value_size);
+    return t;
+  }
+  return std::nullopt;
+}
+
 std::optional<ImageInfo> tiff_image_info(const std::string& path) {
   TiffHandle t(open_tiff(path));
   const Layout L = layout_of(t.tif);

@@ -21,6 +21,7 @@
 #include "tpkit/core/nitf_image.hpp"
 #include "tpkit/core/input_file.hpp"
 #include "tpkit/core/text_table.hpp"
+#include "tpkit/core/tiff_image.hpp"
 #include "tpkit/rpc/rpc_nitf.hpp"
 
 namespace tpkit {
@@ -918,7 +919,22 @@ RpcModel rpc_from_tag_values(const std::array<double, 92>& v) {
 
 std::optional<RpcModel> read_rpc_tiff(const std::string& path) {
   auto v = read_rpc_tag(path);
-  if (!v) return std::nullopt;
+  if (!v) {
+    // libtiff reads a tag whose values it cannot reach as no tag: that one is a damaged model, not none
+    constexpr uint16_t kRpcTag = 50844;
+    if (const auto e = tiff_first_ifd_tag(path, kRpcTag)) {
+      std::error_code ec;
+      const uintmax_t size = fs::file_size(path, ec);
+      const bool past = !ec && e->bytes != 0 && (e->bytes > size || e->offset > size - e->bytes);
+      throw InputError(path, 0, "RPC tag 50844 is corrupt: its " + std::to_string(e->count) + " values of TIFF type " +
+                                    std::to_string(e->type) +
+                                    (past ? " (" + std::to_string(e->bytes) + " bytes from byte " + std::to_string(e->offset) +
+                                                ") run past the end of the file (" + std::to_string(size) + " bytes)"
+                                          : std::string(" cannot be read")) +
+                                    ": give the model with --rpc IMAGE=FILE");
+    }
+    return std::nullopt;
+  }
   RpcModel m = rpc_from_tag_values(*v);
   check_model(m, path);
   return m;

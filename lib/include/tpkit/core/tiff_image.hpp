@@ -9,6 +9,7 @@
 // them are decoded. Samples are converted to float without scaling (a 12-bit range in 16-bit words
 // stays 0..4095).
 #pragma once
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,6 +21,18 @@ namespace tpkit {
 
 // True when the file starts like a classic or Big TIFF (byte order mark and 42 or 43).
 bool is_tiff_file(const std::string& path);
+
+// The entry of `tag` in the first directory (IFD) of a classic or Big TIFF as the file writes it: its field
+// type (TIFF type code: 11 FLOAT, 12 DOUBLE, ...), its count, and where its values lie (in the entry
+// itself when they fit); nothing when the directory has no such tag or cannot be read. libtiff passes
+// over a tag whose values it cannot read (a count that runs past the end of the file) as if it were
+// absent, and converts a FLOAT array to the DOUBLE it was registered with: this reads what is on disk.
+struct TiffTagEntry {
+  int type = 0;
+  uint64_t count = 0;
+  uint64_t offset = 0, bytes = 0;  // the values' byte range (bytes 0: a type not known here)
+};
+std::optional<TiffTagEntry> tiff_first_ifd_tag(const std::string& path, uint16_t tag);
 
 // The image's size, bands, sample type ("uint8", "int8", "uint16", "int16", "uint32", "int32", "float",
 // "double"), bits per sample and GDAL_NODATA value; nothing when the file is a TIFF whose layout this
