@@ -15,3 +15,16 @@ tpkit_tool_test(trust-formats.nitf-hex-field
 tpkit_tool_test(trust-formats.tag-50844-past-the-end
   COMMAND "tp-synth --out s --size 128 --seed 1 --supersample 1 --relief 10 >/dev/null 2>&1 && head -c $(( $(wc -c < s/view1.tif) - 100 )) s/view1.tif > cut.tif && echo '0 0 0' | tp-rpc project cut.tif"
   EXPECT_FAIL STDERR_MATCH "tp-rpc: cut.tif: RPC tag 50844 is corrupt: its 92 values of TIFF type 12 [(]736 bytes from byte [0-9]+[)] run past the end of the file [(][0-9]+ bytes[)]: give the model with --rpc")
+
+# Item 14: one pair given twice (the same file, or its two directions) was written twice into OpenMVG's
+# matches.f.txt; COLMAP refused it only when writing the database. Both peer formats hold one set of
+# matches per pair: refused before anything is written.
+set(_ab "printf '# tpkit matches 1\\n# image1: A.tif 100 80\\n# image2: B.tif 90 90\\n# columns: id1 x1 y1 id2 x2 y2\\n1 10.25 20.5 7 11.75 21.125\\n' > ab.m")
+tpkit_tool_test(trust-formats.openmvg-pair-twice
+  COMMAND "${_ab} && tp-convert --to openmvg ab.m ab.m -o mvg"
+  EXPECT_FAIL STDERR_MATCH "tp-convert: ab.m: pairs A.tif and B.tif, as ab.m does: COLMAP and OpenMVG hold one set of matches per pair"
+  NO_FILE mvg/matches.f.txt)
+tpkit_tool_test(trust-formats.colmap-pair-both-ways
+  COMMAND "${_ab} && printf '# tpkit matches 1\\n# image1: B.tif 90 90\\n# image2: A.tif 100 80\\n# columns: id1 x1 y1 id2 x2 y2\\n7 11.75 21.125 1 10.25 20.5\\n' > ba.m && tp-convert --to colmap ab.m ba.m -o col"
+  EXPECT_FAIL STDERR_MATCH "tp-convert: ba.m: pairs B.tif and A.tif, as ab.m does"
+  NO_FILE col/database.db)

@@ -179,13 +179,10 @@ Eigen::MatrixX4d colmap_pair_points(const PeerKeypoints& k, const PeerPair& p, b
 void insert_pairs(Db& db, const PeerKeypoints& k) {
   Stmt mt(db, "INSERT INTO matches (pair_id, rows, cols, data) VALUES (?, ?, 2, ?)");
   Stmt tv(db, "INSERT INTO two_view_geometries (pair_id, rows, cols, data, config, F) VALUES (?, ?, 2, ?, ?, ?)");
-  std::map<long long, std::string> seen;
-  for (const PeerPair& p : k.pairs) {
+  for (const PeerPair& p : k.pairs) {  // one per pair (collect_peer_keypoints)
     const long long id1 = static_cast<long long>(p.image1) + 1, id2 = static_cast<long long>(p.image2) + 1;
     const bool swap = id1 > id2;
     const long long pair = colmap_pair_id(id1, id2);
-    const std::string name = k.images[p.image1].ref.path + " and " + k.images[p.image2].ref.path;
-    if (!seen.emplace(pair, name).second) db.fail("two matches files pair " + name + ": COLMAP holds one set of matches per pair");
     std::vector<uint32_t> data;
     for (size_t r = 0; r < p.idx1.size(); ++r) {
       data.push_back(swap ? p.idx2[r] : p.idx1[r]);
@@ -275,32 +272,45 @@ Matches pair_matches(Db& db, std::map<long long, ColmapImage>& images, long long
   Matches m = peer_matches(a->second.ref, b->second.ref, format, db.path());
   // tpkit ids (tpkit_keypoint_ids): an id is one keypoint of its image. In image 1 of the tpkit file it
   // stood at one position (the keypoint's); only image 2's positions are refined per match, so one id
-  // may stand at two positions there. A pair whose ids stand at two positions in both images was not
-  // written from tpkit matches (all ids equal, say): its ids would join points that are not one.
+  // may stand at two positions there, each a refinement of the keypoint (tp-match moves it by at most
+  // --max-shift, 1.5 px by default). A pair whose ids stand at two positions in both images, or at two
+  // positions more than kRefinedApart apart in one, was not written from tpkit matches (all ids of an
+  // image equal, say): its ids would join points that are not one.
+  constexpr double kRefinedApart = 10;  // px
   struct Repeat {
     long long id = -1, record1 = -1, record2 = -1;
   };
-  auto repeat_of = [&](const ColmapImage& im, bool first) {
-    Repeat out;
+  // the first id at two positions, and the first at two positions more than kRefinedApart apart
+  auto repeats_of = [&](const ColmapImage& im, bool first) {
+    std::pair<Repeat, Repeat> out;
     if (im.ids.empty()) return out;
     std::map<long long, std::pair<uint32_t, long long>> seen;  // tpkit id -> (keypoint index, record)
-    for (long long r = 0; r < rows && out.id < 0; ++r) {
+    for (long long r = 0; r < rows && out.second.id < 0; ++r) {
       const uint32_t k = data[static_cast<size_t>(2 * r + (first ? 0 : 1))];
       if (k >= im.keypoints) break;  // reported below
       const auto [it, fresh] = seen.emplace(im.ids[k], std::make_pair(k, r));
       const uint32_t j = it->second.first;
-      if (!fresh && (im.xy[2 * j] != im.xy[2 * k] || im.xy[2 * j + 1] != im.xy[2 * k + 1]))
-        out = {im.ids[k], it->second.second, r};
+      const double dx = im.xy[2 * j] - im.xy[2 * k], dy = im.xy[2 * j + 1] - im.xy[2 * k + 1];
+      if (fresh || (dx == 0 && dy == 0)) continue;
+      const Repeat repeat{im.ids[k], it->second.second, r};
+      if (out.first.id < 0) out.first = repeat;
+      if (std::hypot(dx, dy) > kRefinedApart) out.second = repeat;
     }
     return out;
   };
-  const Repeat r1 = repeat_of(a->second, true), r2 = repeat_of(b->second, false);
+  const auto [r1, far1] = repeats_of(a->second, true);
+  const auto [r2, far2] = repeats_of(b->second, false);
   if (r1.id >= 0 && r2.id >= 0)
     db.fail(what + ": tpkit_keypoint_ids give one id to two positions in both images (id " + std::to_string(r1.id) +
             " of image_id " + std::to_string(id1) + " in matches " + std::to_string(r1.record1) + " and " +
             std::to_string(r1.record2) + ", id " + std::to_string(r2.id) + " of image_id " + std::to_string(id2) +
             " in matches " + std::to_string(r2.record1) + " and " + std::to_string(r2.record2) +
             "): not ids of tpkit matches");
+  for (const auto& [far, image] : {std::make_pair(far1, id1), std::make_pair(far2, id2)})
+    if (far.id >= 0)
+      db.fail(what + ": tpkit_keypoint_ids give id " + std::to_string(far.id) + " of image_id " + std::to_string(image) +
+              " two positions more than " + format_number(kRefinedApart) + " px apart (matches " + std::to_string(far.record1) +
+              " and " + std::to_string(far.record2) + "): not one keypoint, refined");
   RecordList recs;
   for (long long r = 0; r < rows; ++r) {
     const uint32_t i = data[static_cast<size_t>(2 * r)], j = data[static_cast<size_t>(2 * r + 1)];

@@ -1,5 +1,6 @@
 #include "tpkit/interop/peer_keypoints.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <tuple>
@@ -81,6 +82,7 @@ void check_peer_pair(const Matches& m) {
 
 PeerKeypoints collect_peer_keypoints(const std::vector<Matches>& files, const std::vector<std::string>& order) {
   Builder b(order);
+  std::map<std::pair<size_t, size_t>, size_t> pair_file;  // (smaller, larger image index) -> its file
   for (size_t f = 0; f < files.size(); ++f) {
     const Matches& m = files[f];
     check_peer_pair(m);
@@ -88,6 +90,10 @@ PeerKeypoints collect_peer_keypoints(const std::vector<Matches>& files, const st
     p.image1 = b.image(m.image1);
     p.image2 = b.image(m.image2);
     p.file = f;
+    const auto [it, fresh] = pair_file.emplace(std::minmax(p.image1, p.image2), f);
+    if (!fresh)
+      throw InputError(m.source, 0, "pairs " + m.image1.path + " and " + m.image2.path + ", as " + files[it->second].source +
+                                        " does: COLMAP and OpenMVG hold one set of matches per pair (tp-merge joins the files of one pair)");
     for (size_t r = 0; r < m.size(); ++r) {
       p.idx1.push_back(b.entry(p.image1, m.id1[r], m.xy(r, 0), m.xy(r, 1)));
       p.idx2.push_back(b.entry(p.image2, m.id2[r], m.xy(r, 2), m.xy(r, 3)));

@@ -242,6 +242,9 @@ TEST(ColmapDatabase, HostileDatabases) {
              "is not a COLMAP pair id: it decodes to image_id 2 then 1");
   fails_with(forged("ids-equal", "UPDATE tpkit_keypoint_ids SET data = zeroblob(length(data))"),
              "tpkit_keypoint_ids give one id to two positions in both images");
+  // issue 50: all ids of one image equal, its positions far apart: not one keypoint refined per match
+  fails_with(forged("ids-equal-one-image", "UPDATE tpkit_keypoint_ids SET data = zeroblob(length(data)) WHERE image_id = 2"),
+             "pair_id 2147483649: tpkit_keypoint_ids give id 0 of image_id 2 two positions more than 10 px apart (matches 0 and 1)");
   // the good one still reads
   EXPECT_EQ(read_colmap_database(forged("good", "SELECT 1"), true).at(0).size(), 10u);
 }

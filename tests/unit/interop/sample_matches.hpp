@@ -32,6 +32,8 @@ inline tpkit::Matches sample_matches(const std::string& a, const std::string& b,
     m.xy.row(r) << u(rng) + 1.0 / 3, u(rng), u(rng) + 0.1, u(rng);
     m.extra.values(r, 0) = r % 2 ? 0.05 : 0.4;
   }
+  // id 5 a refinement apart from its first position (record 1's)
+  if (n > 2) m.xy.row(n - 1).tail<2>() = m.xy.row(1).tail<2>() + Eigen::RowVector2d(0.25, -0.375);
   return m;
 }
 

@@ -41,8 +41,9 @@ void check_peer_pair(const Matches& m);
 
 // Builds the lists. `order` (image files, may be empty; each matched to the header image of the same
 // path, file name or stem) fixes the image numbering; images not in it follow in order of first
-// appearance. Throws InputError for a file that check_peer_pair refuses, UsageError when an image of
-// `order` is in no file.
+// appearance. Throws InputError for a file that check_peer_pair refuses and for a second file of a pair
+// (either way round: COLMAP and OpenMVG hold one set of matches per pair, and two would be written as
+// two), UsageError when an image of `order` is in no file.
 PeerKeypoints collect_peer_keypoints(const std::vector<Matches>& files, const std::vector<std::string>& order = {});
 
 // The file name of an image without its folder ("a/b/img_01.tif" -> "img_01.tif") and without its
