@@ -28,3 +28,10 @@ tpkit_tool_test(trust-formats.colmap-pair-both-ways
   COMMAND "${_ab} && printf '# tpkit matches 1\\n# image1: B.tif 90 90\\n# image2: A.tif 100 80\\n# columns: id1 x1 y1 id2 x2 y2\\n7 11.75 21.125 1 10.25 20.5\\n' > ba.m && tp-convert --to colmap ab.m ba.m -o col"
   EXPECT_FAIL STDERR_MATCH "tp-convert: ba.m: pairs B.tif and A.tif, as ab.m does"
   NO_FILE col/database.db)
+
+# Item 12: a JPEG 2000 NITF whose codestream lacks tiles (cut after its first two tile-parts, EOC after
+# them, LI and FL made to agree) decoded them as 0 without a word: refused, naming the tile. Bytes flipped
+# inside a tile's data cannot be seen (no checksum: tpkit-formats(5)).
+tpkit_tool_test(trust-formats.j2k-tiles-missing
+  COMMAND "tp-rpc -q crop ${_wv3}/wv3_20.NTF --compression j2k --block 256 -o j.ntf && li=$(head -c 379 j.ntf | tail -c 10) && start=$(( $(wc -c < j.ntf) - 10#$li )) && cut=$(od -An -v -tx1 j.ntf | tr -s ' ' '\\n' | awk 'NF { b[n++] = $1 } END { for (i = 0@SEMI@ i + 5 < n@SEMI@ i++) if (b[i] b[i + 1] b[i + 2] b[i + 3] b[i + 4] b[i + 5] == \"ff90000a0002\") { print i@SEMI@ exit } }') && { head -c 342 j.ntf@SEMI@ printf '%012d' $(( cut + 2 ))@SEMI@ head -c 369 j.ntf | tail -c 15@SEMI@ printf '%010d' $(( cut + 2 - start ))@SEMI@ head -c $cut j.ntf | tail -c +380@SEMI@ printf '\\xff\\xd9'@SEMI@ } > cut.ntf && tp-rpc crop cut.ntf --window 0 200 100 100 -o c.tif"
+  EXPECT_FAIL STDERR_MATCH "tp-rpc: cut.ntf: JPEG 2000: tile 2 [(]of 4[)] is not in the codestream" NO_FILE c.tif)

@@ -349,6 +349,83 @@ opj_stream_t* make_stream(FileSpan* span, bool input) {
   return st;
 }
 
+// Where the codestream starts in `span`: at 0, or in a JP2 file the data of its jp2c box.
+uint64_t codestream_start(const ByteFile& f, const NitfImage& im, const FileSpan& span, bool jp2) {
+  uint64_t p = 0;
+  while (jp2) {
+    unsigned char b[16];
+    if (p + 8 > span.length) throw InputError(im.path, 0, "JPEG 2000: a JP2 file without a codestream box (jp2c)");
+    f.read(span.base + p, b, std::min<uint64_t>(16, span.length - p), "a JP2 box header");
+    uint64_t length = (uint64_t(b[0]) << 24) | (uint64_t(b[1]) << 16) | (uint64_t(b[2]) << 8) | b[3], header = 8;
+    if (length == 1) {
+      length = 0;
+      for (int k = 8; k < 16; ++k) length = (length << 8) | b[k];
+      header = 16;
+    }
+    if (std::memcmp(b + 4, "jp2c", 4) == 0) return p + header;
+    if (length < header)
+      throw InputError(im.path, 0, "JPEG 2000: a JP2 box of " + std::to_string(length) + " bytes at byte " + std::to_string(span.base + p));
+    p += length;
+  }
+  return p;
+}
+
+// The first tile-part (SOT marker) of the codestream at `soc`: after SOC, the main header's marker
+// segments (each FFxx then its length) up to the first SOT.
+uint64_t first_tile_part(const ByteFile& f, const NitfImage& im, const FileSpan& span, uint64_t soc) {
+  for (uint64_t p = soc + 2; p + 4 <= span.length;) {
+    unsigned char m[4];
+    f.read(span.base + p, m, 4, "a JPEG 2000 marker");
+    if (m[0] != 0xFF) break;
+    if (m[1] == 0x90) return p;
+    p += 2 + ((uint64_t(m[2]) << 8) | m[3]);
+  }
+  throw InputError(im.path, 0, "JPEG 2000: the main header of the codestream at byte " + std::to_string(span.base + soc) +
+                                   " leads to no tile-part");
+}
+
+// The tile grid of a codestream from its SIZ marker segment, which follows SOC (at `soc` in `span`):
+// XTsiz YTsiz the tile size, XTOsiz YTOsiz the grid's origin, Xsiz Ysiz the image's far corner; at most
+// 65535 tiles (Isot's 16 bits).
+struct TileGrid {
+  uint64_t width, height, x0, y0, across, down;
+};
+TileGrid codestream_tile_grid(const ByteFile& f, const NitfImage& im, const FileSpan& span, uint64_t soc) {
+  unsigned char b[40];
+  f.read(span.base + soc, b, sizeof b, "the JPEG 2000 SIZ marker");
+  auto be32 = [&](int at) { return (uint64_t(b[at]) << 24) | (uint64_t(b[at + 1]) << 16) | (uint64_t(b[at + 2]) << 8) | b[at + 3]; };
+  TileGrid g{be32(24), be32(28), be32(32), be32(36), 0, 0};
+  if (b[2] != 0xFF || b[3] != 0x51 || g.width == 0 || g.height == 0 || be32(8) <= g.x0 || be32(12) <= g.y0)
+    throw InputError(im.path, 0, "JPEG 2000: no valid SIZ marker after SOC at byte " + std::to_string(span.base + soc));
+  g.across = (be32(8) - g.x0 + g.width - 1) / g.width;
+  g.down = (be32(12) - g.y0 + g.height - 1) / g.height;
+  if (g.across * g.down > 65535)
+    throw InputError(im.path, 0, "JPEG 2000: " + std::to_string(g.across) + " x " + std::to_string(g.down) + " tiles (65535 at most)");
+  return g;
+}
+
+// Which tiles the codestream holds: its tile-parts walked from the first SOT marker (`first`, an offset in
+// `span`) to EOC (SOT: Lsot, Isot the tile, Psot the tile-part's length, 0 for the last one, which runs to
+// EOC). OpenJPEG decodes a tile that is not there as zeros, without a word, when a region also meets tiles
+// that are.
+std::vector<bool> codestream_tiles(const ByteFile& f, const NitfImage& im, const FileSpan& span, uint64_t first, uint64_t tiles) {
+  std::vector<bool> present(tiles, false);
+  for (uint64_t p = first; p + 2 <= span.length;) {
+    unsigned char m[12] = {};
+    f.read(span.base + p, m, std::min<uint64_t>(sizeof m, span.length - p), "a JPEG 2000 tile-part header");
+    if (m[0] == 0xFF && m[1] == 0xD9) break;  // EOC
+    const uint64_t isot = (uint64_t(m[4]) << 8) | m[5];
+    const uint64_t psot = (uint64_t(m[6]) << 24) | (uint64_t(m[7]) << 16) | (uint64_t(m[8]) << 8) | m[9];
+    if (m[0] != 0xFF || m[1] != 0x90 || p + 12 > span.length || isot >= tiles)
+      throw InputError(im.path, 0, "JPEG 2000: no tile-part header (SOT marker of a tile below " + std::to_string(tiles) +
+                                       ") at byte " + std::to_string(span.base + p) + ": a corrupt codestream");
+    present[isot] = true;
+    if (psot == 0) break;
+    p += psot;
+  }
+  return present;
+}
+
 void read_jpeg2000(const ByteFile& f, const NitfImage& im, int band, Raster& r) {
   const BlockMap map = read_block_map(f, im);
   FileSpan span{f.handle(), map.first, im.data_offset + im.data_length - map.first, 0};
@@ -370,7 +447,11 @@ void read_jpeg2000(const ByteFile& f, const NitfImage& im, int band, Raster& r) 
   auto fail = [&](const char* stage) {
     throw InputError(im.path, 0, std::string("JPEG 2000 ") + stage + ": " + (err.empty() ? "corrupt or truncated codestream" : err));
   };
-  if (!opj_setup_decoder(h.codec, &params) || !opj_read_header(h.stream, h.codec, &h.image)) fail("header");
+  // strict (OpenJPEG 2.5's default, made explicit): a codestream that ends early is an error, where the
+  // lenient mode decodes what it has
+  if (!opj_setup_decoder(h.codec, &params) || !opj_decoder_set_strict_mode(h.codec, OPJ_TRUE) ||
+      !opj_read_header(h.stream, h.codec, &h.image))
+    fail("header");
   if (static_cast<int>(h.image->numcomps) != im.bands)
     throw InputError(im.path, 0, "the JPEG 2000 codestream has " + std::to_string(h.image->numcomps) + " components, NBANDS says " +
                                      std::to_string(im.bands));
@@ -379,6 +460,18 @@ void read_jpeg2000(const ByteFile& f, const NitfImage& im, int band, Raster& r) 
                                      std::to_string(h.image->y1 - h.image->y0) + ", the subheader says " + std::to_string(im.cols) +
                                      " x " + std::to_string(im.rows));
   const OPJ_INT32 gx = static_cast<OPJ_INT32>(h.image->x0), gy = static_cast<OPJ_INT32>(h.image->y0);
+  {  // every tile the region meets must be in the codestream
+    const uint64_t soc = codestream_start(f, im, span, jp2), first = first_tile_part(f, im, span, soc);
+    const TileGrid g = codestream_tile_grid(f, im, span, soc);
+    const std::vector<bool> present = codestream_tiles(f, im, span, first, g.across * g.down);
+    const uint64_t c0 = (gx + r.x0 - g.x0) / g.width, c1 = (gx + r.x0 + r.width - 1 - g.x0) / g.width;
+    const uint64_t r0 = (gy + r.y0 - g.y0) / g.height, r1 = (gy + r.y0 + r.height - 1 - g.y0) / g.height;
+    for (uint64_t tr = r0; tr <= r1; ++tr)
+      for (uint64_t tc = c0; tc <= c1; ++tc)
+        if (!present[tr * g.across + tc])
+          throw InputError(im.path, 0, "JPEG 2000: tile " + std::to_string(tr * g.across + tc) + " (of " +
+                                           std::to_string(g.across * g.down) + ") is not in the codestream: a truncated or corrupt image");
+  }
   if (!opj_set_decode_area(h.codec, h.image, gx + static_cast<OPJ_INT32>(r.x0), gy + static_cast<OPJ_INT32>(r.y0),
                            gx + static_cast<OPJ_INT32>(r.x0 + r.width), gy + static_cast<OPJ_INT32>(r.y0 + r.height)) ||
       !opj_decode(h.codec, h.stream, h.image) || !opj_end_decompress(h.codec, h.stream))

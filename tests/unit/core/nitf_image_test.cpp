@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <sstream>
 
 #include "tpkit/core/error.hpp"
@@ -319,4 +320,41 @@ TEST(NitfImage, MalformedFilesRefusedWithWhat) {
   // a band that does not exist
   const std::string ok = write_temp("ok.ntf", good);
   EXPECT_NE(error_of([&] { read_band(ok, 1); }).find("band 2 does not exist"), std::string::npos);
+}
+
+// Issue 50: a JPEG 2000 codestream that lacks tiles (cut at a tile-part boundary, EOC after it) decoded
+// them as 0 without a word when a region met tiles that are there too. Every tile the region meets must
+// be in the codestream; a region of tiles that are there still reads. (Flipped bytes inside a tile's
+// entropy-coded data cannot be told: JPEG 2000 has no checksum over them.)
+TEST(NitfImage, Jpeg2000TileMissingRefused) {
+  const long w = 50, h = 37;
+  std::vector<uint16_t> px(static_cast<size_t>(w) * h);
+  for (size_t i = 0; i < px.size(); ++i) px[i] = static_cast<uint16_t>((i * 37) % 4096);
+  const std::string path = testing::TempDir() + "tiles.ntf";
+  NitfWriteOptions o;
+  o.compression = NitfWriteOptions::Compression::j2k;
+  o.block = 16;  // 4 x 3 tiles
+  o.abpp = 12;
+  {
+    NitfWriterU16 wr(path, w, h, o);
+    wr.write_rows(0, h, px.data());
+    wr.close();
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const NitfImage im = read_nitf_image(path);
+  // the last tile-part: the last SOT marker of tile 11 (Lsot 10, Isot 11)
+  const size_t last = bytes.rfind(std::string("\xFF\x90\x00\x0A\x00\x0B", 6));
+  ASSERT_NE(last, std::string::npos);
+  ASSERT_GT(last, im.data_offset);
+  std::string cut = bytes.substr(0, last) + "\xFF\xD9";
+  const uint64_t li = cut.size() - im.data_offset;
+  cut.replace(369, 10, num(li, 10));         // LI of the image segment
+  cut.replace(342, 12, num(cut.size(), 12));  // FL
+  const std::string missing = write_temp("tiles-missing.ntf", cut);
+  EXPECT_NE(error_of([&] { read_band(missing); }).find("JPEG 2000: tile 11 (of 12) is not in the codestream"), std::string::npos)
+      << error_of([&] { read_band(missing); });
+  const Raster r = read_region(missing, 0, 0, 0, 16, 16);  // tile 0
+  for (long y = 0; y < 16; ++y)
+    for (long x = 0; x < 16; ++x) ASSERT_EQ(r.at(x, y), px[static_cast<size_t>(y) * w + x]);
 }
