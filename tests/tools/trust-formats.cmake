@@ -35,3 +35,9 @@ tpkit_tool_test(trust-formats.colmap-pair-both-ways
 tpkit_tool_test(trust-formats.j2k-tiles-missing
   COMMAND "tp-rpc -q crop ${_wv3}/wv3_20.NTF --compression j2k --block 256 -o j.ntf && li=$(head -c 379 j.ntf | tail -c 10) && start=$(( $(wc -c < j.ntf) - 10#$li )) && cut=$(od -An -v -tx1 j.ntf | tr -s ' ' '\\n' | awk 'NF { b[n++] = $1 } END { for (i = 0@SEMI@ i + 5 < n@SEMI@ i++) if (b[i] b[i + 1] b[i + 2] b[i + 3] b[i + 4] b[i + 5] == \"ff90000a0002\") { print i@SEMI@ exit } }') && { head -c 342 j.ntf@SEMI@ printf '%012d' $(( cut + 2 ))@SEMI@ head -c 369 j.ntf | tail -c 15@SEMI@ printf '%010d' $(( cut + 2 - start ))@SEMI@ head -c $cut j.ntf | tail -c +380@SEMI@ printf '\\xff\\xd9'@SEMI@ } > cut.ntf && tp-rpc crop cut.ntf --window 0 200 100 100 -o c.tif"
   EXPECT_FAIL STDERR_MATCH "tp-rpc: cut.ntf: JPEG 2000: tile 2 [(]of 4[)] is not in the codestream" NO_FILE c.tif)
+
+# Item 14: a pair geometry whose map is singular (a11 a12 a21 a22 zeroed) sent every region to one point
+# of image 2 and wrote zero matches, blaming the models: refused as it is read, with its line.
+tpkit_tool_test(trust-formats.region-geometry-singular
+  COMMAND "tp-synth --out s --size 640 --seed 4 --threads 2 --supersample 1 >/dev/null && tp-match -q --write-geometry g s/view1.tif s/view2.tif && awk '/^#/ { print@SEMI@ next } { $1 = 0@SEMI@ $2 = 0@SEMI@ $4 = 0@SEMI@ $5 = 0@SEMI@ print }' g > z && tp-match --geometry z --region 0 0 100 100 s/view1.tif s/view2.tif -o a.m"
+  EXPECT_FAIL STDERR_MATCH "tp-match: z:[0-9]+: the map a11 .. a22 is singular or nearly [(]singular values 0 and 0[)]" NO_FILE a.m)

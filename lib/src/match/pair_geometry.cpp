@@ -185,6 +185,13 @@ PairGeometry read_pair_geometry(const std::string& path) {
     throw InputError(path, line, "the map and the spread must be finite, the spread >= 0");
   if (!(G.stretch1.lo <= G.stretch1.hi) || !(G.stretch2.lo <= G.stretch2.hi))
     throw InputError(path, line, "a stretch needs lo <= hi");
+  // the map of one view onto another of the same ground: its linear part shrinks no direction to
+  // nothing (a region's image-2 window would be a line or a point, and its matches silently lost). No
+  // two views that tp-match matches differ by a factor 1000 in scale.
+  const Eigen::Vector2d sv = G.A.leftCols<2>().jacobiSvd().singularValues();
+  if (!(sv(1) >= 1e-3 * std::max(1.0, sv(0))))
+    throw InputError(path, line, "the map a11 .. a22 is singular or nearly (singular values " + format_number(sv(0)) + " and " +
+                                     format_number(sv(1)) + "): not a map between two views of one scene");
   return G;
 }
 
