@@ -28,6 +28,11 @@ struct RegionBorder {
     if (r.empty()) return;
     std::istringstream in(r);
     if (!(in >> x0 >> y0 >> w >> h)) throw InputError(m.source, 0, "unreadable region metadata: " + r);
+    // a region that holds no pixel (tp-match --region writes W, H > 0) would rank every record of its file
+    // as outside it
+    if (!(w > 0 && h > 0) || !std::isfinite(x0 + y0 + w + h))
+      throw InputError(m.source, 0, "region metadata " + r.substr(0, r.find(" (")) +
+                                        ": not a window of pixels (x0 y0 width height, width and height > 0)");
     whole = false;
   }
   double inner(double x, double y) const {
