@@ -163,7 +163,8 @@ std::optional<TiffTagEntry> tiff_first_ifd_tag(const std::string& path, uint16_t
     const uint64_t size = t.type >= 1 && t.type <= 18 ? static_cast<uint64_t>(kTypeBytes[t.type]) : 0;
     t.bytes = size == 0 ? 0 : t.count <= UINT64_MAX / size ? t.count * size : UINT64_MAX;
     const uint64_t entry_at = ifd + count_size + e * entry_size;
-    t.offset = t.bytes <= static_cast<uint64_t>(value_size) ? entry_at + entry_size - value_size : u(d + entry_size - value_size, value_size);
+    t.offset = t.bytes <= static_cast<uint64_t>(value_size) ? entry_at + entry_size - value_size  // in the entry
+                                                            : u(d + entry_size - value_size, value_size);
     return t;
   }
   return std::nullopt;

@@ -93,7 +93,8 @@ PeerKeypoints collect_peer_keypoints(const std::vector<Matches>& files, const st
     const auto [it, fresh] = pair_file.emplace(std::minmax(p.image1, p.image2), f);
     if (!fresh)
       throw InputError(m.source, 0, "pairs " + m.image1.path + " and " + m.image2.path + ", as " + files[it->second].source +
-                                        " does: COLMAP and OpenMVG hold one set of matches per pair (tp-merge joins the files of one pair)");
+                                        " does: COLMAP and OpenMVG hold one set of matches per pair (tp-merge joins the files of "
+                                        "one pair)");
     for (size_t r = 0; r < m.size(); ++r) {
       p.idx1.push_back(b.entry(p.image1, m.id1[r], m.xy(r, 0), m.xy(r, 1)));
       p.idx2.push_back(b.entry(p.image2, m.id2[r], m.xy(r, 2), m.xy(r, 3)));

@@ -352,7 +352,8 @@ std::string xml_unescape(const std::string& s, const std::string& file, long lin
     const std::string ref = semi == std::string::npos ? std::string() : s.substr(i + 1, semi - i - 1);
     auto refused = [&]() -> InputError {
       return InputError(file, line, "'" + s.substr(i, std::min<size_t>(12, s.size() - i)) +
-                                        "': not one of XML's five entities (&lt; &gt; &amp; &quot; &apos;) or a character reference (&#45; &#x2d;)");
+                                        "': not one of XML's five entities (&lt; &gt; &amp; &quot; &apos;) or a character "
+                                        "reference (&#45; &#x2d;)");
     };
     bool known = false;
     for (const auto& [name, c] : kEntities)
@@ -412,8 +413,8 @@ std::map<std::string, std::string> xml_attributes(const std::string& s, const st
 
 // Walks an XML document, calling leaf(path, text, line) for every element without child elements, in
 // document order: `path` the elements from the root down to it, `text` its trimmed text (references
-// replaced, CDATA sections taken as they are), `line` the line of its end tag. Comments, processing instructions and declarations are skipped; unbalanced or
-// unterminated markup is refused with its line.
+// replaced, CDATA sections taken as they are), `line` the line of its end tag. Comments, processing
+// instructions and declarations are skipped; unbalanced or unterminated markup is refused with its line.
 using XmlLeafVisitor = std::function<void(const std::vector<XmlOpen>& path, const std::string& text, long line)>;
 void xml_walk(const std::string& s, const std::string& file, const XmlLeafVisitor& leaf) {
   std::vector<XmlOpen> stack;
@@ -504,7 +505,8 @@ struct XmlLeaf {
   long repeated_at = 0;  // the line of a second leaf of the same path (0: none)
 };
 // `also`, when given, sees every leaf too.
-std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file, const XmlLeafVisitor& also = nullptr) {
+std::map<std::string, XmlLeaf> xml_leaves(const std::string& s, const std::string& file,
+                                          const XmlLeafVisitor& also = nullptr) {
   std::map<std::string, XmlLeaf> out;
   xml_walk(s, file, [&](const std::vector<XmlOpen>& path, const std::string& text, long line) {
     if (also) also(path, text, line);

@@ -133,7 +133,8 @@ RpcModel parse_rpc_tre(const NitfTre& tre, const std::string& path) {
   for (const auto& p : kPolys)
     for (int i = 0; i < 20; ++i) {
       const int src = a ? kRpc00aTerm[i] : i;
-      (m.*(p.member))[i] = field_value(tre, path, p.offset + 12 * src, 12, std::string(p.name) + "_" + std::to_string(src + 1), kCoefficient);
+      (m.*(p.member))[i] =
+          field_value(tre, path, p.offset + 12 * src, 12, std::string(p.name) + "_" + std::to_string(src + 1), kCoefficient);
     }
   for (const auto& f : kFields)
     if (std::string(f.name).find("SCALE") != std::string::npos && !(m.*(f.member) > 0))
