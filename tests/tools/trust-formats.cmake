@@ -41,8 +41,8 @@ tpkit_tool_test(trust-formats.j2k-tiles-missing
 tpkit_tool_test(trust-formats.region-geometry-singular
   COMMAND "tp-synth --out s --size 640 --seed 4 --threads 2 --supersample 1 >/dev/null && tp-match -q --write-geometry g s/view1.tif s/view2.tif && awk '/^#/ { print@SEMI@ next } { $1 = 0@SEMI@ $2 = 0@SEMI@ $4 = 0@SEMI@ $5 = 0@SEMI@ print }' g > z && tp-match --geometry z --region 0 0 100 100 s/view1.tif s/view2.tif -o a.m"
   EXPECT_FAIL STDERR_MATCH "tp-match: z:[0-9]+: the map a11 .. a22 is singular or nearly [(]singular values 0 and 0[)]" NO_FILE a.m)
-# ... and a file whose region line is no window (width 0) ranked every record of its file as outside
-# it: refused.
+# Item 14, the region read by tp-merge: a file whose region line is no window (width 0) ranked every
+# record of its file as outside it: refused.
 tpkit_tool_test(trust-formats.merge-region-empty
   COMMAND "printf '# tpkit matches 1\\n# image1: A.tif 100 80\\n# image2: B.tif 90 90\\n# region: 0 0 0 80 (x0 y0 width height)\\n# columns: id1 x1 y1 id2 x2 y2\\n1 10 20 7 11 21\\n' > a.m && printf '# tpkit matches 1\\n# image1: A.tif 100 80\\n# image2: B.tif 90 90\\n# region: 50 0 50 80 (x0 y0 width height)\\n# columns: id1 x1 y1 id2 x2 y2\\n2 60 20 8 61 21\\n' > b.m && tp-merge a.m b.m -o m.m"
   EXPECT_FAIL STDERR_MATCH "tp-merge: a.m: region metadata 0 0 0 80: not a window of pixels" NO_FILE m.m)
