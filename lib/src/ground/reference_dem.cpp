@@ -8,6 +8,7 @@
 #include <tiffio.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -58,6 +59,13 @@ std::vector<std::string> geoid_grids(const std::string& datum) {
   return {datum};
 }
 
+// A grid named in a datum option goes into a PROJ definition: letters, digits and . _ - / only, as PROJ reads
+// '@' as "optional: use no grid when missing", ',' as a list, and a space or '+' as further parameters.
+bool plain_grid_name(const std::string& grid) {
+  return std::all_of(grid.begin(), grid.end(),
+                     [](unsigned char c) { return std::isalnum(c) || c == '.' || c == '_' || c == '-' || c == '/'; });
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------
@@ -70,6 +78,9 @@ struct VerticalDatum::Impl {
 VerticalDatum::VerticalDatum(const std::string& datum, const std::string& what) : name_(datum) {
   if (datum.empty()) throw InputError(what + ": empty vertical datum (ellipsoid|egm96|egm2008|GRID)");
   if (datum == "ellipsoid") return;
+  if (!plain_grid_name(datum))
+    throw InputError(what + " '" + datum + "': neither ellipsoid, egm96, egm2008 nor a grid's file name (letters, digits, "
+                     ". _ - / only: PROJ would read '@' as an optional grid, ',' as a list, a space or '+' as more parameters)");
   impl_ = std::make_unique<Impl>();
   std::string tried;
   for (const std::string& grid : geoid_grids(datum)) {

@@ -20,7 +20,9 @@
 namespace tpkit {
 
 // A geoid model (or none): N(lon, lat) in metres, h_ellipsoid = H_geoid + N. `datum`: ellipsoid|egm96|egm2008|
-// a grid's path. InputError naming the grid (and `what`, the option or file it is for) when the grid is missing.
+// a grid's file name or path. InputError naming `what` (the option or file it is for) when the grid is missing,
+// or when `datum` is not one of these: the grid goes into a PROJ definition, so PROJ's optional-grid '@', a
+// list (','), spaces or '+' parameters are refused rather than pasted in.
 class VerticalDatum {
  public:
   explicit VerticalDatum(const std::string& datum, const std::string& what = "--dem-datum");

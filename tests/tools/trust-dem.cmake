@@ -1,0 +1,18 @@
+# Trust campaign (issue 50), group "dem": reference DEMs through tp-ground --compare/--align, tp-rpc --dem and
+# rpc-adjust --dem, which share one reader (ReferenceDem). What needs a DEM no tool writes (vertical units,
+# "-3.4e+38" float nodata, a huge strip or tile) is in tests/unit/ground/reference_dem_trust_test.cpp.
+set(dem_small "tp-synth -o syn --size 64 --gsd 20 --points 40 > /dev/null")
+set(dem_scene "tp-synth -o syn --size 192 --gsd 20 --relief 300 --points 300 > /dev/null")
+set(dem_ground "tp-ground syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks")
+
+# Item 13: PROJ's optional-grid prefix '@' made a missing grid silently no grid (dz against the ellipsoid,
+# rc 0); the datum option is refused, naming it, and no output is left.
+tpkit_tool_test(trust-dem.datum-optional-grid-refused
+  COMMAND "${dem_small} && ${dem_ground} --compare syn/truth.dem.tif --dem-datum @missing.gtx --dz dz.txt -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: --dem-datum \\(for syn/truth.dem.tif\\) '@missing.gtx': neither ellipsoid, egm96, egm2008 nor a grid's file name"
+  NO_FILE dz.txt)
+# Item 13: '+multiplier=1000' after a grid was pasted into the PROJ definition (undulations x 1000); tp-rpc
+# --dem (the same reader) refuses it.
+tpkit_tool_test(trust-dem.datum-proj-parameters-refused
+  COMMAND "${dem_small} && echo '32 32' | tp-rpc localize syn/view1.tif --dem syn/truth.dem.tif --dem-datum 'egm96_15.gtx +multiplier=1000'"
+  EXPECT_FAIL STDERR_MATCH "tp-rpc: --dem-datum \\(for syn/truth.dem.tif\\) 'egm96_15.gtx \\+multiplier=1000': neither ellipsoid")
