@@ -16,3 +16,9 @@ tpkit_tool_test(trust-dem.datum-optional-grid-refused
 tpkit_tool_test(trust-dem.datum-proj-parameters-refused
   COMMAND "${dem_small} && echo '32 32' | tp-rpc localize syn/view1.tif --dem syn/truth.dem.tif --dem-datum 'egm96_15.gtx +multiplier=1000'"
   EXPECT_FAIL STDERR_MATCH "tp-rpc: --dem-datum \\(for syn/truth.dem.tif\\) 'egm96_15.gtx \\+multiplier=1000': neither ellipsoid")
+# Item 8: a DEM that reaches none of the points (the scene's DEM of another place) gave rc 0 and a dz file
+# of zero counts; it is refused as rpc-adjust refuses it.
+tpkit_tool_test(trust-dem.compare-dem-off-the-points
+  COMMAND "${dem_small} && tp-synth -o far --size 64 --gsd 20 --points 10 --origin 10,10,0 > /dev/null && ${dem_ground} --compare far/truth.dem.tif --dz dz.txt -o g.points"
+  EXPECT_FAIL STDERR_MATCH "tp-ground: far/truth.dem.tif: none of the [0-9]+ points has a height on it" NO_FILE dz.txt)
+

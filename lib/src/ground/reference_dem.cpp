@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cfloat>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -64,6 +65,14 @@ std::vector<std::string> geoid_grids(const std::string& datum) {
 bool plain_grid_name(const std::string& grid) {
   return std::all_of(grid.begin(), grid.end(),
                      [](unsigned char c) { return std::isalnum(c) || c == '.' || c == '_' || c == '-' || c == '/'; });
+}
+
+// GDAL_NODATA in the band's sample type, as GDAL compares it: for float32 the text's nearest float ("-3.4e+38"
+// is the float -3.39999995e38, not the double -3.4e38), a value just beyond FLT_MAX (its text rounded) FLT_MAX.
+double nodata_in_type(double v, uint16_t bits, uint16_t format) {
+  if (format != SAMPLEFORMAT_IEEEFP || bits != 32 || !std::isfinite(v)) return v;
+  if (std::fabs(v) > FLT_MAX) return std::fabs(v) <= FLT_MAX * (1 + 1e-7) ? std::copysign(FLT_MAX, v) : v;
+  return static_cast<float>(v);
 }
 
 }  // namespace
@@ -182,7 +191,7 @@ void ReferenceDem::Impl::read_layout() {
   char* nd = nullptr;
   if (TIFFGetField(tif, TIFFTAG_GDAL_NODATA, &nd) && nd) {
     char* end = nullptr;
-    nodata = std::strtod(nd, &end);
+    nodata = nodata_in_type(std::strtod(nd, &end), bits, format);
     has_nodata = end != nd;
   }
 }

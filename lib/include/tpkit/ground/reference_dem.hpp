@@ -9,8 +9,8 @@
 // centre). Vertical datum: "ellipsoid" (heights above the ellipsoid of the DEM's CRS, taken as WGS 84's),
 // "egm96" (PROJ grid egm96_15.gtx, Debian proj-data), "egm2008" (PROJ grid egm08_25.gtx) or the path of a
 // vertical grid PROJ reads (GTX, GeoTIFF): h_ellipsoid = H + N(lon, lat), N the grid's geoid undulation.
-// Nodata (GDAL_NODATA tag 42113), NaN and cells outside the DEM are unknown: a sample needs the 4 cells
-// around it known.
+// Nodata (GDAL_NODATA tag 42113, compared in the band's sample type as GDAL does: "-3.4e+38" is the float32
+// -3.4e38), NaN and cells outside the DEM are unknown: a sample needs the 4 cells around it known.
 #pragma once
 #include <cstddef>
 #include <memory>
