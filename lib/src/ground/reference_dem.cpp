@@ -124,9 +124,11 @@ struct ReferenceDem::Impl {
   std::string path;
   TIFF* tif = nullptr;
   long width = 0, height = 0;
-  // Blocks: tiles, or strips taken as tiles as wide as the image.
-  bool tiled = false;
-  long block_w = 0, block_h = 0, blocks_across = 0;
+  // Blocks: tiles, strips taken as tiles as wide as the image, or (by_rows: strips above kMaxDemBlockBytes)
+  // bands of rows read row by row. libtiff decodes a compressed strip's rows only in order, from its first:
+  // next_row is the row it decodes next (-1: unknown), strip_rows the rows per strip.
+  bool tiled = false, by_rows = false;
+  long block_w = 0, block_h = 0, blocks_across = 0, strip_rows = 0, next_row = -1;
   uint16_t bits = 32, format = SAMPLEFORMAT_IEEEFP;
   bool has_nodata = false;
   double nodata = 0;
@@ -187,6 +189,21 @@ void ReferenceDem::Impl::read_layout() {
     block_h = std::min<long>(rps, height);
   }
   if (block_w <= 0 || block_h <= 0) fail("no tile or strip size");
+  const auto mib = [](uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB"; };
+  const uint64_t block_bytes = tiled ? TIFFTileSize64(tif) : TIFFStripSize64(tif);
+  if (block_bytes > kMaxDemBlockBytes) {
+    const std::string bound = mib(kMaxDemBlockBytes) + " a DEM block may take";
+    if (tiled)
+      fail("tiles of " + std::to_string(block_w) + "x" + std::to_string(block_h) + " cells (" + mib(block_bytes) +
+           " decoded) exceed the " + bound + " (libtiff decodes a tile only whole): rewrite it with smaller tiles "
+           "(gdal_translate -co TILED=YES)");
+    const uint64_t row = TIFFScanlineSize64(tif);
+    if (row > kMaxDemBlockBytes) fail("rows of " + mib(row) + " exceed the " + bound);
+    // Bands of about 1 MiB: a miss costs a restart of the strip's decoding when it lies before the last row read.
+    by_rows = true;
+    strip_rows = block_h;
+    block_h = std::max<long>(1, std::min<long>(block_h, static_cast<long>((std::size_t(1) << 20) / row)));
+  }
   blocks_across = (width + block_w - 1) / block_w;
   char* nd = nullptr;
   if (TIFFGetField(tif, TIFFTAG_GDAL_NODATA, &nd) && nd) {
@@ -263,11 +280,29 @@ const std::vector<float>& ReferenceDem::Impl::block(long index) {
     lru.splice(lru.begin(), lru, it->second.second);
     return it->second.first;
   }
-  const tmsize_t bytes = tiled ? TIFFTileSize(tif) : TIFFStripSize(tif);
-  std::vector<unsigned char> raw(static_cast<std::size_t>(bytes));
-  const tmsize_t got = tiled ? TIFFReadEncodedTile(tif, static_cast<uint32_t>(index), raw.data(), bytes)
-                             : TIFFReadEncodedStrip(tif, static_cast<uint32_t>(index), raw.data(), bytes);
-  if (got < 0) fail((tiled ? "tile " : "strip ") + std::to_string(index) + " cannot be read");
+  tmsize_t got = 0;
+  std::vector<unsigned char> raw;
+  if (by_rows) {
+    // Rows r0 .. r1 - 1, decoded from where libtiff is in their strip when it is before r0, else from the strip's
+    // first row; rows before r0 go to a scratch row.
+    const tmsize_t row = TIFFScanlineSize(tif);
+    const long r0 = index * block_h, r1 = std::min(r0 + block_h, height), strip_start = r0 / strip_rows * strip_rows;
+    raw.resize(static_cast<std::size_t>(row * (r1 - r0)));
+    const long from = next_row >= strip_start && next_row <= r0 ? next_row : strip_start;
+    std::vector<unsigned char> skipped(from < r0 ? static_cast<std::size_t>(row) : 0);
+    next_row = -1;
+    for (long r = from; r < r1; ++r)
+      if (TIFFReadScanline(tif, r < r0 ? skipped.data() : raw.data() + (r - r0) * row, static_cast<uint32_t>(r), 0) < 0)
+        fail("row " + std::to_string(r) + " cannot be read");
+    next_row = r1;
+    got = row * (r1 - r0);
+  } else {
+    const tmsize_t bytes = tiled ? TIFFTileSize(tif) : TIFFStripSize(tif);
+    raw.resize(static_cast<std::size_t>(bytes));
+    got = tiled ? TIFFReadEncodedTile(tif, static_cast<uint32_t>(index), raw.data(), bytes)
+                : TIFFReadEncodedStrip(tif, static_cast<uint32_t>(index), raw.data(), bytes);
+    if (got < 0) fail((tiled ? "tile " : "strip ") + std::to_string(index) + " cannot be read");
+  }
   ++reads;
   const std::size_t n = static_cast<std::size_t>(block_w * block_h);
   std::vector<float> out(n, NAN);

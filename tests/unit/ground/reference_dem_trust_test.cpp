@@ -40,6 +40,48 @@ double height_at(const ReferenceDem& dem, double lon, double lat) {
   return h;
 }
 
+// A geographic (EPSG:4326) float32 GeoTIFF DEM of n x n cells of 1e-4 degree, the top-left cell's centre at
+// lon 5, lat 44, height = row index; deflated, in one strip (rows_per_strip = n) or one tile (tile = n).
+void write_one_block_dem(const std::string& path, long n, bool tiled) {
+  TIFF* tif = XTIFFOpen(path.c_str(), "w");
+  ASSERT_NE(tif, nullptr);
+  TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, static_cast<uint32_t>(n));
+  TIFFSetField(tif, TIFFTAG_IMAGELENGTH, static_cast<uint32_t>(n));
+  TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 1);
+  TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 32);
+  TIFFSetField(tif, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_IEEEFP);
+  TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+  TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
+  TIFFSetField(tif, TIFFTAG_ZIPQUALITY, 1);
+  double scale[3] = {1e-4, 1e-4, 0}, tie[6] = {0, 0, 0, 5 - 0.5e-4, 44 + 0.5e-4, 0};
+  TIFFSetField(tif, TIFFTAG_GEOPIXELSCALE, 3, scale);
+  TIFFSetField(tif, TIFFTAG_GEOTIEPOINTS, 6, tie);
+  GTIF* gtif = GTIFNew(tif);
+  GTIFKeySet(gtif, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeGeographic);
+  GTIFKeySet(gtif, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
+  GTIFKeySet(gtif, GeographicTypeGeoKey, TYPE_SHORT, 1, 4326);
+  GTIFWriteKeys(gtif);
+  GTIFFree(gtif);
+  bool ok = true;
+  if (tiled) {
+    TIFFSetField(tif, TIFFTAG_TILEWIDTH, static_cast<uint32_t>(n));
+    TIFFSetField(tif, TIFFTAG_TILELENGTH, static_cast<uint32_t>(n));
+    std::vector<float> tile(static_cast<size_t>(n * n));
+    for (long r = 0; r < n; ++r) std::fill_n(tile.begin() + r * n, n, static_cast<float>(r));
+    ok = TIFFWriteEncodedTile(tif, 0, tile.data(), static_cast<tmsize_t>(tile.size() * sizeof(float))) >= 0;
+  } else {
+    TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, static_cast<uint32_t>(n));
+    std::vector<float> row(static_cast<size_t>(n));
+    for (long r = 0; r < n && ok; ++r) {
+      std::fill(row.begin(), row.end(), static_cast<float>(r));
+      ok = TIFFWriteScanline(tif, row.data(), static_cast<uint32_t>(r), 0) == 1;
+    }
+  }
+  XTIFFClose(tif);
+  ASSERT_TRUE(ok);
+}
+
 }  // namespace
 
 // Item 8: a float32 DEM whose GDAL_NODATA is "-3.4e+38" (as GDAL writes it): cells of the float -3.4e38 are
@@ -84,3 +126,35 @@ TEST(ReferenceDemKeys, DatumOptionIsAGridNameOnly) {
   EXPECT_DOUBLE_EQ(by_file.undulation(5.4, 43.3), named.undulation(5.4, 43.3));
 }
 
+// Item 5: a DEM of one deflated strip of 12000 x 12000 float32 cells (576 MB decoded, a file of a few hundred
+// kB) is sampled, out of row order, within 768 MiB of address space: the strip is read by rows, not whole
+// (whole it took twice its size). Under the sanitizers (no address-space limit) the same reads run unlimited.
+TEST(ReferenceDemBlocks, HugeStripReadByRows) {
+  const std::string path = scratch("one_strip.tif");
+  write_one_block_dem(path, 12000, false);
+  const auto sample = [&path]() {
+    ReferenceDem dem(path);
+    bool ok = true;
+    for (const double row : {11000.25, 20.5, 6000.75, 11998.5, 3.0}) {
+      double h = NAN;
+      ok = ok && dem.height(5 + 0.1, 44 - row * 1e-4, h) && std::fabs(h - row) < 1e-3;
+    }
+    return ok;
+  };
+  if (tpkit_test::kSanitized) {
+    EXPECT_TRUE(sample());
+  } else {
+    EXPECT_EQ(tpkit_test::run_limited(rlim_t(768) << 20, sample), 0);
+  }
+}
+
+// Item 5: a tile above kMaxDemBlockBytes (4608 x 4608 float32 cells, 81 MiB) is refused when the DEM is
+// opened, with the bound and the way out, rather than decoded whole at the first sample.
+TEST(ReferenceDemBlocks, HugeTileRefused) {
+  const std::string path = scratch("one_tile.tif");
+  write_one_block_dem(path, 4608, true);
+  const std::string e = refusal([&] { ReferenceDem dem(path); });
+  EXPECT_NE(e.find(path + ": tiles of 4608x4608 cells (81 MiB decoded) exceed the 64 MiB a DEM block may take"),
+            std::string::npos)
+      << e;
+}

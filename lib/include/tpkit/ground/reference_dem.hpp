@@ -11,6 +11,9 @@
 // vertical grid PROJ reads (GTX, GeoTIFF): h_ellipsoid = H + N(lon, lat), N the grid's geoid undulation.
 // Nodata (GDAL_NODATA tag 42113, compared in the band's sample type as GDAL does: "-3.4e+38" is the float32
 // -3.4e38), NaN and cells outside the DEM are unknown: a sample needs the 4 cells around it known.
+// Memory: a tile, or a strip read whole, takes at most kMaxDemBlockBytes decoded; a larger strip is read row
+// by row (libtiff decodes a strip's rows in order: sampling it out of order decodes it again from its start,
+// slow for a big compressed strip but bounded), a larger tile is refused (libtiff decodes a tile only whole).
 #pragma once
 #include <cstddef>
 #include <memory>
@@ -18,6 +21,9 @@
 #include <vector>
 
 namespace tpkit {
+
+// Decoded bytes a DEM tile (or a strip read whole) may take: 64 MiB, e.g. 4096 x 4096 float32 cells.
+constexpr std::size_t kMaxDemBlockBytes = std::size_t(64) << 20;
 
 // A geoid model (or none): N(lon, lat) in metres, h_ellipsoid = H_geoid + N. `datum`: ellipsoid|egm96|egm2008|
 // a grid's file name or path. InputError naming `what` (the option or file it is for) when the grid is missing,
@@ -48,7 +54,7 @@ struct ReferenceDemOptions {
 class ReferenceDem {
  public:
   // InputError naming `path` for a file that is not a single-band GeoTIFF, has no georeferencing, an unknown
-  // CRS, or a datum grid that is missing.
+  // CRS, a tile above kMaxDemBlockBytes, or a datum grid that is missing.
   explicit ReferenceDem(const std::string& path, const ReferenceDemOptions& options = {});
   ~ReferenceDem();
   ReferenceDem(const ReferenceDem&) = delete;
