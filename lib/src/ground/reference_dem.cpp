@@ -139,6 +139,7 @@ struct ReferenceDem::Impl {
   double posting = 0;
   ProjHandle to_dem;  // WGS 84 lon, lat -> DEM x, y
   std::unique_ptr<VerticalDatum> datum;
+  double z_unit = 1;  // metres per stored height unit
   // Cache: LRU list of block indices, map index -> (data, list position).
   std::size_t max_blocks = 1;
   std::list<long> lru;
@@ -154,6 +155,7 @@ struct ReferenceDem::Impl {
   void read_layout();
   void read_georeferencing(GTIF* gtif);
   void read_crs(GTIF* gtif);
+  std::string read_vertical(GTIF* gtif, const std::string& option);
   const std::vector<float>& block(long index);
   bool cell(long c, long r, double& z);
   bool to_pixel(double lon, double lat, double& fc, double& fr);
@@ -242,6 +244,36 @@ void ReferenceDem::Impl::read_georeferencing(GTIF* gtif) {
   inv[1] = a[5] / det; inv[2] = -a[2] / det; inv[4] = -a[4] / det; inv[5] = a[1] / det;
   inv[0] = -(inv[1] * a[0] + inv[2] * a[3]);
   inv[3] = -(inv[4] * a[0] + inv[5] * a[3]);
+}
+
+// The vertical datum: `option` when given (refused where the keys name another), else the keys'. A vertical
+// CRS or datum code the keys give but tpkit does not name needs `option` (its grid). Sets z_unit.
+std::string ReferenceDem::Impl::read_vertical(GTIF* gtif, const std::string& option) {
+  unsigned short cs = 0, vd = 0, units = 0;
+  std::string keys, said;  // the keys' datum ("?" for a code tpkit does not name), and how the keys say it
+  if (GTIFKeyGetSHORT(gtif, VerticalCSTypeGeoKey, &cs, 0, 1) && cs != KvUserDefined) {
+    said = "vertical CRS EPSG:" + std::to_string(cs);
+    keys = cs == 5773 ? "egm96" : cs == 3855 ? "egm2008" : cs == 5030 ? "ellipsoid" : "?";
+  } else if (GTIFKeyGetSHORT(gtif, VerticalDatumGeoKey, &vd, 0, 1) && vd != KvUserDefined) {
+    said = "vertical datum EPSG:" + std::to_string(vd);
+    keys = vd == 5171 ? "egm96" : vd == 1027 ? "egm2008" : vd == 6326 ? "ellipsoid" : "?";
+  }
+  if (GTIFKeyGetSHORT(gtif, VerticalUnitsGeoKey, &units, 0, 1) && units != Linear_Meter) {
+    double metres = 0;
+    if (!GTIFGetUOMLengthInfoEx(to_dem.ctx, units, nullptr, &metres) || !(metres > 0))
+      fail("vertical unit " + std::to_string(units) + " in the GeoTIFF keys (VerticalUnitsGeoKey): not a length unit EPSG knows");
+    z_unit = metres;
+  }
+  if (option.empty()) {
+    if (keys == "?")
+      fail("the GeoTIFF keys give " + said + " for its heights, not one tpkit knows (EGM96 height 5773, EGM2008 height "
+           "3855, WGS 84 ellipsoidal 5030): give its geoid grid with --dem-datum");
+    return keys.empty() ? "ellipsoid" : keys;
+  }
+  if (!keys.empty() && keys != "?" && option != keys)
+    fail("--dem-datum " + option + " disagrees with the GeoTIFF keys' " + said + " (" + keys +
+         "): leave --dem-datum out to use the keys");
+  return option;
 }
 
 void ReferenceDem::Impl::read_crs(GTIF* gtif) {
@@ -376,12 +408,14 @@ ReferenceDem::ReferenceDem(const std::string& path, const ReferenceDemOptions& o
   try {
     d.read_georeferencing(gtif);
     d.read_crs(gtif);
+    const std::string datum = d.read_vertical(gtif, options.datum);
+    d.datum = std::make_unique<VerticalDatum>(
+        datum, options.datum.empty() ? path + ": the GeoTIFF keys' vertical datum" : "--dem-datum (for " + path + ")");
   } catch (...) {
     GTIFFree(gtif);
     throw;
   }
   GTIFFree(gtif);
-  d.datum = std::make_unique<VerticalDatum>(options.datum, "--dem-datum (for " + path + ")");
   const std::size_t block_bytes = static_cast<std::size_t>(d.block_w * d.block_h) * sizeof(float);
   d.max_blocks = std::max<std::size_t>(4, options.cache_bytes / std::max<std::size_t>(1, block_bytes));
   // Posting in metres: pixel steps along columns and rows, in degrees converted at the centre when geographic.
@@ -407,13 +441,13 @@ bool ReferenceDem::height(double lon, double lat, double& h, double* grad) const
       const double e = 1e-5;
       double fc1, fr1, fc2, fr2;
       if (!d.to_pixel(lon + e, lat, fc1, fr1) || !d.to_pixel(lon, lat + e, fc2, fr2)) return false;
-      grad[0] = (dzc * (fc1 - fc) + dzr * (fr1 - fr)) / e;
-      grad[1] = (dzc * (fc2 - fc) + dzr * (fr2 - fr)) / e;
+      grad[0] = d.z_unit * (dzc * (fc1 - fc) + dzr * (fr1 - fr)) / e;
+      grad[1] = d.z_unit * (dzc * (fc2 - fc) + dzr * (fr2 - fr)) / e;
     }
   }
   const double n = d.datum->undulation(lon, lat);
   if (!std::isfinite(n)) return false;
-  h = z + n;
+  h = z * d.z_unit + n;
   return std::isfinite(h);
 }
 
@@ -429,6 +463,8 @@ bool ReferenceDem::slope_aspect(double lon, double lat, double& slope_deg, doubl
 
 const std::string& ReferenceDem::path() const { return impl_->path; }
 std::string ReferenceDem::crs() const { return impl_->crs; }
+const std::string& ReferenceDem::datum() const { return impl_->datum->name(); }
+double ReferenceDem::vertical_unit_m() const { return impl_->z_unit; }
 double ReferenceDem::posting_m() const { return impl_->posting; }
 long ReferenceDem::width() const { return impl_->width; }
 long ReferenceDem::height_px() const { return impl_->height; }
@@ -480,7 +516,7 @@ void write_reference_dem(const std::string& path, const DemRaster& dem) {
   GTIFKeySet(gtif, GTModelTypeGeoKey, TYPE_SHORT, 1, geographic ? ModelTypeGeographic : ModelTypeProjected);
   GTIFKeySet(gtif, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
   GTIFKeySet(gtif, geographic ? GeographicTypeGeoKey : ProjectedCSTypeGeoKey, TYPE_SHORT, 1, dem.epsg);
-  // Vertical keys: EPSG 5773 is EGM96 height, 3855 EGM2008 height (a reader of this kind uses --dem-datum).
+  // Vertical keys: EPSG 5773 is EGM96 height, 3855 EGM2008 height (a ReferenceDem takes its datum from them).
   if (dem.datum == "egm96") GTIFKeySet(gtif, VerticalCSTypeGeoKey, TYPE_SHORT, 1, 5773);
   if (dem.datum == "egm2008") GTIFKeySet(gtif, VerticalCSTypeGeoKey, TYPE_SHORT, 1, 3855);
   GTIFWriteKeys(gtif);

@@ -34,6 +34,27 @@ std::string refusal(const std::function<void()>& f) {
   return "";
 }
 
+// A plane z = 100 + 0.01 (E - E0) on a UTM 31N grid around lon 5.4, lat 43.3 (30 m posting, strips), heights
+// above `datum` (its vertical keys written by write_reference_dem).
+std::string plane(const std::string& name, const std::string& datum) {
+  const double e0 = 690000, n0 = 4800000;
+  const std::string path = scratch(name);
+  write_reference_dem(path, tpkit_test::utm_raster(e0, n0, 30, 400, 400, [&](double e, double) { return 100 + 0.01 * (e - e0); },
+                                                   datum, 0));
+  return path;
+}
+
+// Sets (value > 0) or deletes (value 0) GeoKeys of a GeoTIFF in place.
+void set_keys(const std::string& path, const std::vector<std::pair<geokey_t, int>>& keys) {
+  TIFF* tif = XTIFFOpen(path.c_str(), "r+");
+  ASSERT_NE(tif, nullptr);
+  GTIF* gtif = GTIFNew(tif);
+  for (const auto& [key, value] : keys) GTIFKeySet(gtif, key, TYPE_SHORT, value ? 1 : 0, value);
+  GTIFWriteKeys(gtif);
+  GTIFFree(gtif);
+  XTIFFClose(tif);
+}
+
 double height_at(const ReferenceDem& dem, double lon, double lat) {
   double h = NAN;
   EXPECT_TRUE(dem.height(lon, lat, h)) << dem.path();
@@ -83,6 +104,68 @@ void write_one_block_dem(const std::string& path, long n, bool tiled) {
 }
 
 }  // namespace
+
+// Item 7: EGM96 heights (VerticalCSTypeGeoKey 5773, as GDAL writes EPSG:4326+5773 and write_reference_dem
+// writes "egm96") are taken as EGM96 without a datum option: the same heights as with "egm96", N = 49.4356 m
+// above those of the same raster with no vertical keys (ellipsoidal).
+TEST(ReferenceDemKeys, VerticalCrsKeyGivesTheDatum) {
+  const std::string keyed = plane("egm96.tif", "egm96"), bare = plane("bare.tif", "ellipsoid");
+  ReferenceDem from_keys(keyed), named(keyed, {"egm96"}), ellipsoidal(bare);
+  EXPECT_EQ(from_keys.datum(), "egm96");
+  EXPECT_EQ(ellipsoidal.datum(), "ellipsoid");
+  EXPECT_NEAR(height_at(from_keys, 5.4, 43.3) - height_at(ellipsoidal, 5.4, 43.3), 49.4356, 1e-3);
+  EXPECT_DOUBLE_EQ(height_at(from_keys, 5.4, 43.3), height_at(named, 5.4, 43.3));
+  // Without vertical keys a named datum is taken as given.
+  ReferenceDem bare_egm96(bare, {"egm96"});
+  EXPECT_DOUBLE_EQ(height_at(bare_egm96, 5.4, 43.3), height_at(from_keys, 5.4, 43.3));
+}
+
+// Item 7: a datum option that disagrees with the keys is refused, naming both.
+TEST(ReferenceDemKeys, DisagreeingDatumRefused) {
+  const std::string keyed = plane("egm96_refused.tif", "egm96");
+  for (const std::string datum : {"ellipsoid", "egm2008"}) {
+    const std::string e = refusal([&] { ReferenceDem dem(keyed, {datum}); });
+    EXPECT_NE(e.find(keyed + ": --dem-datum " + datum + " disagrees with the GeoTIFF keys' vertical CRS EPSG:5773 (egm96)"),
+              std::string::npos)
+        << e;
+  }
+  // Keys of WGS 84 ellipsoidal heights (5030) refuse egm96.
+  const std::string ell = plane("ellipsoidal_keys.tif", "ellipsoid");
+  set_keys(ell, {{VerticalCSTypeGeoKey, 5030}});
+  EXPECT_EQ(ReferenceDem(ell).datum(), "ellipsoid");
+  EXPECT_NE(refusal([&] { ReferenceDem dem(ell, {"egm96"}); }).find("disagrees"), std::string::npos);
+}
+
+// Item 7: the vertical datum key alone (VerticalDatumGeoKey 5171, EGM96 geoid) names the datum too; a vertical
+// CRS tpkit does not name (NAVD88 height, 5703) needs its grid named, and is then taken as named.
+TEST(ReferenceDemKeys, VerticalDatumKeyAndUnknownCrs) {
+  const std::string by_datum = plane("datum_key.tif", "ellipsoid");
+  set_keys(by_datum, {{VerticalDatumGeoKey, 5171}});
+  EXPECT_EQ(ReferenceDem(by_datum).datum(), "egm96");
+  const std::string navd = plane("navd88.tif", "ellipsoid");
+  set_keys(navd, {{VerticalCSTypeGeoKey, 5703}});
+  const std::string e = refusal([&] { ReferenceDem dem(navd); });
+  EXPECT_NE(e.find("vertical CRS EPSG:5703"), std::string::npos) << e;
+  EXPECT_NE(e.find("--dem-datum"), std::string::npos) << e;
+  EXPECT_EQ(ReferenceDem(navd, {"egm96"}).datum(), "egm96");
+}
+
+// Item 7: heights in US survey feet (VerticalUnitsGeoKey 9003) come back in metres, and so does the slope.
+TEST(ReferenceDemKeys, VerticalUnitsConvertedToMetres) {
+  const std::string metres = plane("metres.tif", "ellipsoid"), feet = plane("feet.tif", "ellipsoid");
+  set_keys(feet, {{VerticalUnitsGeoKey, 9003}});
+  ReferenceDem m(metres), f(feet);
+  const double ft = 1200.0 / 3937;
+  EXPECT_NEAR(f.vertical_unit_m(), ft, 1e-12);
+  EXPECT_NEAR(height_at(f, 5.4, 43.3), ft * height_at(m, 5.4, 43.3), 1e-6);
+  double sm, am, sf, af;
+  ASSERT_TRUE(m.slope_aspect(5.4, 43.3, sm, am));
+  ASSERT_TRUE(f.slope_aspect(5.4, 43.3, sf, af));
+  EXPECT_NEAR(std::tan(sf * M_PI / 180), ft * std::tan(sm * M_PI / 180), 1e-6);
+  // A unit code EPSG does not know is refused.
+  set_keys(feet, {{VerticalUnitsGeoKey, 9999}});
+  EXPECT_NE(refusal([&] { ReferenceDem dem(feet); }).find("vertical unit 9999"), std::string::npos);
+}
 
 // Item 8: a float32 DEM whose GDAL_NODATA is "-3.4e+38" (as GDAL writes it): cells of the float -3.4e38 are
 // no-data, not heights; the points on them are unknown, and a DEM with none of the points on it is refused.
