@@ -135,6 +135,7 @@ struct ReferenceDem::Impl {
   // Model (x, y) of pixel centre (c, r): x = a[0] + a[1] c + a[2] r, y = a[3] + a[4] c + a[5] r; inverse inv.
   double a[6] = {0, 1, 0, 0, 0, -1}, inv[6] = {0, 1, 0, 0, 0, -1};
   bool geographic = false;
+  double xy_unit = 1;  // metres per model unit of a projected CRS
   std::string crs;
   double posting = 0;
   ProjHandle to_dem;  // WGS 84 lon, lat -> DEM x, y
@@ -304,6 +305,22 @@ void ReferenceDem::Impl::read_crs(GTIF* gtif) {
   to_dem.pj = proj_normalize_for_visualization(to_dem.ctx, raw);  // lon, lat in; easting (lon), northing (lat) out
   proj_destroy(raw);
   if (!to_dem.pj) fail("CRS " + def + ": PROJ cannot normalize its axis order");
+  // A projected CRS's unit from its first axis (a US-feet state plane's pixel scale is in feet; PROJ's
+  // transformation already gives feet, only the posting in metres needs it). A PROJ string is made a CRS.
+  if (!geographic) {
+    PJ* c = proj_create(to_dem.ctx, (def[0] == '+' ? def + " +type=crs" : def).c_str());
+    if (c && proj_get_type(c) == PJ_TYPE_BOUND_CRS) {
+      PJ* source = proj_get_source_crs(to_dem.ctx, c);
+      proj_destroy(c);
+      c = source;
+    }
+    PJ* cs = c ? proj_crs_get_coordinate_system(to_dem.ctx, c) : nullptr;
+    double metres = 0;
+    if (cs && proj_cs_get_axis_info(to_dem.ctx, cs, 0, nullptr, nullptr, nullptr, &metres, nullptr, nullptr, nullptr) && metres > 0)
+      xy_unit = metres;
+    if (cs) proj_destroy(cs);
+    if (c) proj_destroy(c);
+  }
 }
 
 const std::vector<float>& ReferenceDem::Impl::block(long index) {
@@ -418,12 +435,16 @@ ReferenceDem::ReferenceDem(const std::string& path, const ReferenceDemOptions& o
   GTIFFree(gtif);
   const std::size_t block_bytes = static_cast<std::size_t>(d.block_w * d.block_h) * sizeof(float);
   d.max_blocks = std::max<std::size_t>(4, options.cache_bytes / std::max<std::size_t>(1, block_bytes));
-  // Posting in metres: pixel steps along columns and rows, in degrees converted at the centre when geographic.
+  // Posting in metres: pixel steps along columns and rows, in degrees converted at the centre when geographic,
+  // in the CRS's unit converted when projected.
   double sx = std::hypot(d.a[1], d.a[4]), sy = std::hypot(d.a[2], d.a[5]);
   if (d.geographic) {
     const double lat = d.a[3] + d.a[4] * (d.width - 1) / 2.0 + d.a[5] * (d.height - 1) / 2.0;
     sx *= 111320 * std::cos(lat * kDegToRad);
     sy *= 110574;
+  } else {
+    sx *= d.xy_unit;
+    sy *= d.xy_unit;
   }
   d.posting = (sx + sy) / 2;
 }

@@ -4,6 +4,7 @@
 #include <geotiff/geovalues.h>
 #include <geotiff/xtiffio.h>
 #include <gtest/gtest.h>
+#include <proj.h>
 #include <tiffio.h>
 
 #include <cmath>
@@ -165,6 +166,44 @@ TEST(ReferenceDemKeys, VerticalUnitsConvertedToMetres) {
   // A unit code EPSG does not know is refused.
   set_keys(feet, {{VerticalUnitsGeoKey, 9999}});
   EXPECT_NE(refusal([&] { ReferenceDem dem(feet); }).find("vertical unit 9999"), std::string::npos);
+}
+
+// Item 7, horizontal units: a DEM in a US-feet state plane (EPSG:2263, NAD83 / New York Long Island (ftUS),
+// pixel scale 100 ftUS) is sampled where PROJ puts each point in feet (already right: PROJ's transformation is
+// in the CRS's unit), and its posting is in metres (30.48 m; it was given as 100).
+TEST(ReferenceDemKeys, FeetStatePlane) {
+  PJ_CONTEXT* ctx = proj_context_create();
+  PJ* raw = proj_create_crs_to_crs(ctx, "EPSG:4326", "EPSG:2263", nullptr);
+  PJ* pj = proj_normalize_for_visualization(ctx, raw);
+  const auto feet = [&](double lon, double lat, double& x, double& y) {
+    const PJ_COORD q = proj_trans(pj, PJ_FWD, proj_coord(lon, lat, 0, 0));
+    x = q.xy.x;
+    y = q.xy.y;
+  };
+  double xc, yc;
+  feet(-73.9, 40.75, xc, yc);
+  const double x0 = std::floor(xc) - 20000, y0 = std::floor(yc) + 20000;
+  const auto z = [&](double x, double y) { return 10 + 0.001 * (x - x0) + 0.002 * (y0 - y); };
+  DemRaster r;
+  r.epsg = 2263;
+  r.x0 = x0;
+  r.y0 = y0;
+  r.dx = r.dy = 100;
+  r.width = r.height = 400;
+  for (long j = 0; j < r.height; ++j)
+    for (long i = 0; i < r.width; ++i) r.data.push_back(static_cast<float>(z(x0 + 100 * i, y0 - 100 * j)));
+  const std::string path = scratch("ftus.tif");
+  write_reference_dem(path, r);
+  ReferenceDem dem(path);
+  EXPECT_NEAR(dem.posting_m(), 30.48006, 1e-4);
+  for (const double lon : {-73.92, -73.9, -73.88}) {
+    double x, y;
+    feet(lon, 40.76, x, y);
+    EXPECT_NEAR(height_at(dem, lon, 40.76), z(x, y), 1e-3) << lon;
+  }
+  proj_destroy(pj);
+  proj_destroy(raw);
+  proj_context_destroy(ctx);
 }
 
 // Item 8: a float32 DEM whose GDAL_NODATA is "-3.4e+38" (as GDAL writes it): cells of the float -3.4e38 are
