@@ -30,7 +30,7 @@ using namespace tpkit;
 
 struct Opts {
   std::vector<std::string> images, tracks, check, fixed, rpc, gcp;
-  std::string model = "affine", height_prior, dem, dem_datum = "ellipsoid", crs = "geographic", out;
+  std::string model = "affine", height_prior, dem, dem_datum, crs = "geographic", out;
   double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01, default_sigma = NAN;
   int threads = 1, iterations = 100;
   bool write_tiff = false, strict = false, unweighted = false;
@@ -287,7 +287,7 @@ int run(const Opts& o) {
   ao.default_sigma_px = o.default_sigma;
   ao.progress = isatty(2);
   if (!o.height_prior.empty() && !o.dem.empty()) throw UsageError("--height-prior and --dem exclude each other");
-  if (o.dem_datum != "ellipsoid" && o.dem.empty()) throw UsageError("--dem-datum goes with --dem");
+  if (!o.dem_datum.empty() && o.dem.empty()) throw UsageError("--dem-datum goes with --dem");
   if (!o.height_prior.empty()) ao.height = parse_height_prior(o.height_prior);
   if (!o.dem.empty() && o.dem_sigma < kMinHeightSigma)
     throw UsageError("--dem-sigma " + format_figure(o.dem_sigma) + ": below " + format_figure(kMinHeightSigma) + " m (no DEM is that good; the cost would overflow)");
@@ -416,7 +416,7 @@ int main(int argc, char** argv) {
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--height-prior", o->height_prior, "H+-S: height prior of every ground point (m)");
         app.add_option("--dem", o->dem, "GeoTIFF DEM (any CRS; m above --dem-datum): height prior");
-        app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid (default) | egm96 | egm2008 | a PROJ vertical grid file");
+        app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid | egm96 | egm2008 | a PROJ vertical grid file (default: the DEM's vertical GeoTIFF keys, ellipsoid without them)");
         app.add_option("--dem-sigma", o->dem_sigma, "sigma of the DEM heights (m)")->check(Positive);
         app.add_option("--crs", o->crs, "ground.points coordinates: geographic, utm or ecef");
         app.add_option("--loss", o->loss, "Huber loss scale (px)")->check(Positive);

@@ -27,7 +27,7 @@ using namespace tpkit;
 struct Opts {
   std::vector<std::string> images, tracks, rpc;
   std::string crs = "geographic", output = "-";
-  std::string compare, align, dem_datum = "ellipsoid", dz, models;
+  std::string compare, align, dem_datum, dz, models;
   int threads = 1;
   double flag = 2;
 };
@@ -44,7 +44,8 @@ DemStage dem_stage(const Opts& o, const std::vector<AdjustImage>& images, const 
   const std::string& path = o.align.empty() ? o.compare : o.align;
   ReferenceDem dem(path, {o.dem_datum});
   DzReport report;
-  meta_set(report.meta, "dem", path + " (" + dem.crs() + ", posting " + format_figure(dem.posting_m()) + " m, heights above " + o.dem_datum + ")");
+  meta_set(report.meta, "dem", path + " (" + dem.crs() + ", posting " + format_figure(dem.posting_m()) + " m, heights above " + dem.datum() +
+                                  (dem.vertical_unit_m() != 1 ? " in units of " + format_figure(dem.vertical_unit_m()) + " m" : "") + ")");
   meta_set(report.meta, "dz", "h - DEM, m above the WGS 84 ellipsoid; NMAD = 1.4826 median|dz - median|; class 0: all points, 1..5: DEM slope classes (deg)");
   if (o.compare.size()) {
     report.stages.push_back(compare_to_dem(points, dem));
@@ -88,7 +89,7 @@ int run(const Opts& o) {
   if (o.threads < 1 || o.threads > kMaxThreads) throw UsageError("--threads must be between 1 and " + std::to_string(kMaxThreads));
   const GroundCrs crs = parse_ground_crs(o.crs);
   if (!o.compare.empty() && !o.align.empty()) throw UsageError("--compare and --align exclude each other");
-  if (o.compare.empty() && o.align.empty() && (o.dem_datum != "ellipsoid" || !o.dz.empty()))
+  if (o.compare.empty() && o.align.empty() && (!o.dem_datum.empty() || !o.dz.empty()))
     throw UsageError("--dem-datum and --dz go with --compare or --align");
   if (!o.models.empty() && o.align.empty()) throw UsageError("--models goes with --align");
   std::vector<std::string> inputs = o.images;
@@ -179,7 +180,7 @@ int main(int argc, char** argv) {
             ->check(Positive);
         app.add_option("--compare", o->compare, "reference DEM (GeoTIFF, any CRS): dz = h - DEM statistics, by slope class");
         app.add_option("--align", o->align, "reference DEM: the 3-D shift of the ground points onto it (Nuth & Kaab); -o writes the points moved");
-        app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid (default) | egm96 | egm2008 | a PROJ vertical grid file");
+        app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid | egm96 | egm2008 | a PROJ vertical grid file (default: the DEM's vertical GeoTIFF keys, ellipsoid without them)");
         app.add_option("--dz", o->dz, "with --compare/--align: the dz statistics as a dem-dz file");
         app.add_option("--models", o->models, "with --align: folder for the shifted models (IMAGE-STEM_rpc.txt)");
         app.add_option("-o,--output", o->output, "ground file, - for stdout; .geojson/.json: GeoJSON, .csv: CSV (+ .csvt, .prj)");

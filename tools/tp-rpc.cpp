@@ -22,7 +22,7 @@ extern const char* const tpkit_man_page;
 
 namespace {
 struct Opts {
-  std::string action, model, input = "-", output = "-", dem, dem_datum = "ellipsoid";
+  std::string action, model, input = "-", output = "-", dem, dem_datum;
   std::vector<long> window;
   int band = 1;
   std::string compression = "none", crs = "geographic";
@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
     app.add_option("-i,--input", o->input, "points to transform; - for stdin (default)");
     app.add_option("-o,--output", o->output, "the transformed points; - for stdout (default)");
     app.add_option("--dem", o->dem, "localize onto this GeoTIFF DEM (any CRS; heights above --dem-datum, m): input x y");
-    app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid (default) | egm96 | egm2008 | a PROJ vertical grid file");
+    app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid | egm96 | egm2008 | a PROJ vertical grid file (default: the DEM's vertical GeoTIFF keys, ellipsoid without them)");
     app.add_option("--crs", o->crs, "project / localize: ground coordinates lon lat h (geographic, default) | utm (easting northing h, m, the model centre's zone) | ecef (X Y Z, m)")
         ->check(CLI::IsMember({"geographic", "utm", "ecef"}));
     app.add_option("--window", o->window, "crop: X0 Y0 W H, pixels (the window's top-left pixel, its width and height; default the whole image)")->expected(4);
@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
     app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
     return [o]() {
       if (!o->dem.empty() && o->action != "localize") throw UsageError("--dem goes with localize");
-      if (o->dem_datum != "ellipsoid" && o->dem.empty()) throw UsageError("--dem-datum goes with --dem");
+      if (!o->dem_datum.empty() && o->dem.empty()) throw UsageError("--dem-datum goes with --dem");
       if (o->action == "crop") {
         if (o->crs != "geographic") throw UsageError("--crs goes with project and localize");
         if (o->output == "-") throw UsageError("crop needs -o OUT.tif (a GeoTIFF) or -o OUT.ntf (a NITF image), not stdout");

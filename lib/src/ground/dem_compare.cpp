@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "tpkit/core/error.hpp"
+
 namespace tpkit {
 
 namespace {
@@ -49,6 +51,9 @@ DemComparison compare_to_dem(const std::vector<GroundSample>& points, const Refe
     while (k + 1 < classes.size() && slope >= DemComparison::kSlopeBounds[k + 1]) ++k;
     classes[k].push_back(dz);
   }
+  if (all.empty())
+    throw InputError(dem.path(), 0, "none of the " + std::to_string(points.size()) +
+                                        " points has a height on it (off the DEM, or only no-data where they are)");
   c.all = dz_stats(std::move(all));
   for (size_t k = 0; k < classes.size(); ++k) c.by_slope[k] = dz_stats(std::move(classes[k]));
   return c;

@@ -8,6 +8,8 @@
 #include <tiffio.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cfloat>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -58,6 +60,21 @@ std::vector<std::string> geoid_grids(const std::string& datum) {
   return {datum};
 }
 
+// A grid named in a datum option goes into a PROJ definition: letters, digits and . _ - / only, as PROJ reads
+// '@' as "optional: use no grid when missing", ',' as a list, and a space or '+' as further parameters.
+bool plain_grid_name(const std::string& grid) {
+  return std::all_of(grid.begin(), grid.end(),
+                     [](unsigned char c) { return std::isalnum(c) || c == '.' || c == '_' || c == '-' || c == '/'; });
+}
+
+// GDAL_NODATA in the band's sample type, as GDAL compares it: for float32 the text's nearest float ("-3.4e+38"
+// is the float -3.39999995e38, not the double -3.4e38), a value just beyond FLT_MAX (its text rounded) FLT_MAX.
+double nodata_in_type(double v, uint16_t bits, uint16_t format) {
+  if (format != SAMPLEFORMAT_IEEEFP || bits != 32 || !std::isfinite(v)) return v;
+  if (std::fabs(v) > FLT_MAX) return std::fabs(v) <= FLT_MAX * (1 + 1e-7) ? std::copysign(FLT_MAX, v) : v;
+  return static_cast<float>(v);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------
@@ -70,6 +87,9 @@ struct VerticalDatum::Impl {
 VerticalDatum::VerticalDatum(const std::string& datum, const std::string& what) : name_(datum) {
   if (datum.empty()) throw InputError(what + ": empty vertical datum (ellipsoid|egm96|egm2008|GRID)");
   if (datum == "ellipsoid") return;
+  if (!plain_grid_name(datum))
+    throw InputError(what + " '" + datum + "': neither ellipsoid, egm96, egm2008 nor a grid's file name (letters, digits, "
+                     ". _ - / only: PROJ would read '@' as an optional grid, ',' as a list, a space or '+' as more parameters)");
   impl_ = std::make_unique<Impl>();
   std::string tried;
   for (const std::string& grid : geoid_grids(datum)) {
@@ -104,19 +124,23 @@ struct ReferenceDem::Impl {
   std::string path;
   TIFF* tif = nullptr;
   long width = 0, height = 0;
-  // Blocks: tiles, or strips taken as tiles as wide as the image.
-  bool tiled = false;
-  long block_w = 0, block_h = 0, blocks_across = 0;
+  // Blocks: tiles, strips taken as tiles as wide as the image, or (by_rows: strips above kMaxDemBlockBytes)
+  // bands of rows read row by row. libtiff decodes a compressed strip's rows only in order, from its first:
+  // next_row is the row it decodes next (-1: unknown), strip_rows the rows per strip.
+  bool tiled = false, by_rows = false;
+  long block_w = 0, block_h = 0, blocks_across = 0, strip_rows = 0, next_row = -1;
   uint16_t bits = 32, format = SAMPLEFORMAT_IEEEFP;
   bool has_nodata = false;
   double nodata = 0;
   // Model (x, y) of pixel centre (c, r): x = a[0] + a[1] c + a[2] r, y = a[3] + a[4] c + a[5] r; inverse inv.
   double a[6] = {0, 1, 0, 0, 0, -1}, inv[6] = {0, 1, 0, 0, 0, -1};
   bool geographic = false;
+  double xy_unit = 1;  // metres per model unit of a projected CRS
   std::string crs;
   double posting = 0;
   ProjHandle to_dem;  // WGS 84 lon, lat -> DEM x, y
   std::unique_ptr<VerticalDatum> datum;
+  double z_unit = 1;  // metres per stored height unit
   // Cache: LRU list of block indices, map index -> (data, list position).
   std::size_t max_blocks = 1;
   std::list<long> lru;
@@ -132,6 +156,7 @@ struct ReferenceDem::Impl {
   void read_layout();
   void read_georeferencing(GTIF* gtif);
   void read_crs(GTIF* gtif);
+  std::string read_vertical(GTIF* gtif, const std::string& option);
   const std::vector<float>& block(long index);
   bool cell(long c, long r, double& z);
   bool to_pixel(double lon, double lat, double& fc, double& fr);
@@ -167,11 +192,26 @@ void ReferenceDem::Impl::read_layout() {
     block_h = std::min<long>(rps, height);
   }
   if (block_w <= 0 || block_h <= 0) fail("no tile or strip size");
+  const auto mib = [](uint64_t bytes) { return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB"; };
+  const uint64_t block_bytes = tiled ? TIFFTileSize64(tif) : TIFFStripSize64(tif);
+  if (block_bytes > kMaxDemBlockBytes) {
+    const std::string bound = mib(kMaxDemBlockBytes) + " a DEM block may take";
+    if (tiled)
+      fail("tiles of " + std::to_string(block_w) + "x" + std::to_string(block_h) + " cells (" + mib(block_bytes) +
+           " decoded) exceed the " + bound + " (libtiff decodes a tile only whole): rewrite it with smaller tiles "
+           "(gdal_translate -co TILED=YES)");
+    const uint64_t row = TIFFScanlineSize64(tif);
+    if (row > kMaxDemBlockBytes) fail("rows of " + mib(row) + " exceed the " + bound);
+    // Bands of about 1 MiB: a miss costs a restart of the strip's decoding when it lies before the last row read.
+    by_rows = true;
+    strip_rows = block_h;
+    block_h = std::max<long>(1, std::min<long>(block_h, static_cast<long>((std::size_t(1) << 20) / row)));
+  }
   blocks_across = (width + block_w - 1) / block_w;
   char* nd = nullptr;
   if (TIFFGetField(tif, TIFFTAG_GDAL_NODATA, &nd) && nd) {
     char* end = nullptr;
-    nodata = std::strtod(nd, &end);
+    nodata = nodata_in_type(std::strtod(nd, &end), bits, format);
     has_nodata = end != nd;
   }
 }
@@ -207,6 +247,36 @@ void ReferenceDem::Impl::read_georeferencing(GTIF* gtif) {
   inv[3] = -(inv[4] * a[0] + inv[5] * a[3]);
 }
 
+// The vertical datum: `option` when given (refused where the keys name another), else the keys'. A vertical
+// CRS or datum code the keys give but tpkit does not name needs `option` (its grid). Sets z_unit.
+std::string ReferenceDem::Impl::read_vertical(GTIF* gtif, const std::string& option) {
+  unsigned short cs = 0, vd = 0, units = 0;
+  std::string keys, said;  // the keys' datum ("?" for a code tpkit does not name), and how the keys say it
+  if (GTIFKeyGetSHORT(gtif, VerticalCSTypeGeoKey, &cs, 0, 1) && cs != KvUserDefined) {
+    said = "vertical CRS EPSG:" + std::to_string(cs);
+    keys = cs == 5773 ? "egm96" : cs == 3855 ? "egm2008" : cs == 5030 ? "ellipsoid" : "?";
+  } else if (GTIFKeyGetSHORT(gtif, VerticalDatumGeoKey, &vd, 0, 1) && vd != KvUserDefined) {
+    said = "vertical datum EPSG:" + std::to_string(vd);
+    keys = vd == 5171 ? "egm96" : vd == 1027 ? "egm2008" : vd == 6326 ? "ellipsoid" : "?";
+  }
+  if (GTIFKeyGetSHORT(gtif, VerticalUnitsGeoKey, &units, 0, 1) && units != Linear_Meter) {
+    double metres = 0;
+    if (!GTIFGetUOMLengthInfoEx(to_dem.ctx, units, nullptr, &metres) || !(metres > 0))
+      fail("vertical unit " + std::to_string(units) + " in the GeoTIFF keys (VerticalUnitsGeoKey): not a length unit EPSG knows");
+    z_unit = metres;
+  }
+  if (option.empty()) {
+    if (keys == "?")
+      fail("the GeoTIFF keys give " + said + " for its heights, not one tpkit knows (EGM96 height 5773, EGM2008 height "
+           "3855, WGS 84 ellipsoidal 5030): give its geoid grid with --dem-datum");
+    return keys.empty() ? "ellipsoid" : keys;
+  }
+  if (!keys.empty() && keys != "?" && option != keys)
+    fail("--dem-datum " + option + " disagrees with the GeoTIFF keys' " + said + " (" + keys +
+         "): leave --dem-datum out to use the keys");
+  return option;
+}
+
 void ReferenceDem::Impl::read_crs(GTIF* gtif) {
   unsigned short model = 0, code = 0;
   GTIFKeyGetSHORT(gtif, GTModelTypeGeoKey, &model, 0, 1);
@@ -235,6 +305,22 @@ void ReferenceDem::Impl::read_crs(GTIF* gtif) {
   to_dem.pj = proj_normalize_for_visualization(to_dem.ctx, raw);  // lon, lat in; easting (lon), northing (lat) out
   proj_destroy(raw);
   if (!to_dem.pj) fail("CRS " + def + ": PROJ cannot normalize its axis order");
+  // A projected CRS's unit from its first axis (a US-feet state plane's pixel scale is in feet; PROJ's
+  // transformation already gives feet, only the posting in metres needs it). A PROJ string is made a CRS.
+  if (!geographic) {
+    PJ* c = proj_create(to_dem.ctx, (def[0] == '+' ? def + " +type=crs" : def).c_str());
+    if (c && proj_get_type(c) == PJ_TYPE_BOUND_CRS) {
+      PJ* source = proj_get_source_crs(to_dem.ctx, c);
+      proj_destroy(c);
+      c = source;
+    }
+    PJ* cs = c ? proj_crs_get_coordinate_system(to_dem.ctx, c) : nullptr;
+    double metres = 0;
+    if (cs && proj_cs_get_axis_info(to_dem.ctx, cs, 0, nullptr, nullptr, nullptr, &metres, nullptr, nullptr, nullptr) && metres > 0)
+      xy_unit = metres;
+    if (cs) proj_destroy(cs);
+    if (c) proj_destroy(c);
+  }
 }
 
 const std::vector<float>& ReferenceDem::Impl::block(long index) {
@@ -243,11 +329,29 @@ const std::vector<float>& ReferenceDem::Impl::block(long index) {
     lru.splice(lru.begin(), lru, it->second.second);
     return it->second.first;
   }
-  const tmsize_t bytes = tiled ? TIFFTileSize(tif) : TIFFStripSize(tif);
-  std::vector<unsigned char> raw(static_cast<std::size_t>(bytes));
-  const tmsize_t got = tiled ? TIFFReadEncodedTile(tif, static_cast<uint32_t>(index), raw.data(), bytes)
-                             : TIFFReadEncodedStrip(tif, static_cast<uint32_t>(index), raw.data(), bytes);
-  if (got < 0) fail((tiled ? "tile " : "strip ") + std::to_string(index) + " cannot be read");
+  tmsize_t got = 0;
+  std::vector<unsigned char> raw;
+  if (by_rows) {
+    // Rows r0 .. r1 - 1, decoded from where libtiff is in their strip when it is before r0, else from the strip's
+    // first row; rows before r0 go to a scratch row.
+    const tmsize_t row = TIFFScanlineSize(tif);
+    const long r0 = index * block_h, r1 = std::min(r0 + block_h, height), strip_start = r0 / strip_rows * strip_rows;
+    raw.resize(static_cast<std::size_t>(row * (r1 - r0)));
+    const long from = next_row >= strip_start && next_row <= r0 ? next_row : strip_start;
+    std::vector<unsigned char> skipped(from < r0 ? static_cast<std::size_t>(row) : 0);
+    next_row = -1;
+    for (long r = from; r < r1; ++r)
+      if (TIFFReadScanline(tif, r < r0 ? skipped.data() : raw.data() + (r - r0) * row, static_cast<uint32_t>(r), 0) < 0)
+        fail("row " + std::to_string(r) + " cannot be read");
+    next_row = r1;
+    got = row * (r1 - r0);
+  } else {
+    const tmsize_t bytes = tiled ? TIFFTileSize(tif) : TIFFStripSize(tif);
+    raw.resize(static_cast<std::size_t>(bytes));
+    got = tiled ? TIFFReadEncodedTile(tif, static_cast<uint32_t>(index), raw.data(), bytes)
+                : TIFFReadEncodedStrip(tif, static_cast<uint32_t>(index), raw.data(), bytes);
+    if (got < 0) fail((tiled ? "tile " : "strip ") + std::to_string(index) + " cannot be read");
+  }
   ++reads;
   const std::size_t n = static_cast<std::size_t>(block_w * block_h);
   std::vector<float> out(n, NAN);
@@ -321,20 +425,26 @@ ReferenceDem::ReferenceDem(const std::string& path, const ReferenceDemOptions& o
   try {
     d.read_georeferencing(gtif);
     d.read_crs(gtif);
+    const std::string datum = d.read_vertical(gtif, options.datum);
+    d.datum = std::make_unique<VerticalDatum>(
+        datum, options.datum.empty() ? path + ": the GeoTIFF keys' vertical datum" : "--dem-datum (for " + path + ")");
   } catch (...) {
     GTIFFree(gtif);
     throw;
   }
   GTIFFree(gtif);
-  d.datum = std::make_unique<VerticalDatum>(options.datum, "--dem-datum (for " + path + ")");
   const std::size_t block_bytes = static_cast<std::size_t>(d.block_w * d.block_h) * sizeof(float);
   d.max_blocks = std::max<std::size_t>(4, options.cache_bytes / std::max<std::size_t>(1, block_bytes));
-  // Posting in metres: pixel steps along columns and rows, in degrees converted at the centre when geographic.
+  // Posting in metres: pixel steps along columns and rows, in degrees converted at the centre when geographic,
+  // in the CRS's unit converted when projected.
   double sx = std::hypot(d.a[1], d.a[4]), sy = std::hypot(d.a[2], d.a[5]);
   if (d.geographic) {
     const double lat = d.a[3] + d.a[4] * (d.width - 1) / 2.0 + d.a[5] * (d.height - 1) / 2.0;
     sx *= 111320 * std::cos(lat * kDegToRad);
     sy *= 110574;
+  } else {
+    sx *= d.xy_unit;
+    sy *= d.xy_unit;
   }
   d.posting = (sx + sy) / 2;
 }
@@ -352,13 +462,13 @@ bool ReferenceDem::height(double lon, double lat, double& h, double* grad) const
       const double e = 1e-5;
       double fc1, fr1, fc2, fr2;
       if (!d.to_pixel(lon + e, lat, fc1, fr1) || !d.to_pixel(lon, lat + e, fc2, fr2)) return false;
-      grad[0] = (dzc * (fc1 - fc) + dzr * (fr1 - fr)) / e;
-      grad[1] = (dzc * (fc2 - fc) + dzr * (fr2 - fr)) / e;
+      grad[0] = d.z_unit * (dzc * (fc1 - fc) + dzr * (fr1 - fr)) / e;
+      grad[1] = d.z_unit * (dzc * (fc2 - fc) + dzr * (fr2 - fr)) / e;
     }
   }
   const double n = d.datum->undulation(lon, lat);
   if (!std::isfinite(n)) return false;
-  h = z + n;
+  h = z * d.z_unit + n;
   return std::isfinite(h);
 }
 
@@ -374,6 +484,8 @@ bool ReferenceDem::slope_aspect(double lon, double lat, double& slope_deg, doubl
 
 const std::string& ReferenceDem::path() const { return impl_->path; }
 std::string ReferenceDem::crs() const { return impl_->crs; }
+const std::string& ReferenceDem::datum() const { return impl_->datum->name(); }
+double ReferenceDem::vertical_unit_m() const { return impl_->z_unit; }
 double ReferenceDem::posting_m() const { return impl_->posting; }
 long ReferenceDem::width() const { return impl_->width; }
 long ReferenceDem::height_px() const { return impl_->height; }
@@ -425,7 +537,7 @@ void write_reference_dem(const std::string& path, const DemRaster& dem) {
   GTIFKeySet(gtif, GTModelTypeGeoKey, TYPE_SHORT, 1, geographic ? ModelTypeGeographic : ModelTypeProjected);
   GTIFKeySet(gtif, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsArea);
   GTIFKeySet(gtif, geographic ? GeographicTypeGeoKey : ProjectedCSTypeGeoKey, TYPE_SHORT, 1, dem.epsg);
-  // Vertical keys: EPSG 5773 is EGM96 height, 3855 EGM2008 height (a reader of this kind uses --dem-datum).
+  // Vertical keys: EPSG 5773 is EGM96 height, 3855 EGM2008 height (a ReferenceDem takes its datum from them).
   if (dem.datum == "egm96") GTIFKeySet(gtif, VerticalCSTypeGeoKey, TYPE_SHORT, 1, 5773);
   if (dem.datum == "egm2008") GTIFKeySet(gtif, VerticalCSTypeGeoKey, TYPE_SHORT, 1, 3855);
   GTIFWriteKeys(gtif);

@@ -3,42 +3,17 @@
 #include "tpkit/core/parallel_for.hpp"
 
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <stdexcept>
 #include <vector>
 
+#include "../limited_process.hpp"
+
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
-
-// Runs `body` in a child process whose address space is limited to `bytes`; returns its exit status
-// (0 = the body returned true).
-template <class F>
-int run_limited(rlim_t bytes, F body) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    rlimit lim{bytes, bytes};
-    if (setrlimit(RLIMIT_AS, &lim) != 0) _exit(10);
-    _exit(body() ? 0 : 1);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
+using tpkit_test::kSanitized;
+using tpkit_test::run_limited;
 
 TEST(ParallelFor, EveryItemOnceWithFewerThreadsThanAsked) {
   if (kSanitized) GTEST_SKIP() << "the sanitizers' shadow memory needs more address space than the limit";

@@ -69,9 +69,10 @@ TEST(ReferenceDem, Egm96HeightsBecomeEllipsoidal) {
   EXPECT_NEAR(egm96.undulation(5.4, 43.3), 49.4356, 1e-3);
   PlaneDem p;
   p.e0 = 690000;  // covers lon 5.4 (E 694669)
-  const std::string path = scratch("plane_egm96.tif");
+  const std::string path = scratch("plane_egm96.tif"), bare = scratch("plane_no_vertical_keys.tif");
   write_reference_dem(path, p.raster("egm96", 128));
-  ReferenceDem ell(path), geo(path, {"egm96"});
+  write_reference_dem(bare, p.raster("ellipsoid", 128));
+  ReferenceDem ell(bare), geo(path, {"egm96"});
   double h1, h2;
   ASSERT_TRUE(ell.height(5.4, 43.3, h1));
   ASSERT_TRUE(geo.height(5.4, 43.3, h2));

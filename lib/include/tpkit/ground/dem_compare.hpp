@@ -31,6 +31,7 @@ struct DemComparison {
   std::array<DzStats, 5> by_slope;
   long unknown = 0;  // points the DEM gives no height for
 };
+// InputError naming the DEM when it gives none of the points a height: statistics of nothing are no comparison.
 DemComparison compare_to_dem(const std::vector<GroundSample>& points, const ReferenceDem& dem);
 
 // A dem-dz file (tpkit-formats(5)): one record per (stage, class): stage 0 before alignment, 1 after (only 0

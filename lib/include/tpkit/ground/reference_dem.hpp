@@ -9,8 +9,16 @@
 // centre). Vertical datum: "ellipsoid" (heights above the ellipsoid of the DEM's CRS, taken as WGS 84's),
 // "egm96" (PROJ grid egm96_15.gtx, Debian proj-data), "egm2008" (PROJ grid egm08_25.gtx) or the path of a
 // vertical grid PROJ reads (GTX, GeoTIFF): h_ellipsoid = H + N(lon, lat), N the grid's geoid undulation.
-// Nodata (GDAL_NODATA tag 42113), NaN and cells outside the DEM are unknown: a sample needs the 4 cells
-// around it known.
+// Unless the caller names one, the datum is the GeoTIFF's vertical keys' (VerticalCSTypeGeoKey 5773 EGM96
+// height, 3855 EGM2008 height, 5030 WGS 84 ellipsoidal; else VerticalDatumGeoKey 5171 EGM96, 1027 EGM2008, 6326
+// WGS 84), ellipsoidal when the keys give none; a named datum that disagrees with the keys is refused (keys of a
+// vertical CRS tpkit does not know: the caller must name its grid). Heights in the VerticalUnitsGeoKey's unit
+// (feet, US survey feet...) are converted to metres.
+// Nodata (GDAL_NODATA tag 42113, compared in the band's sample type as GDAL does: "-3.4e+38" is the float32
+// -3.4e38), NaN and cells outside the DEM are unknown: a sample needs the 4 cells around it known.
+// Memory: a tile, or a strip read whole, takes at most kMaxDemBlockBytes decoded; a larger strip is read row
+// by row (libtiff decodes a strip's rows in order: sampling it out of order decodes it again from its start,
+// slow for a big compressed strip but bounded), a larger tile is refused (libtiff decodes a tile only whole).
 #pragma once
 #include <cstddef>
 #include <memory>
@@ -19,8 +27,13 @@
 
 namespace tpkit {
 
+// Decoded bytes a DEM tile (or a strip read whole) may take: 64 MiB, e.g. 4096 x 4096 float32 cells.
+constexpr std::size_t kMaxDemBlockBytes = std::size_t(64) << 20;
+
 // A geoid model (or none): N(lon, lat) in metres, h_ellipsoid = H_geoid + N. `datum`: ellipsoid|egm96|egm2008|
-// a grid's path. InputError naming the grid (and `what`, the option or file it is for) when the grid is missing.
+// a grid's file name or path. InputError naming `what` (the option or file it is for) when the grid is missing,
+// or when `datum` is not one of these: the grid goes into a PROJ definition, so PROJ's optional-grid '@', a
+// list (','), spaces or '+' parameters are refused rather than pasted in.
 class VerticalDatum {
  public:
   explicit VerticalDatum(const std::string& datum, const std::string& what = "--dem-datum");
@@ -39,14 +52,15 @@ class VerticalDatum {
 };
 
 struct ReferenceDemOptions {
-  std::string datum = "ellipsoid";        // ellipsoid|egm96|egm2008|GRID
+  std::string datum;                      // ellipsoid|egm96|egm2008|GRID; empty: the GeoTIFF's vertical keys
   std::size_t cache_bytes = 256u << 20;   // tiles (strips) kept in memory at most
 };
 
 class ReferenceDem {
  public:
   // InputError naming `path` for a file that is not a single-band GeoTIFF, has no georeferencing, an unknown
-  // CRS, or a datum grid that is missing.
+  // CRS, a tile above kMaxDemBlockBytes, a datum that disagrees with its vertical keys, or a datum grid that is
+  // missing.
   explicit ReferenceDem(const std::string& path, const ReferenceDemOptions& options = {});
   ~ReferenceDem();
   ReferenceDem(const ReferenceDem&) = delete;
@@ -61,6 +75,8 @@ class ReferenceDem {
 
   const std::string& path() const;
   std::string crs() const;             // e.g. "EPSG:32631"
+  const std::string& datum() const;    // the vertical datum used: ellipsoid|egm96|egm2008|GRID
+  double vertical_unit_m() const;      // metres per unit of the stored heights (1 unless the keys say otherwise)
   double posting_m() const;            // mean pixel size in metres (geographic CRS: at the DEM's centre)
   long width() const;
   long height_px() const;
