@@ -270,6 +270,14 @@ int run(const Opts& o) {
   if (o.images.empty()) throw UsageError("no images given");
   if (o.tracks.empty()) throw UsageError("--tracks: at least one tracks file is needed");
   if (o.out.empty()) throw UsageError("-o DIR is required");
+  {
+    // '-' is standard input, which one reader takes whole
+    std::vector<std::string> text_inputs = o.tracks;
+    text_inputs.insert(text_inputs.end(), o.check.begin(), o.check.end());
+    text_inputs.insert(text_inputs.end(), o.gcp.begin(), o.gcp.end());
+    if (std::count(text_inputs.begin(), text_inputs.end(), "-") > 1)
+      throw UsageError("'-' (standard input) is given more than once among --tracks, --check and --gcp: it can be read once");
+  }
   const BiasModel model = parse_bias_model(o.model);
   parse_ground_crs(o.crs);
   if (o.threads < 1 || o.threads > kMaxThreads) throw UsageError("--threads must be between 1 and " + std::to_string(kMaxThreads));
@@ -298,11 +306,7 @@ int run(const Opts& o) {
   }
   const std::vector<AdjustTrack> tracks = gather_tracks(o.tracks, o.images);
   const std::vector<AdjustTrack> check = gather_tracks(o.check, o.images);
-  std::vector<Gcp> gcps;
-  for (const auto& f : o.gcp) {
-    auto part = read_gcp_file(f);
-    gcps.insert(gcps.end(), part.begin(), part.end());
-  }
+  const std::vector<Gcp> gcps = read_gcp_files(o.gcp);
   ao.control = gcps_to_adjust(gcps, GcpRole::control, images);
   const std::vector<AdjustControl> check_points = gcps_to_adjust(gcps, GcpRole::check, images);
   if (!o.gcp.empty() && ao.control.empty()) warn("--gcp: no control point (role 0) in the files: only check points, the fit is that without GCPs");

@@ -1,0 +1,25 @@
+# Trust campaign (issue 50), area rpc: GCP files, rpc-adjust's refusals, tp-rpc project's reach.
+# A triplet with a bias on every view (no view fixed), 5 control and 20 check points from its truth
+# (bench/gcp_from_truth.awk), left out of the tie tracks; and a triplet with two biased views, the first fixed.
+set(tr_synth_gcp "tp-synth -o syn --size 256 --points 300 --rpc-bias 1:4,-3,0.002,-0.001 --rpc-bias 2:-5,2,0.001,0.002 --rpc-bias 3:3,5,-0.002,0.001 > /dev/null && awk -v TIES=syn/ties.tracks -f $SRC/bench/gcp_from_truth.awk syn/truth.tracks > syn/points.gcp")
+set(tr_adjust_gcp "rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/ties.tracks")
+set(tr_synth "tp-synth -o syn --size 512 --points 400 --rpc-bias 2:6,-8,0.002,-0.001,0.001,0.0015 --rpc-bias 3:-10,4,0.001,0.0005 > /dev/null")
+set(tr_adjust "rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --fixed syn/view1.tif")
+# tpkit gcp records: id role lon lat h ...; AWK_EDIT changes every point (a wrong zone, a wrong datum)
+set(tr_edit_gcp "awk '/^#/ { print @SEMI@ next } { AWK_EDIT @SEMI@ print }' OFS=' ' syn/points.gcp > syn/edited.gcp")
+
+# Item 9: the same GCP file given twice (every point counted twice), by its name or another, and one id in
+# two files, are refused with the file (and line).
+tpkit_tool_test(trust-rpc.gcp-file-twice
+  COMMAND "${tr_synth_gcp} && ln -s points.gcp syn/again.gcp && (${tr_adjust_gcp} --gcp syn/points.gcp --gcp syn/points.gcp -o a @SEMI@ echo rc $?) && (${tr_adjust_gcp} --gcp syn/points.gcp --gcp syn/again.gcp -o b @SEMI@ echo rc $?) && grep -v '^#' syn/points.gcp | head -1 > one && (grep '^#' syn/points.gcp @SEMI@ cat one) > syn/other.gcp && ${tr_adjust_gcp} --gcp syn/points.gcp --gcp syn/other.gcp -o c"
+  EXPECT_FAIL STDOUT_MATCH "^rc 1\nrc 1\n$"
+  STDERR_MATCH "rpc-adjust: syn/points.gcp: given twice \\(also as syn/points.gcp\\): its points would count twice.*rpc-adjust: syn/again.gcp: given twice \\(also as syn/points.gcp\\).*rpc-adjust: syn/other.gcp:[0-9]+: point [0-9]+ is also syn/points.gcp:[0-9]+: one id is one point"
+  NO_FILE c)
+
+# Item 17: GCP files: a UTF-8 byte order mark (an editor's) is skipped, '-' reads standard input, and an
+# id beyond 2^53 (not held exactly by a double, beyond 64 bits here) is refused with file:line.
+tpkit_tool_test(trust-rpc.gcp-bom-stdin-ids
+  COMMAND "${tr_synth_gcp} && (printf '\\xEF\\xBB\\xBF' @SEMI@ cat syn/points.gcp) > syn/bom.gcp && ${tr_adjust_gcp} --gcp syn/bom.gcp -o bom 2>&1 | grep -c 'agree with the tie points' && cat syn/points.gcp | ${tr_adjust_gcp} --gcp - -o piped 2>&1 | grep -c 'agree with the tie points' && (${tr_adjust_gcp} --tracks - --gcp - -o twice < syn/points.gcp @SEMI@ echo rc $?) && printf '# ASP\\n123456789012345678901234 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2 0.2\\n' > syn/big.gcp && ${tr_adjust_gcp} --gcp syn/big.gcp -o adj"
+  EXPECT_FAIL STDOUT_MATCH "^1\n1\nrc 2\n$"
+  STDERR_MATCH "'-' \\(standard input\\) is given more than once.*rpc-adjust: syn/big.gcp:2: id '123456789012345678901234' is beyond 2\\^53"
+  NO_FILE adj)
