@@ -16,6 +16,14 @@ tpkit_tool_test(trust-rpc.gcp-file-twice
   STDERR_MATCH "rpc-adjust: syn/points.gcp: given twice \\(also as syn/points.gcp\\): its points would count twice.*rpc-adjust: syn/again.gcp: given twice \\(also as syn/points.gcp\\).*rpc-adjust: syn/other.gcp:[0-9]+: point [0-9]+ is also syn/points.gcp:[0-9]+: one id is one point"
   NO_FILE c)
 
+# Item 13: project gives nan, not a pixel, for a latitude outside [-90, 90], a longitude outside
+# [-180, 360), the antipode and the Earth's centre (ECEF 0 0 0), far outside the model's box; a point of
+# the scene still projects.
+tpkit_tool_test(trust-rpc.project-out-of-reach
+  COMMAND "${tr_synth} && printf '5.4428 1000 150\\n545 43.3 150\\n-174.56 -43.3 150\\n' | tp-rpc project syn/view1.tif && echo '0 0 0' | tp-rpc project syn/view1.tif --crs ecef && grep -v '^#' syn/truth.tracks | head -1 | awk '{ print $11, $12, $13 }' > p && tp-rpc project syn/view1.tif -i p"
+  STDOUT_MATCH "^nan nan nan\nnan nan nan\nnan nan nan\nnan nan nan\n-?[0-9][0-9.e+-]* -?[0-9][0-9.e+-]* "
+  STDERR_MATCH "warning: 3 points have no solution and are written as nan@SEMI@ the first: stdin:1: latitude 1000 is outside \\[-90, 90\\]")
+
 # Item 17: GCP files: a UTF-8 byte order mark (an editor's) is skipped, '-' reads standard input, and an
 # id beyond 2^53 (not held exactly by a double, beyond 64 bits here) is refused with file:line.
 tpkit_tool_test(trust-rpc.gcp-bom-stdin-ids

@@ -235,3 +235,18 @@ TEST(RpcTrust, AGroundPointOutsideTheUtmZoneNamesItsTrack) {
   const std::string e = message([&] { utm(Eigen::Vector3d(95.0, 43.3, 100), 7); });
   EXPECT_NE(e.find("track 7 at lon 95, lat 43.3: not in EPSG:32631"), std::string::npos) << e;
 }
+
+// Issue 50, item 13: a ground point the model says nothing about is named (tp-rpc project writes nan for
+// it): latitude and longitude off the globe, the antipode, the Earth's centre; the scene and its margin
+// are not.
+TEST(RpcTrust, PointsFarOutsideTheModelAreOutsideItsDomain) {
+  const RpcModel m = pleiades()[0].model;
+  const Eigen::Vector3d centre(m.lon_off, m.lat_off, m.height_off);
+  EXPECT_EQ(m.outside_domain(centre), "");
+  EXPECT_EQ(m.outside_domain(centre + Eigen::Vector3d(9 * m.lon_scale, -9 * m.lat_scale, 9 * m.height_scale)), "");
+  EXPECT_NE(m.outside_domain({m.lon_off, 1000, 150}).find("latitude 1000 is outside [-90, 90]"), std::string::npos);
+  EXPECT_NE(m.outside_domain({545, m.lat_off, 150}).find("longitude 545 is outside [-180, 360)"), std::string::npos);
+  EXPECT_NE(m.outside_domain({m.lon_off + 180, -m.lat_off, 150}).find("more than 10 scales"), std::string::npos);
+  EXPECT_NE(m.outside_domain({0, 0, -6378137}).find("more than 10 scales"), std::string::npos);
+  EXPECT_NE(m.outside_domain(centre + Eigen::Vector3d(0, 0, 11 * m.height_scale)).find("more than 10 scales"), std::string::npos);
+}
