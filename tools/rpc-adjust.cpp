@@ -317,17 +317,21 @@ int run(const Opts& o) {
   inputs.insert(inputs.end(), o.check.begin(), o.check.end());
   inputs.insert(inputs.end(), o.gcp.begin(), o.gcp.end());
   if (!o.dem.empty()) inputs.push_back(o.dem);
+  for (const auto& s : sources) inputs.push_back(s.path);  // the models read (a sidecar, an --rpc file)
   const fs::path dir(o.out);
-  check_outputs({{"-o", (dir / "rpc.bias").string()},
-                 {"-o", (dir / "ground.points").string()},
-                 {"-o", (dir / "ground.geojson").string()},
-                 {"-o", (dir / "ground.csv").string()},
-                 {"-o", (dir / "ground.csvt").string()},
-                 {"-o", (dir / "ground.prj").string()},
-                 {"-o", (dir / "rpc.residuals").string()},
-                 {"-o", (dir / "accuracy").string()},
-                 {"-o", (dir / "residuals.svg").string()}},
-                inputs);
+  std::vector<std::pair<std::string, std::string>> outputs;
+  for (const char* name : {"rpc.bias", "ground.points", "ground.geojson", "ground.csv", "ground.csvt", "ground.prj",
+                           "rpc.residuals", "accuracy", "residuals.svg"})
+    outputs.push_back({"-o", (dir / name).string()});
+  // the adjusted models (write_models' names): an image's own sidecar in -o is an input, refused here
+  // rather than after the adjustment
+  for (const auto& im : images) {
+    const std::string stem = (dir / fs::path(im.path).stem()).string();
+    outputs.push_back({"-o", stem + "_rpc.txt"});
+    outputs.push_back({"-o", stem + ".RPB"});
+    if (o.write_tiff) outputs.push_back({"--write-tiff", (dir / fs::path(im.path).filename()).string()});
+  }
+  check_outputs(outputs, inputs);
 
   AdjustResult r = adjust_rpcs(images, tracks, ao);
   if (ao.height.at) {

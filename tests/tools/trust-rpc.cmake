@@ -24,6 +24,14 @@ tpkit_tool_test(trust-rpc.project-out-of-reach
   STDOUT_MATCH "^nan nan nan\nnan nan nan\nnan nan nan\nnan nan nan\n-?[0-9][0-9.e+-]* -?[0-9][0-9.e+-]* "
   STDERR_MATCH "warning: 3 points have no solution and are written as nan@SEMI@ the first: stdin:1: latitude 1000 is outside \\[-90, 90\\]")
 
+# Item 17: -o naming the images' folder, where an adjusted model would replace the model read (an
+# --rpc sidecar): refused before the fit and before any figure is printed (it printed the DEM check's RMS
+# line, then failed on the name), exit 2, nothing written.
+tpkit_tool_test(trust-rpc.output-is-a-model-read
+  COMMAND "${tr_synth} && (${tr_adjust} --dem syn/truth.dem.tif --rpc syn/view2.tif=syn/view2_rpc.txt -o syn 2> log @SEMI@ echo rc $?) && cat log >&2 && grep -c rms log"
+  EXPECT_FAIL STDOUT_MATCH "^rc 2\n0\n$"
+  STDERR_MATCH "rpc-adjust: .*syn/view2_rpc.txt"
+  NO_FILE syn/rpc.bias)
 # Item 17: GCP files: a UTF-8 byte order mark (an editor's) is skipped, '-' reads standard input, and an
 # id beyond 2^53 (not held exactly by a double, beyond 64 bits here) is refused with file:line.
 tpkit_tool_test(trust-rpc.gcp-bom-stdin-ids
