@@ -333,11 +333,16 @@ int run(const Opts& o) {
   }
   check_outputs(outputs, inputs);
 
+  // a fit that fails with a height prior or GCPs is held until the checks below have said whether they made it fail
+  ao.keep_untrusted = ao.height.at || !ao.control.empty();
   AdjustResult r = adjust_rpcs(images, tracks, ao);
+  const FitTrust trust = fit_trust(images, tracks, r, ao.flag_px);
   if (ao.height.at) {
     // a prior that contradicts the tie points degrades the fit silently: solved again without it, compared
     const HeightPriorCheck pc = check_height_prior(images, tracks, ao, r);
     const std::string what = !o.height_prior.empty() ? "--height-prior " + o.height_prior : "--dem " + o.dem;
+    if (pc.contradicts && !trust.ok())
+      throw NumericalError(what + " contradicts the tie points: " + pc.figures + "; the fit with it fails: " + trust.figures);
     if (pc.contradicts && o.strict)
       throw NumericalError(what + " contradicts the tie points (--strict): " + pc.figures);
     if (pc.contradicts)
@@ -348,12 +353,15 @@ int run(const Opts& o) {
   if (!ao.control.empty()) {
     // GCPs that contradict the tie points (or each other): solved again without them, compared
     const GcpCheck gc = check_gcps(images, tracks, ao, r);
+    if (gc.contradicts && !trust.ok())
+      throw NumericalError("--gcp: the control points contradict the tie points: " + gc.figures + "; the fit with them fails: " + trust.figures);
     if (gc.contradicts && o.strict) throw NumericalError("--gcp: the control points contradict the tie points (--strict): " + gc.figures);
     if (gc.contradicts)
       warn("--gcp: the control points contradict the tie points: " + gc.figures + " (check that point's coordinates, datum and measurements; --strict makes this an error)");
     else
       std::cerr << "rpc-adjust: --gcp: the control points agree with the tie points: " << gc.figures << "\n";
   }
+  if (!trust.ok()) throw NumericalError(trust.message());
   std::vector<PointSet> sets;
   if (!gcps.empty()) sets = evaluate_sets(images, r, ao.control, check_points);
   long check_n = 0;

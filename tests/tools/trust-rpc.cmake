@@ -16,6 +16,19 @@ tpkit_tool_test(trust-rpc.gcp-file-twice
   STDERR_MATCH "rpc-adjust: syn/points.gcp: given twice \\(also as syn/points.gcp\\): its points would count twice.*rpc-adjust: syn/again.gcp: given twice \\(also as syn/points.gcp\\).*rpc-adjust: syn/other.gcp:[0-9]+: point [0-9]+ is also syn/points.gcp:[0-9]+: one id is one point"
   NO_FILE c)
 
+# Item 10: a height prior that drags the fit over --flag is named in the error, with both RMS (it said
+# "wrong models, wrong tracks, or a --flag too tight", naming neither the prior nor the DEM).
+tpkit_tool_test(trust-rpc.prior-drags-the-fit
+  COMMAND "${tr_synth} && ${tr_adjust} --height-prior 1000+-0.01 -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: --height-prior 1000\\+-0.01 contradicts the tie points: rms after [0-9.e-]+ px with it, [0-9.e-]+ px without .*@SEMI@ the fit with it fails: [0-9]+ of 400 tracks keep an RMS above 1 px after the fit"
+  NO_FILE adj)
+# Item 10: the same for a control point given 1 km off with a 1 mm sigma: the GCPs are named, with the
+# worst point (a single point moves no median: the check on the delivered models lets it through).
+tpkit_tool_test(trust-rpc.gcp-drags-the-fit
+  COMMAND "${tr_synth_gcp} && awk -v TIES=syn/ties.tracks -v BLUNDER=1000 -v SG=0.001 -f $SRC/bench/gcp_from_truth.awk syn/truth.tracks > syn/blunder.gcp && ${tr_adjust_gcp} --gcp syn/blunder.gcp -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: --gcp: the control points contradict the tie points: rms after .* largest normalized GCP residual [0-9.e+]+ sigma at point [0-9]+ .*@SEMI@ the fit with them fails: "
+  NO_FILE adj)
+
 # Item 13: project gives nan, not a pixel, for a latitude outside [-90, 90], a longitude outside
 # [-180, 360), the antipode and the Earth's centre (ECEF 0 0 0), far outside the model's box; a point of
 # the scene still projects.
@@ -38,4 +51,13 @@ tpkit_tool_test(trust-rpc.gcp-bom-stdin-ids
   COMMAND "${tr_synth_gcp} && (printf '\\xEF\\xBB\\xBF' @SEMI@ cat syn/points.gcp) > syn/bom.gcp && ${tr_adjust_gcp} --gcp syn/bom.gcp -o bom 2>&1 | grep -c 'agree with the tie points' && cat syn/points.gcp | ${tr_adjust_gcp} --gcp - -o piped 2>&1 | grep -c 'agree with the tie points' && (${tr_adjust_gcp} --tracks - --gcp - -o twice < syn/points.gcp @SEMI@ echo rc $?) && printf '# ASP\\n123456789012345678901234 43.3 5.4 100 1 1 1 view1.tif 10 20 0.2 0.2\\n' > syn/big.gcp && ${tr_adjust_gcp} --gcp syn/big.gcp -o adj"
   EXPECT_FAIL STDOUT_MATCH "^1\n1\nrc 2\n$"
   STDERR_MATCH "'-' \\(standard input\\) is given more than once.*rpc-adjust: syn/big.gcp:2: id '123456789012345678901234' is beyond 2\\^53"
+  NO_FILE adj)
+
+# Item 14: a model that diverges over its image (view2's cubic L^3 term of the sample raised to 0.3: up to
+# 80 px at its edges, which no bias model follows) in 160 of 400 tracks: the fit flags 113 of them, fewer
+# than half of all, and its models were written with a warning; refused now, naming the image, for half or
+# more of the tracks that view one image are flagged. Nothing is written.
+tpkit_tool_test(trust-rpc.diverging-model
+  COMMAND "${tr_synth} && awk '/^#/ { print @SEMI@ next } { n++ } n % 5 < 3 { $4 = $5 = \"nan\" } { print }' syn/truth.tracks | sed 's/^# tpkit tracks 1/# tpkit tracks 2/' > syn/part.tracks && sed 's/^SAMP_NUM_COEFF_12: .*/SAMP_NUM_COEFF_12: 0.3/' syn/view2_rpc.txt > bad_rpc.txt && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/part.tracks --fixed syn/view1.tif --rpc syn/view2.tif=bad_rpc.txt -o adj"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: image2 syn/view2.tif: [0-9]+ of the 160 tracks that view it keep an RMS above 1 px after the fit \\(its rms [0-9.]+ px before, [0-9.]+ px after\\): its model does not fit them"
   NO_FILE adj)

@@ -379,13 +379,8 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   }
   r.sigma0 = std::sqrt(sum / std::max(1L, 2 * count));
   r.sigma0_weighted = std::sqrt(wsum / std::max(1L, 2 * count));
-  // a fit that leaves most tracks above the flag threshold adjusted nothing that can be trusted
-  const long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
-  if (2 * flagged > usable)
-    throw NumericalError(std::to_string(flagged) + " of " + std::to_string(usable) + " tracks keep an RMS above " +
-                         format_figure(o.flag_px) + " px after the fit (rms " + format_figure(residual_rms(r, false)) +
-                         " px before, " + format_figure(residual_rms(r, true)) + " px after, " +
-                         std::to_string(r.iterations) + " iterations): wrong models, wrong tracks, or a --flag too tight");
+  if (!o.keep_untrusted)
+    if (const FitTrust trust = fit_trust(images, tracks, r, o.flag_px); !trust.ok()) throw NumericalError(trust.message());
   // sigma_h: the weighted normal matrix of the point, (J^T W J)^-1 (h, h) scaled by the a posteriori
   // variance of unit weight, W = (s_ref / sigma)^2 (unit weights: sigma0^2 (J^T J)^-1, as tp-ground's)
   for (size_t t = 0; t < nt; ++t) {
@@ -403,6 +398,35 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     r.sigma_h[t] = r.sigma0_weighted * std::sqrt(std::max(C(2, 2), 0.0));
   }
   return r;
+}
+
+FitTrust fit_trust(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r,
+                   double flag_px) {
+  FitTrust trust;
+  const long usable = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
+  const long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
+  if (2 * flagged >= usable) {
+    trust.figures = std::to_string(flagged) + " of " + std::to_string(usable) + " tracks keep an RMS above " + format_figure(flag_px) +
+                    " px after the fit (rms " + format_figure(residual_rms(r, false)) + " px before, " +
+                    format_figure(residual_rms(r, true)) + " px after, " + std::to_string(r.iterations) + " iterations)";
+    trust.cause = "wrong models, wrong tracks, or a --flag too tight";
+    return trust;
+  }
+  std::vector<long> seen(images.size(), 0), bad(images.size(), 0);
+  for (size_t t = 0; t < tracks.size(); ++t)
+    if (r.initial_ok[t])
+      for (const auto& [i, xy] : tracks[t].views) ++seen[i], bad[i] += r.flagged[t];
+  for (size_t i = 0; i < images.size(); ++i)
+    if (bad[i] > 0 && 2 * bad[i] >= seen[i]) {
+      trust.figures = "image" + std::to_string(i + 1) + " " + images[i].path + ": " + std::to_string(bad[i]) + " of the " +
+                      std::to_string(seen[i]) + " tracks that view it keep an RMS above " + format_figure(flag_px) +
+                      " px after the fit (its rms " + format_figure(residual_rms(r, false, static_cast<int>(i))) + " px before, " +
+                      format_figure(residual_rms(r, true, static_cast<int>(i))) + " px after)";
+      trust.cause = "its model does not fit them where the other images' do (another image's model, or one that diverges over "
+                    "the image, which no bias model follows), or its tracks are wrong";
+      return trust;
+    }
+  return trust;
 }
 
 double inlier_rms(const AdjustResult& r, int image) {
@@ -472,6 +496,7 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
   AdjustOptions free_options = options;
   free_options.height = HeightPrior{};
   free_options.progress = false;
+  free_options.keep_untrusted = false;  // a free fit that fails too: the models or the tracks are wrong
   const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
   // the RMS of both fits over the same observations: those of the tracks that neither fit flags, so
   // that a few blunders (whose residuals grow when a prior holds their heights) do not pass for a
@@ -587,6 +612,7 @@ GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<Ad
   AdjustOptions free_options = options;
   free_options.control.clear();
   free_options.progress = false;
+  free_options.keep_untrusted = false;  // a free fit that fails too: the models or the tracks are wrong
   const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
   double s[2] = {0, 0};
   long n = 0;
@@ -598,6 +624,8 @@ GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<Ad
     ++n;
   }
   for (size_t t = 0; t < with.flagged.size(); ++t) c.common_tracks += with.initial_ok[t] && !with.flagged[t] && !free_fit.flagged[t];
+  c.flagged_with = std::count(with.flagged.begin(), with.flagged.end(), 1);
+  c.flagged_without = std::count(free_fit.flagged.begin(), free_fit.flagged.end(), 1);
   c.rms_with = n ? std::sqrt(s[0] / n) : NAN;
   c.rms_without = n ? std::sqrt(s[1] / n) : NAN;
   for (size_t p = 0; p < options.control.size(); ++p) {
@@ -612,11 +640,13 @@ GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<Ad
     }
     if (worst > c.worst_normalized) c.worst_normalized = worst, c.worst_id = gc.id, c.worst_enu = enu;
   }
-  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with.reference_sigma_px || c.worst_normalized > 5;
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with.reference_sigma_px || c.worst_normalized > 5 ||
+                  c.flagged_with - c.flagged_without > std::max<long>(10, static_cast<long>(free_fit.flagged.size() / 100));
   c.figures = "rms after " + format_figure(c.rms_with) + " px with the GCPs, " + format_figure(c.rms_without) +
               " px without (over the " + std::to_string(c.common_tracks) + " tracks neither flags); largest normalized GCP residual " +
               format_figure(c.worst_normalized) + " sigma at point " + std::to_string(c.worst_id) + " (adjusted minus given: e " +
-              format_figure(c.worst_enu[0], 3) + " m, n " + format_figure(c.worst_enu[1], 3) + " m, u " + format_figure(c.worst_enu[2], 3) + " m)";
+              format_figure(c.worst_enu[0], 3) + " m, n " + format_figure(c.worst_enu[1], 3) + " m, u " + format_figure(c.worst_enu[2], 3) + " m); flagged tracks " +
+              std::to_string(c.flagged_with) + " with, " + std::to_string(c.flagged_without) + " without";
   return c;
 }
 

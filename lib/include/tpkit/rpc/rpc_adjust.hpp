@@ -110,6 +110,9 @@ struct AdjustOptions {
   int threads = 1;
   int max_iterations = 100;
   bool progress = false;        // progress line on a terminal (tool_support Progress)
+  // Return a fit that fit_trust() refuses instead of throwing its error, so that the caller can first ask
+  // whether a height prior or the GCPs dragged it there (check_height_prior, check_gcps name them).
+  bool keep_untrusted = false;
 };
 
 struct AdjustResult {
@@ -142,10 +145,25 @@ void check_tracks(const std::vector<AdjustImage>& images, const std::vector<Adju
 
 // Throws what check_tracks throws; NumericalError when no track can be intersected, when the cost is not
 // finite (an observation or a prior out of range), when the DEM or height prior reaches none of the
-// points, or when most tracks stay above flag_px after the fit (the models, the tracks or --flag are
-// wrong: the figures are in the message).
+// points, or (unless keep_untrusted) with fit_trust's message for a fit it cannot stand behind.
 AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                          const AdjustOptions& options);
+
+// Can the fit be trusted? Not when half or more of the intersected tracks keep an RMS above flag_px after
+// it (the models, the tracks or --flag are wrong), nor when half or more of the tracks that view one image
+// do (that image's model is wrong where the others hold: another image's, or one that diverges over the
+// image, as a corrupted cubic term does, which no bias model follows). Half, not most: the robust fit
+// holds the tracks it fits and flags the rest, so a fit that fits only half of them fits no model (a
+// diverging model flagged exactly half of the tracks, and its models were written). Empty `figures`:
+// trusted.
+struct FitTrust {
+  std::string figures;  // "N of M tracks keep an RMS above F px after the fit (...)", or that of one image
+  std::string cause;    // what is wrong, in words
+  bool ok() const { return figures.empty(); }
+  std::string message() const { return figures + ": " + cause; }
+};
+FitTrust fit_trust(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r,
+                   double flag_px);
 
 // Does a height prior (options.height: --height-prior or --dem) contradict the tie points? The adjustment
 // is solved again without it and the two compared: the prior contradicts them when, with it, the RMS
@@ -192,11 +210,14 @@ ControlEvaluation evaluate_controls(const std::vector<AdjustImage>& images, cons
 // 0.04 px at 1 px sigma on a tp-synth block; only a fit that the tie points' own sigma cannot explain
 // counts), or when a control point's normalized residual after the fit (the largest of its
 // ground residuals over their sigmas and its image residuals over their sigmas) exceeds 5: a GCP that the
-// other GCPs and the tie points cannot fit (a blunder in its coordinates or its measurements).
+// other GCPs and the tie points cannot fit (a blunder in its coordinates or its measurements), or when
+// they flag more than max(10, 1% of the tracks) tracks more (as check_height_prior: GCPs that drag the
+// fit over --flag).
 struct GcpCheck {
   bool contradicts = false;
   double rms_with = 0, rms_without = 0;  // px, over the tracks neither fit flags
   long common_tracks = 0;
+  long flagged_with = 0, flagged_without = 0;
   long long worst_id = 0;                // the control point of the largest normalized residual
   double worst_normalized = 0;           // that residual (sigmas)
   Eigen::Vector3d worst_enu = Eigen::Vector3d::Zero();  // its ground residual (adjusted minus known, m)
