@@ -33,7 +33,7 @@ struct Opts {
   std::string model = "affine", height_prior, dem, dem_datum = "ellipsoid", crs = "geographic", out;
   double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01, default_sigma = NAN;
   int threads = 1, iterations = 100;
-  bool write_tiff = false, strict = false, unweighted = false;
+  bool write_tiff = false, strict = false, unweighted = false, force_gcp = false;
 };
 
 
@@ -333,6 +333,23 @@ int run(const Opts& o) {
   }
   check_outputs(outputs, inputs);
 
+  if (!gcps.empty()) {
+    // GCPs wrong together (a zone, a datum, geoid heights) move the whole block and agree with the tie
+    // points after the fit: only the delivered models can tell, so they judge the GCPs first
+    std::vector<AdjustControl> all = ao.control;
+    all.insert(all.end(), check_points.begin(), check_points.end());
+    const GcpModelCheck mc = check_gcps_on_models(images, all);
+    std::string what = "--gcp";
+    for (const auto& f : o.gcp) what += " " + f;
+    if (mc.refuse && !o.force_gcp)
+      throw NumericalError(what + ": " + mc.problem + ": " + mc.figures + " (--force-gcp adjusts with them all the same)");
+    if (!mc.problem.empty() && o.strict) throw NumericalError(what + ": " + mc.problem + " (--strict): " + mc.figures);
+    if (!mc.problem.empty())
+      warn(what + ": " + mc.problem + ": " + mc.figures + " (--strict makes this an error)");
+    else
+      std::cerr << "rpc-adjust: " << what << ": on the delivered models: " << mc.figures << "\n";
+  }
+
   // a fit that fails with a height prior or GCPs is held until the checks below have said whether they made it fail
   ao.keep_untrusted = ao.height.at || !ao.control.empty();
   AdjustResult r = adjust_rpcs(images, tracks, ao);
@@ -444,6 +461,7 @@ int main(int argc, char** argv) {
         app.add_option("--iterations", o->iterations, "largest number of solver iterations")->check(Positive);
         app.add_option("--threads", o->threads, "threads");
         app.add_flag("--strict", o->strict, "a height prior (--height-prior, --dem) or GCPs (--gcp) that contradict the tie points are an error");
+        app.add_flag("--force-gcp", o->force_gcp, "adjust with GCPs that lie more than 150 px (median) from the delivered models' projections");
         app.add_flag("--write-tiff", o->write_tiff, "also write a copy of each image with the adjusted tag 50844");
         app.add_option("-o,--out", o->out, "output folder (created if needed)");
         return [o]() { return run(*o); };

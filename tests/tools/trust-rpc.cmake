@@ -8,6 +8,23 @@ set(tr_adjust "rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn
 # tpkit gcp records: id role lon lat h ...; AWK_EDIT changes every point (a wrong zone, a wrong datum)
 set(tr_edit_gcp "awk '/^#/ { print @SEMI@ next } { AWK_EDIT @SEMI@ print }' OFS=' ' syn/points.gcp > syn/edited.gcp")
 
+# Item 9: control points all moved 1 km east (a wrong zone or datum) lie about 2000 px from where the
+# delivered models project them: refused before any fit, naming the file and the shift in pixels and
+# metres; --force-gcp adjusts with them all the same. (They passed as "agreeing with the tie points".)
+string(REPLACE "AWK_EDIT" "$3 += 1000 / (111319.49 * cos($4 * 3.14159265358979 / 180))" tr_east "${tr_edit_gcp}")
+tpkit_tool_test(trust-rpc.gcp-all-moved-1km
+  COMMAND "${tr_synth_gcp} && ${tr_east} && (${tr_adjust_gcp} --gcp syn/edited.gcp --force-gcp -o forced 2>&1 | grep -c 'warning: --gcp syn/edited.gcp: the points lie') && ${tr_adjust_gcp} --gcp syn/edited.gcp --strict -o adj"
+  EXPECT_FAIL STDOUT_MATCH "^1\n$"
+  STDERR_MATCH "rpc-adjust: --gcp syn/edited.gcp: the points lie [0-9]+ px \\(median\\) from where the delivered models project them, .*: 25 points, 75 measurements: .* offset -?[0-9.]+, -?[0-9.]+ px = known minus seen (99[0-9]|100[0-9])(\\.[0-9]+)? m east, -?[0-9.]+ m north.* \\(--force-gcp adjusts with them all the same\\)"
+  NO_FILE adj)
+# Item 9: control heights 49.4 m low (EGM96 heights at Marseille given as ellipsoidal) are named as such: a
+# warning, and an error with --strict. The delivered models' own heights are within a few metres.
+string(REPLACE "AWK_EDIT" "$5 -= 49.4" tr_geoid "${tr_edit_gcp}")
+tpkit_tool_test(trust-rpc.gcp-geoid-heights
+  COMMAND "${tr_synth_gcp} && ${tr_geoid} && (${tr_adjust_gcp} --gcp syn/edited.gcp -o warned 2>&1 | grep -c 'geoid heights given as ellipsoidal?') && ${tr_adjust_gcp} --gcp syn/points.gcp --strict -o fine 2> fine.log && grep -c 'on the delivered models: 25 points' fine.log && ${tr_adjust_gcp} --gcp syn/edited.gcp --strict -o adj"
+  EXPECT_FAIL STDOUT_MATCH "^1\n1\n$"
+  STDERR_MATCH "rpc-adjust: --gcp syn/edited.gcp: their heights lie 4[0-9.]+ m below those the delivered models intersect them at, the geoid undulation there \\(49\\.[0-9]+ m\\): geoid heights given as ellipsoidal\\? \\(--strict\\): "
+  NO_FILE adj)
 # Item 9: the same GCP file given twice (every point counted twice), by its name or another, and one id in
 # two files, are refused with the file (and line).
 tpkit_tool_test(trust-rpc.gcp-file-twice

@@ -21,6 +21,7 @@
 #include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
+#include "tpkit/ground/reference_dem.hpp"
 
 namespace tpkit {
 
@@ -111,6 +112,13 @@ struct ControlPriorCost {
     return true;
   }
 };
+
+// The median (upper, for an even count) of v; NaN for none.
+double median_of(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
 
 // WGS 84 metres per degree of longitude and latitude at latitude lat (deg), and 1 for the height.
 Eigen::Vector3d metres_per_degree(double lat) {
@@ -529,13 +537,8 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
     adh.push_back(std::fabs(h - g[2]));
   }
   c.covered = static_cast<long>(dh.size());
-  auto median = [](std::vector<double> v) {
-    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  c.median_dh = median(dh);
-  c.median_abs_dh = median(adh);
+  c.median_dh = median_of(dh);
+  c.median_abs_dh = median_of(adh);
   // The heights of the free fit have a level only when something holds it (a fixed image, control points);
   // otherwise the bias priors choose it, and a prior that moves it is choosing the datum, not contradicting.
   const bool free_has_datum = !options.control.empty() ||
@@ -604,6 +607,72 @@ ControlEvaluation evaluate_controls(const std::vector<AdjustImage>& images, cons
     e.known_residual_px.push_back(res);
   }
   return e;
+}
+
+GcpModelCheck check_gcps_on_models(const std::vector<AdjustImage>& images, const std::vector<AdjustControl>& points) {
+  GcpModelCheck c;
+  const ControlEvaluation e = evaluate_controls(images, nullptr, points);
+  std::vector<double> dx, dy, de, dn, du, lon, lat;
+  for (size_t p = 0; p < points.size(); ++p) {
+    const AdjustControl& g = points[p];
+    double s = 0;
+    for (size_t k = 0; k < g.views.size(); ++k) {
+      const Eigen::Vector2d& r = e.known_residual_px[p][k];
+      s += r.squaredNorm();
+      dx.push_back(r[0]);
+      dy.push_back(r[1]);
+      const auto& [i, xy] = g.views[k];
+      try {
+        const Eigen::Vector2d ll = images[i].model.localize(xy[0], xy[1], g.llh[2]);
+        const Eigen::Vector3d m = metres_per_degree(g.llh[1]);
+        de.push_back((g.llh[0] - ll[0]) * m[0]);
+        dn.push_back((g.llh[1] - ll[1]) * m[1]);
+      } catch (const NumericalError&) {  // not localized: its pixel offset still counts
+      }
+    }
+    c.measurements += static_cast<long>(g.views.size());
+    c.residual_px.push_back(g.views.empty() ? 0.0 : std::sqrt(s / g.views.size()));
+    if (c.residual_px.back() > c.worst_px) c.worst_px = c.residual_px.back(), c.worst_id = g.id;
+    if (e.intersection[p].ok) du.push_back(g.llh[2] - e.intersection[p].llh[2]);
+    lon.push_back(g.llh[0]);
+    lat.push_back(g.llh[1]);
+  }
+  c.points = static_cast<long>(points.size());
+  c.intersected = static_cast<long>(du.size());
+  if (points.empty()) return c;
+  c.median_px = median_of(c.residual_px);
+  c.offset_px = {median_of(dx), median_of(dy)};
+  c.offset_en = {median_of(de), median_of(dn)};
+  c.offset_u = median_of(du);
+  std::vector<double> spread;
+  for (double d : du) spread.push_back(std::fabs(d - c.offset_u));
+  c.spread_u = median_of(spread);
+  try {
+    const VerticalDatum egm96("egm96", "the GCPs' geoid check");
+    c.geoid_n = egm96.undulation(median_of(lon), median_of(lat));
+  } catch (const InputError&) {  // no grid: the heights are still compared, the geoid not named
+  }
+  const double tol = std::max(5.0, 0.2 * std::fabs(c.geoid_n));
+  c.geoid_like = std::fabs(c.geoid_n) >= 15 && std::fabs(std::fabs(c.offset_u) - std::fabs(c.geoid_n)) <= tol && c.spread_u <= tol;
+  if (c.median_px > kGcpWarnPx)
+    c.problem = "the points lie " + format_figure(c.median_px) + " px (median) from where the delivered models project them, "
+                "beyond those models' error of a few to a few tens of pixels (a wrong zone, datum or coordinate order?)";
+  c.refuse = c.median_px > kGcpRefusePx;
+  if (c.geoid_like)
+    c.problem += std::string(c.problem.empty() ? "" : "; ") + "their heights lie " + format_figure(std::fabs(c.offset_u)) + " m " +
+                 (c.offset_u < 0 ? "below" : "above") + " those the delivered models intersect them at, the geoid undulation there (" +
+                 format_figure(c.geoid_n) + " m): " +
+                 (c.offset_u < 0 ? "geoid heights given as ellipsoidal?" : "ellipsoidal heights given as geoid heights?");
+  c.figures = std::to_string(c.points) + " points, " + std::to_string(c.measurements) +
+              " measurements: projection of the known position minus the measurement, median over the points " +
+              format_figure(c.median_px) + " px (largest " + format_figure(c.worst_px) + " px at point " + std::to_string(c.worst_id) +
+              "), offset " + format_figure(c.offset_px[0]) + ", " + format_figure(c.offset_px[1]) + " px = known minus seen " +
+              format_figure(c.offset_en[0]) + " m east, " + format_figure(c.offset_en[1]) + " m north";
+  if (c.intersected > 0)
+    c.figures += "; known minus intersected height, median over " + std::to_string(c.intersected) + " points " +
+                 format_figure(c.offset_u) + " m (spread " + format_figure(c.spread_u) + " m)";
+  if (std::isfinite(c.geoid_n)) c.figures += ", EGM96 geoid undulation there " + format_figure(c.geoid_n) + " m";
+  return c;
 }
 
 GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,

@@ -226,6 +226,42 @@ struct GcpCheck {
 GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                     const AdjustOptions& options, const AdjustResult& with_gcps);
 
+// The GCPs against the delivered models, before any adjustment. GCPs wrong together (all moved by a wrong
+// zone, datum or coordinate order; heights above the geoid read as ellipsoidal) pull the whole block with
+// them, and the tie points, which see no absolute position, agree with them afterwards: only the
+// delivered models can tell. Per point (control and check): the RMS over its measurements of the
+// projection of its known position minus the measurement (pixels); their median is the decision figure
+// (a blunder or two moves no median). Also, over the measurements, the median offset (projected minus
+// measured, pixels) and the median ground offset (known minus the measurement localized at the known
+// height, metres east, north), and over the points measured in two or more images, the median of the
+// known height minus the height intersected on the delivered models (m).
+struct GcpModelCheck {
+  long points = 0, measurements = 0, intersected = 0;
+  std::vector<double> residual_px;                     // per point, in the order given
+  double median_px = 0;                                // median of residual_px
+  long long worst_id = 0;                              // the point of the largest residual_px
+  double worst_px = 0;
+  Eigen::Vector2d offset_px = Eigen::Vector2d::Zero();  // median projected minus measured, x y
+  Eigen::Vector2d offset_en = Eigen::Vector2d::Zero();  // median known minus localized, m east, north
+  double offset_u = std::nan("");                      // median known minus intersected height, m
+  double spread_u = std::nan("");                      // median |dh - offset_u|, m
+  double geoid_n = std::nan("");                       // EGM96 undulation at the points (NaN: no grid)
+  bool geoid_like = false;                             // |offset_u| is that undulation (see check_gcps_on_models)
+  std::string problem;                                 // what is wrong, in words ("": nothing: median_px and heights fine)
+  bool refuse = false;                                 // median_px above kGcpRefusePx
+  std::string figures;                                 // one line: the figures above
+};
+// Thresholds on median_px. Delivered models are within a few pixels to a few tens of pixels of the
+// ground: Pleiades 8.5 m CE90 without GCPs (17 px at 0.5 m), WorldView-3 3.5 m CE90 (11 px at 0.31 m);
+// the Jacksonville WorldView-3 models disagree with each other by a few pixels, tp-synth blocks' biases
+// are below 10 px. Above 30 px a GCP set is suspect (warned; an error under --strict); above 150 px (75 m
+// at 0.5 m GSD, nine times Pleiades' specified CE90) no delivered model explains it: refused unless forced.
+constexpr double kGcpWarnPx = 30, kGcpRefusePx = 150;
+// geoid_like: |offset_u| within max(5 m, 20% of N) of |N| (N the EGM96 undulation, |N| >= 15 m so that
+// it is told from the delivered models' own height error of a few metres) and the points agree on it
+// (spread_u below the same tolerance): heights above the geoid given as ellipsoidal, or the reverse.
+GcpModelCheck check_gcps_on_models(const std::vector<AdjustImage>& images, const std::vector<AdjustControl>& points);
+
 // RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0), pixels.
 double residual_rms(const AdjustResult& r, bool after, int image = -1);
 // The same after the fit, over the observations of the tracks not flagged (AdjustResult::flagged).
