@@ -33,7 +33,7 @@ struct Opts {
   std::string model = "affine", height_prior, dem, dem_datum, crs = "geographic", out;
   double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01, default_sigma = NAN;
   int threads = 1, iterations = 100;
-  bool write_tiff = false, strict = false, unweighted = false;
+  bool write_tiff = false, strict = false, unweighted = false, force_gcp = false;
 };
 
 
@@ -270,6 +270,14 @@ int run(const Opts& o) {
   if (o.images.empty()) throw UsageError("no images given");
   if (o.tracks.empty()) throw UsageError("--tracks: at least one tracks file is needed");
   if (o.out.empty()) throw UsageError("-o DIR is required");
+  {
+    // '-' is standard input, which one reader takes whole
+    std::vector<std::string> text_inputs = o.tracks;
+    text_inputs.insert(text_inputs.end(), o.check.begin(), o.check.end());
+    text_inputs.insert(text_inputs.end(), o.gcp.begin(), o.gcp.end());
+    if (std::count(text_inputs.begin(), text_inputs.end(), "-") > 1)
+      throw UsageError("'-' (standard input) is given more than once among --tracks, --check and --gcp: it can be read once");
+  }
   const BiasModel model = parse_bias_model(o.model);
   parse_ground_crs(o.crs);
   if (o.threads < 1 || o.threads > kMaxThreads) throw UsageError("--threads must be between 1 and " + std::to_string(kMaxThreads));
@@ -298,11 +306,7 @@ int run(const Opts& o) {
   }
   const std::vector<AdjustTrack> tracks = gather_tracks(o.tracks, o.images);
   const std::vector<AdjustTrack> check = gather_tracks(o.check, o.images);
-  std::vector<Gcp> gcps;
-  for (const auto& f : o.gcp) {
-    auto part = read_gcp_file(f);
-    gcps.insert(gcps.end(), part.begin(), part.end());
-  }
+  const std::vector<Gcp> gcps = read_gcp_files(o.gcp);
   ao.control = gcps_to_adjust(gcps, GcpRole::control, images);
   const std::vector<AdjustControl> check_points = gcps_to_adjust(gcps, GcpRole::check, images);
   if (!o.gcp.empty() && ao.control.empty()) warn("--gcp: no control point (role 0) in the files: only check points, the fit is that without GCPs");
@@ -313,23 +317,49 @@ int run(const Opts& o) {
   inputs.insert(inputs.end(), o.check.begin(), o.check.end());
   inputs.insert(inputs.end(), o.gcp.begin(), o.gcp.end());
   if (!o.dem.empty()) inputs.push_back(o.dem);
+  for (const auto& s : sources) inputs.push_back(s.path);  // the models read (a sidecar, an --rpc file)
   const fs::path dir(o.out);
-  check_outputs({{"-o", (dir / "rpc.bias").string()},
-                 {"-o", (dir / "ground.points").string()},
-                 {"-o", (dir / "ground.geojson").string()},
-                 {"-o", (dir / "ground.csv").string()},
-                 {"-o", (dir / "ground.csvt").string()},
-                 {"-o", (dir / "ground.prj").string()},
-                 {"-o", (dir / "rpc.residuals").string()},
-                 {"-o", (dir / "accuracy").string()},
-                 {"-o", (dir / "residuals.svg").string()}},
-                inputs);
+  std::vector<std::pair<std::string, std::string>> outputs;
+  for (const char* name : {"rpc.bias", "ground.points", "ground.geojson", "ground.csv", "ground.csvt", "ground.prj",
+                           "rpc.residuals", "accuracy", "residuals.svg"})
+    outputs.push_back({"-o", (dir / name).string()});
+  // the adjusted models (write_models' names): an image's own sidecar in -o is an input, refused here
+  // rather than after the adjustment
+  for (const auto& im : images) {
+    const std::string stem = (dir / fs::path(im.path).stem()).string();
+    outputs.push_back({"-o", stem + "_rpc.txt"});
+    outputs.push_back({"-o", stem + ".RPB"});
+    if (o.write_tiff) outputs.push_back({"--write-tiff", (dir / fs::path(im.path).filename()).string()});
+  }
+  check_outputs(outputs, inputs);
 
+  if (!gcps.empty()) {
+    // GCPs wrong together (a zone, a datum, geoid heights) move the whole block and agree with the tie
+    // points after the fit: only the delivered models can tell, so they judge the GCPs first
+    std::vector<AdjustControl> all = ao.control;
+    all.insert(all.end(), check_points.begin(), check_points.end());
+    const GcpModelCheck mc = check_gcps_on_models(images, all);
+    std::string what = "--gcp";
+    for (const auto& f : o.gcp) what += " " + f;
+    if (mc.refuse && !o.force_gcp)
+      throw NumericalError(what + ": " + mc.problem + ": " + mc.figures + " (--force-gcp adjusts with them all the same)");
+    if (!mc.problem.empty() && o.strict) throw NumericalError(what + ": " + mc.problem + " (--strict): " + mc.figures);
+    if (!mc.problem.empty())
+      warn(what + ": " + mc.problem + ": " + mc.figures + " (--strict makes this an error)");
+    else
+      std::cerr << "rpc-adjust: " << what << ": on the delivered models: " << mc.figures << "\n";
+  }
+
+  // a fit that fails with a height prior or GCPs is held until the checks below have said whether they made it fail
+  ao.keep_untrusted = ao.height.at || !ao.control.empty();
   AdjustResult r = adjust_rpcs(images, tracks, ao);
+  const FitTrust trust = fit_trust(images, tracks, r, ao.flag_px);
   if (ao.height.at) {
     // a prior that contradicts the tie points degrades the fit silently: solved again without it, compared
     const HeightPriorCheck pc = check_height_prior(images, tracks, ao, r);
     const std::string what = !o.height_prior.empty() ? "--height-prior " + o.height_prior : "--dem " + o.dem;
+    if (pc.contradicts && !trust.ok())
+      throw NumericalError(what + " contradicts the tie points: " + pc.figures + "; the fit with it fails: " + trust.figures);
     if (pc.contradicts && o.strict)
       throw NumericalError(what + " contradicts the tie points (--strict): " + pc.figures);
     if (pc.contradicts)
@@ -340,12 +370,15 @@ int run(const Opts& o) {
   if (!ao.control.empty()) {
     // GCPs that contradict the tie points (or each other): solved again without them, compared
     const GcpCheck gc = check_gcps(images, tracks, ao, r);
+    if (gc.contradicts && !trust.ok())
+      throw NumericalError("--gcp: the control points contradict the tie points: " + gc.figures + "; the fit with them fails: " + trust.figures);
     if (gc.contradicts && o.strict) throw NumericalError("--gcp: the control points contradict the tie points (--strict): " + gc.figures);
     if (gc.contradicts)
       warn("--gcp: the control points contradict the tie points: " + gc.figures + " (check that point's coordinates, datum and measurements; --strict makes this an error)");
     else
       std::cerr << "rpc-adjust: --gcp: the control points agree with the tie points: " << gc.figures << "\n";
   }
+  if (!trust.ok()) throw NumericalError(trust.message());
   std::vector<PointSet> sets;
   if (!gcps.empty()) sets = evaluate_sets(images, r, ao.control, check_points);
   long check_n = 0;
@@ -428,6 +461,7 @@ int main(int argc, char** argv) {
         app.add_option("--iterations", o->iterations, "largest number of solver iterations")->check(Positive);
         app.add_option("--threads", o->threads, "threads");
         app.add_flag("--strict", o->strict, "a height prior (--height-prior, --dem) or GCPs (--gcp) that contradict the tie points are an error");
+        app.add_flag("--force-gcp", o->force_gcp, "adjust with GCPs that lie more than 150 px (median) from the delivered models' projections");
         app.add_flag("--write-tiff", o->write_tiff, "also write a copy of each image with the adjusted tag 50844");
         app.add_option("-o,--out", o->out, "output folder (created if needed)");
         return [o]() { return run(*o); };

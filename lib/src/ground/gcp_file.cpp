@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <Eigen/Dense>
+#include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <sstream>
 
@@ -25,6 +27,17 @@ double parse_double(const std::string& s, const std::string& source, long line, 
   }
   if (used == 0 || used != s.size()) throw InputError(source, line, what + " '" + s + "' is not a number");
   return v;
+}
+
+// The largest id: an integer that a double holds exactly (2^53), for every tpkit table holds its numbers
+// as doubles (the accuracy file's id column among them): two larger ids could read back as one.
+constexpr double kMaxGcpId = 9007199254740992.0;
+
+long long checked_id(double id, const std::string& text, const std::string& source, long line) {
+  if (id != std::floor(id)) throw InputError(source, line, "id '" + text + "' is not an integer");
+  if (std::fabs(id) > kMaxGcpId)
+    throw InputError(source, line, "id '" + text + "' is beyond 2^53 = 9007199254740992: tpkit keeps ids as numbers, exact up to there (number the points anew)");
+  return static_cast<long long>(id);
 }
 
 void check_point(const Gcp& g) {
@@ -53,11 +66,19 @@ Eigen::Vector3d ecef_sigma_to_enu(const Eigen::Vector3d& s, double lon, double l
   return (R.cwiseAbs2() * s.cwiseAbs2()).cwiseSqrt();
 }
 
+// The file's text ('-': standard input), without a UTF-8 byte order mark at its start (editors on Windows
+// write one; left in, it made the first id "\xEF\xBB\xBF1" or hid the "# tpkit gcp" line).
 std::string read_text(const std::string& path) {
-  std::ifstream f = open_input_file(path, InputKind::stream, true);
   std::ostringstream os;
-  os << f.rdbuf();
-  return os.str();
+  if (path == "-") {
+    os << std::cin.rdbuf();
+  } else {
+    std::ifstream f = open_input_file(path, InputKind::stream, true);
+    os << f.rdbuf();
+  }
+  std::string text = os.str();
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
+  return text;
 }
 
 }  // namespace
@@ -83,9 +104,7 @@ std::vector<Gcp> parse_asp_gcp(const std::string& text, const std::string& sourc
     Gcp g;
     g.source = source;
     g.line = n;
-    const double id = parse_double(f[0], source, n, "id");
-    if (id != std::floor(id)) throw InputError(source, n, "id '" + f[0] + "' is not an integer");
-    g.id = static_cast<long long>(id);
+    g.id = checked_id(parse_double(f[0], source, n, "id"), f[0], source, n);
     if (seen.count(g.id)) throw InputError(source, n, "point " + f[0] + " is also on line " + std::to_string(seen[g.id]));
     seen[g.id] = n;
     const double lat = parse_double(f[1], source, n, "latitude"), lon = parse_double(f[2], source, n, "longitude");
@@ -129,10 +148,10 @@ std::vector<Gcp> parse_tpkit_gcp(const std::string& text, const std::string& sou
   for (size_t r = 0; r < t.rows.size(); ++r) {
     const auto& v = t.rows[r];
     const long line = t.row_line[r];
-    if (v[c[0]] != std::floor(v[c[0]])) throw InputError(source, line, "id " + format_number(v[c[0]]) + " is not an integer");
+    const long long id = checked_id(v[c[0]], format_number(v[c[0]]), source, line);
     if (v[c[1]] != 0 && v[c[1]] != 1) throw InputError(source, line, "role " + format_number(v[c[1]]) + ": 0 (control) or 1 (check)");
     Gcp g;
-    g.id = static_cast<long long>(v[c[0]]);
+    g.id = id;
     g.role = v[c[1]] == 0 ? GcpRole::control : GcpRole::check;
     g.llh = {v[c[2]], v[c[3]], v[c[4]]};
     g.sigma_enu = {v[c[5]], v[c[6]], v[c[7]]};
@@ -168,10 +187,33 @@ std::vector<Gcp> parse_tpkit_gcp(const std::string& text, const std::string& sou
 
 std::vector<Gcp> read_gcp_file(const std::string& path) {
   const std::string text = read_text(path);
+  const std::string source = path == "-" ? "<stdin>" : path;
   const std::string first = text.substr(0, text.find('\n'));
-  if (first.rfind("# tpkit gcp", 0) == 0) return parse_tpkit_gcp(text, path);
-  if (first.rfind("# tpkit ", 0) == 0) throw InputError(path, 1, "a " + first.substr(8) + " file: ground control points are a gcp file");
-  return parse_asp_gcp(text, path);
+  if (first.rfind("# tpkit gcp", 0) == 0) return parse_tpkit_gcp(text, source);
+  if (first.rfind("# tpkit ", 0) == 0) throw InputError(source, 1, "a " + first.substr(8) + " file: ground control points are a gcp file");
+  return parse_asp_gcp(text, source);
+}
+
+std::vector<Gcp> read_gcp_files(const std::vector<std::string>& paths) {
+  namespace fs = std::filesystem;
+  for (size_t i = 0; i < paths.size(); ++i)
+    for (size_t j = 0; j < i; ++j) {
+      std::error_code ec;
+      if (paths[i] == paths[j] || (paths[i] != "-" && paths[j] != "-" && fs::equivalent(paths[i], paths[j], ec)))
+        throw InputError(paths[i] == "-" ? "<stdin>" : paths[i], 0,
+                         "given twice (also as " + paths[j] + "): its points would count twice in the fit");
+    }
+  std::vector<Gcp> out;
+  std::map<long long, size_t> first;  // id -> its point in out
+  for (const auto& path : paths)
+    for (Gcp& g : read_gcp_file(path)) {
+      const auto [it, fresh] = first.emplace(g.id, out.size());
+      if (!fresh)
+        throw InputError(g.source, g.line, "point " + std::to_string(g.id) + " is also " + out[it->second].source + ":" +
+                                               std::to_string(out[it->second].line) + ": one id is one point (a point given twice would count twice)");
+      out.push_back(std::move(g));
+    }
+  return out;
 }
 
 std::string format_tpkit_gcp(const std::vector<Gcp>& gcps) {

@@ -21,6 +21,7 @@
 #include "tpkit/rpc/rpc_ground.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
+#include "tpkit/ground/reference_dem.hpp"
 
 namespace tpkit {
 
@@ -111,6 +112,13 @@ struct ControlPriorCost {
     return true;
   }
 };
+
+// The median (upper, for an even count) of v; NaN for none.
+double median_of(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
 
 // WGS 84 metres per degree of longitude and latitude at latitude lat (deg), and 1 for the height.
 Eigen::Vector3d metres_per_degree(double lat) {
@@ -379,13 +387,8 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   }
   r.sigma0 = std::sqrt(sum / std::max(1L, 2 * count));
   r.sigma0_weighted = std::sqrt(wsum / std::max(1L, 2 * count));
-  // a fit that leaves most tracks above the flag threshold adjusted nothing that can be trusted
-  const long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
-  if (2 * flagged > usable)
-    throw NumericalError(std::to_string(flagged) + " of " + std::to_string(usable) + " tracks keep an RMS above " +
-                         format_figure(o.flag_px) + " px after the fit (rms " + format_figure(residual_rms(r, false)) +
-                         " px before, " + format_figure(residual_rms(r, true)) + " px after, " +
-                         std::to_string(r.iterations) + " iterations): wrong models, wrong tracks, or a --flag too tight");
+  if (!o.keep_untrusted)
+    if (const FitTrust trust = fit_trust(images, tracks, r, o.flag_px); !trust.ok()) throw NumericalError(trust.message());
   // sigma_h: the weighted normal matrix of the point, (J^T W J)^-1 (h, h) scaled by the a posteriori
   // variance of unit weight, W = (s_ref / sigma)^2 (unit weights: sigma0^2 (J^T J)^-1, as tp-ground's)
   for (size_t t = 0; t < nt; ++t) {
@@ -403,6 +406,35 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     r.sigma_h[t] = r.sigma0_weighted * std::sqrt(std::max(C(2, 2), 0.0));
   }
   return r;
+}
+
+FitTrust fit_trust(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r,
+                   double flag_px) {
+  FitTrust trust;
+  const long usable = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
+  const long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
+  if (2 * flagged >= usable) {
+    trust.figures = std::to_string(flagged) + " of " + std::to_string(usable) + " tracks keep an RMS above " + format_figure(flag_px) +
+                    " px after the fit (rms " + format_figure(residual_rms(r, false)) + " px before, " +
+                    format_figure(residual_rms(r, true)) + " px after, " + std::to_string(r.iterations) + " iterations)";
+    trust.cause = "wrong models, wrong tracks, or a --flag too tight";
+    return trust;
+  }
+  std::vector<long> seen(images.size(), 0), bad(images.size(), 0);
+  for (size_t t = 0; t < tracks.size(); ++t)
+    if (r.initial_ok[t])
+      for (const auto& [i, xy] : tracks[t].views) ++seen[i], bad[i] += r.flagged[t];
+  for (size_t i = 0; i < images.size(); ++i)
+    if (bad[i] > 0 && 2 * bad[i] >= seen[i]) {
+      trust.figures = "image" + std::to_string(i + 1) + " " + images[i].path + ": " + std::to_string(bad[i]) + " of the " +
+                      std::to_string(seen[i]) + " tracks that view it keep an RMS above " + format_figure(flag_px) +
+                      " px after the fit (its rms " + format_figure(residual_rms(r, false, static_cast<int>(i))) + " px before, " +
+                      format_figure(residual_rms(r, true, static_cast<int>(i))) + " px after)";
+      trust.cause = "its model does not fit them where the other images' do (another image's model, or one that diverges over "
+                    "the image, which no bias model follows), or its tracks are wrong";
+      return trust;
+    }
+  return trust;
 }
 
 double inlier_rms(const AdjustResult& r, int image) {
@@ -472,6 +504,7 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
   AdjustOptions free_options = options;
   free_options.height = HeightPrior{};
   free_options.progress = false;
+  free_options.keep_untrusted = false;  // a free fit that fails too: the models or the tracks are wrong
   const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
   // the RMS of both fits over the same observations: those of the tracks that neither fit flags, so
   // that a few blunders (whose residuals grow when a prior holds their heights) do not pass for a
@@ -504,13 +537,8 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
     adh.push_back(std::fabs(h - g[2]));
   }
   c.covered = static_cast<long>(dh.size());
-  auto median = [](std::vector<double> v) {
-    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  c.median_dh = median(dh);
-  c.median_abs_dh = median(adh);
+  c.median_dh = median_of(dh);
+  c.median_abs_dh = median_of(adh);
   // The heights of the free fit have a level only when something holds it (a fixed image, control points);
   // otherwise the bias priors choose it, and a prior that moves it is choosing the datum, not contradicting.
   const bool free_has_datum = !options.control.empty() ||
@@ -581,12 +609,79 @@ ControlEvaluation evaluate_controls(const std::vector<AdjustImage>& images, cons
   return e;
 }
 
+GcpModelCheck check_gcps_on_models(const std::vector<AdjustImage>& images, const std::vector<AdjustControl>& points) {
+  GcpModelCheck c;
+  const ControlEvaluation e = evaluate_controls(images, nullptr, points);
+  std::vector<double> dx, dy, de, dn, du, lon, lat;
+  for (size_t p = 0; p < points.size(); ++p) {
+    const AdjustControl& g = points[p];
+    double s = 0;
+    for (size_t k = 0; k < g.views.size(); ++k) {
+      const Eigen::Vector2d& r = e.known_residual_px[p][k];
+      s += r.squaredNorm();
+      dx.push_back(r[0]);
+      dy.push_back(r[1]);
+      const auto& [i, xy] = g.views[k];
+      try {
+        const Eigen::Vector2d ll = images[i].model.localize(xy[0], xy[1], g.llh[2]);
+        const Eigen::Vector3d m = metres_per_degree(g.llh[1]);
+        de.push_back((g.llh[0] - ll[0]) * m[0]);
+        dn.push_back((g.llh[1] - ll[1]) * m[1]);
+      } catch (const NumericalError&) {  // not localized: its pixel offset still counts
+      }
+    }
+    c.measurements += static_cast<long>(g.views.size());
+    c.residual_px.push_back(g.views.empty() ? 0.0 : std::sqrt(s / g.views.size()));
+    if (c.residual_px.back() > c.worst_px) c.worst_px = c.residual_px.back(), c.worst_id = g.id;
+    if (e.intersection[p].ok) du.push_back(g.llh[2] - e.intersection[p].llh[2]);
+    lon.push_back(g.llh[0]);
+    lat.push_back(g.llh[1]);
+  }
+  c.points = static_cast<long>(points.size());
+  c.intersected = static_cast<long>(du.size());
+  if (points.empty()) return c;
+  c.median_px = median_of(c.residual_px);
+  c.offset_px = {median_of(dx), median_of(dy)};
+  c.offset_en = {median_of(de), median_of(dn)};
+  c.offset_u = median_of(du);
+  std::vector<double> spread;
+  for (double d : du) spread.push_back(std::fabs(d - c.offset_u));
+  c.spread_u = median_of(spread);
+  try {
+    const VerticalDatum egm96("egm96", "the GCPs' geoid check");
+    c.geoid_n = egm96.undulation(median_of(lon), median_of(lat));
+  } catch (const InputError&) {  // no grid: the heights are still compared, the geoid not named
+  }
+  const double tol = std::max(5.0, 0.2 * std::fabs(c.geoid_n));
+  c.geoid_like = std::fabs(c.geoid_n) >= 15 && std::fabs(std::fabs(c.offset_u) - std::fabs(c.geoid_n)) <= tol && c.spread_u <= tol;
+  if (c.median_px > kGcpWarnPx)
+    c.problem = "the points lie " + format_figure(c.median_px) + " px (median) from where the delivered models project them, "
+                "beyond those models' error of a few to a few tens of pixels (a wrong zone, datum or coordinate order?)";
+  c.refuse = c.median_px > kGcpRefusePx;
+  if (c.geoid_like)
+    c.problem += std::string(c.problem.empty() ? "" : "; ") + "their heights lie " + format_figure(std::fabs(c.offset_u)) + " m " +
+                 (c.offset_u < 0 ? "below" : "above") + " those the delivered models intersect them at, the geoid undulation there (" +
+                 format_figure(c.geoid_n) + " m): " +
+                 (c.offset_u < 0 ? "geoid heights given as ellipsoidal?" : "ellipsoidal heights given as geoid heights?");
+  c.figures = std::to_string(c.points) + " points, " + std::to_string(c.measurements) +
+              " measurements: projection of the known position minus the measurement, median over the points " +
+              format_figure(c.median_px) + " px (largest " + format_figure(c.worst_px) + " px at point " + std::to_string(c.worst_id) +
+              "), offset " + format_figure(c.offset_px[0]) + ", " + format_figure(c.offset_px[1]) + " px = known minus seen " +
+              format_figure(c.offset_en[0]) + " m east, " + format_figure(c.offset_en[1]) + " m north";
+  if (c.intersected > 0)
+    c.figures += "; known minus intersected height, median over " + std::to_string(c.intersected) + " points " +
+                 format_figure(c.offset_u) + " m (spread " + format_figure(c.spread_u) + " m)";
+  if (std::isfinite(c.geoid_n)) c.figures += ", EGM96 geoid undulation there " + format_figure(c.geoid_n) + " m";
+  return c;
+}
+
 GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                     const AdjustOptions& options, const AdjustResult& with) {
   GcpCheck c;
   AdjustOptions free_options = options;
   free_options.control.clear();
   free_options.progress = false;
+  free_options.keep_untrusted = false;  // a free fit that fails too: the models or the tracks are wrong
   const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
   double s[2] = {0, 0};
   long n = 0;
@@ -598,6 +693,8 @@ GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<Ad
     ++n;
   }
   for (size_t t = 0; t < with.flagged.size(); ++t) c.common_tracks += with.initial_ok[t] && !with.flagged[t] && !free_fit.flagged[t];
+  c.flagged_with = std::count(with.flagged.begin(), with.flagged.end(), 1);
+  c.flagged_without = std::count(free_fit.flagged.begin(), free_fit.flagged.end(), 1);
   c.rms_with = n ? std::sqrt(s[0] / n) : NAN;
   c.rms_without = n ? std::sqrt(s[1] / n) : NAN;
   for (size_t p = 0; p < options.control.size(); ++p) {
@@ -612,11 +709,13 @@ GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<Ad
     }
     if (worst > c.worst_normalized) c.worst_normalized = worst, c.worst_id = gc.id, c.worst_enu = enu;
   }
-  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with.reference_sigma_px || c.worst_normalized > 5;
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with.reference_sigma_px || c.worst_normalized > 5 ||
+                  c.flagged_with - c.flagged_without > std::max<long>(10, static_cast<long>(free_fit.flagged.size() / 100));
   c.figures = "rms after " + format_figure(c.rms_with) + " px with the GCPs, " + format_figure(c.rms_without) +
               " px without (over the " + std::to_string(c.common_tracks) + " tracks neither flags); largest normalized GCP residual " +
               format_figure(c.worst_normalized) + " sigma at point " + std::to_string(c.worst_id) + " (adjusted minus given: e " +
-              format_figure(c.worst_enu[0], 3) + " m, n " + format_figure(c.worst_enu[1], 3) + " m, u " + format_figure(c.worst_enu[2], 3) + " m)";
+              format_figure(c.worst_enu[0], 3) + " m, n " + format_figure(c.worst_enu[1], 3) + " m, u " + format_figure(c.worst_enu[2], 3) + " m); flagged tracks " +
+              std::to_string(c.flagged_with) + " with, " + std::to_string(c.flagged_without) + " without";
   return c;
 }
 

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/text_table.hpp"
 
 namespace tpkit {
 
@@ -62,6 +63,17 @@ Eigen::Vector2d RpcModel::localize(double x, double y, double h) const {
 bool RpcModel::outside_validity_box(const Eigen::Vector3d& llh, double margin) const {
   const double L = (llh[0] - lon_off) / lon_scale, P = (llh[1] - lat_off) / lat_scale, H = (llh[2] - height_off) / height_scale;
   return !(std::fabs(L) <= margin && std::fabs(P) <= margin && std::fabs(H) <= margin);
+}
+
+std::string RpcModel::outside_domain(const Eigen::Vector3d& llh) const {
+  if (!(llh[1] >= -90 && llh[1] <= 90)) return "latitude " + format_number(llh[1]) + " is outside [-90, 90]";
+  if (!(llh[0] >= -180 && llh[0] < 360)) return "longitude " + format_number(llh[0]) + " is outside [-180, 360)";
+  if (outside_validity_box(llh, kFarOutsideScales))
+    return "(" + format_number(llh[0]) + ", " + format_number(llh[1]) + ", " + format_number(llh[2]) + ") is more than " +
+           format_number(kFarOutsideScales) + " scales from the model's offsets (lon " + format_number(lon_off) + " +- " +
+           format_number(lon_scale) + ", lat " + format_number(lat_off) + " +- " + format_number(lat_scale) + ", h " +
+           format_number(height_off) + " +- " + format_number(height_scale) + "): the model says nothing there";
+  return "";
 }
 
 bool RpcModel::operator==(const RpcModel& o) const {

@@ -116,6 +116,7 @@ std::string transform_rpc_points(std::istream& in, const std::string& source, co
         if (std::isnan(x)) throw NumericalError("the input point is nan");
       if (direction == RpcPointDirection::Project) {
         const Eigen::Vector3d g = crs ? crs->inverse({v[0], v[1], v[2]}) : Eigen::Vector3d(v[0], v[1], h);
+        if (const std::string why = model.outside_domain(g); !why.empty()) throw NumericalError(why);
         const Eigen::Vector2d xy = model.project(g);
         if (!xy.allFinite()) throw NumericalError("the projection is not finite (a pole of the model)");
         a = xy.x(), b = xy.y(), h = g.z();

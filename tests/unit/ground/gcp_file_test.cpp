@@ -99,3 +99,34 @@ TEST(GcpFile, BadTpkitRecordsNameFileAndLine) {
                 .find("twice"),
             std::string::npos);
 }
+
+// Issue 50, items 9 and 17: a UTF-8 byte order mark is skipped (it made the first id unreadable), an id
+// beyond 2^53 is refused with file:line (a double, which every tpkit table holds, would round it), a file
+// given twice (by any name) and an id in two files are refused (each counted its points twice).
+TEST(GcpFile, ByteOrderMarkIdsBeyondDoublesAndFilesGivenTwice) {
+  const auto dir = std::filesystem::temp_directory_path() / ("gcp-file-test-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string a = (dir / "a.gcp").string(), b = (dir / "b.gcp").string(), link = (dir / "link.gcp").string();
+  std::ofstream(a) << "\xEF\xBB\xBF" "1 43.3 5.4 100 1 1 1 v.tif 10 20 0.2 0.2\n2 43.3 5.4 100 1 1 1\n";
+  std::ofstream(b) << "\xEF\xBB\xBF# tpkit gcp 1\n# columns: id role lon lat h sigma_e sigma_n sigma_u image x y sigma_px\n"
+                      "2 0 5.4 43.3 100 1 1 1 0 nan nan nan\n";
+  std::filesystem::remove(link);
+  std::filesystem::create_symlink(a, link);
+  const auto g = read_gcp_file(a);
+  ASSERT_EQ(g.size(), 2u);
+  EXPECT_EQ(g[0].id, 1);
+  ASSERT_EQ(read_gcp_file(b).size(), 1u);  // the BOM before "# tpkit gcp" hid the form
+  EXPECT_EQ(read_gcp_files({a}).size(), 2u);
+  EXPECT_NE(error_of([&] { read_gcp_files({a, a}); }).find(a + ": given twice"), std::string::npos);
+  EXPECT_NE(error_of([&] { read_gcp_files({a, link}); }).find(link + ": given twice (also as " + a + ")"), std::string::npos);
+  EXPECT_NE(error_of([&] { read_gcp_files({a, b}); }).find(b + ":3: point 2 is also " + a + ":2"), std::string::npos);
+  EXPECT_NE(error_of([] { parse_asp_gcp("12345678901234567890 43 5 100 1 1 1\n", "x.gcp"); }).find("x.gcp:1: id '12345678901234567890' is beyond 2^53"),
+            std::string::npos);
+  EXPECT_EQ(parse_asp_gcp("9007199254740992 43 5 100 1 1 1\n", "x.gcp")[0].id, 9007199254740992LL);
+  EXPECT_NE(error_of([] {
+              parse_tpkit_gcp("# tpkit gcp 1\n# columns: id role lon lat h sigma_e sigma_n sigma_u image x y sigma_px\n"
+                              "1e19 0 5.4 43.3 100 1 1 1 0 nan nan nan\n", "t.gcp");
+            }).find("t.gcp:3: id '1e+19' is beyond 2^53"),
+            std::string::npos);
+  std::filesystem::remove_all(dir);
+}

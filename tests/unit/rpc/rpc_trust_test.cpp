@@ -235,3 +235,43 @@ TEST(RpcTrust, AGroundPointOutsideTheUtmZoneNamesItsTrack) {
   const std::string e = message([&] { utm(Eigen::Vector3d(95.0, 43.3, 100), 7); });
   EXPECT_NE(e.find("track 7 at lon 95, lat 43.3: not in EPSG:32631"), std::string::npos) << e;
 }
+
+// Issue 50, item 14: a fit that flags half the tracks (not only most), or half of one image's, is refused;
+// one track fewer is not. The result is made by hand: fit_trust reads only the flags and residuals.
+TEST(RpcTrust, AFitThatFlagsHalfTheTracksOrHalfOfOneImageIsRefused) {
+  const auto im = pleiades();
+  std::vector<AdjustTrack> tracks(8);
+  AdjustResult r;
+  for (size_t t = 0; t < tracks.size(); ++t) {
+    // tracks 0-3 view images 1 and 2, tracks 4-7 images 1 and 3
+    tracks[t].views = {{0, {10, 10}}, {t < 4 ? 1 : 2, {10, 10}}};
+    r.initial_ok.push_back(1);
+    r.flagged.push_back(0);
+  }
+  EXPECT_TRUE(fit_trust(im, tracks, r, 1).ok());
+  r.flagged = {0, 0, 0, 0, 0, 1, 1, 1};  // 3 of 8; 3 of image 3's 4: that image
+  const FitTrust one = fit_trust(im, tracks, r, 1);
+  EXPECT_NE(one.figures.find("image3 " + image(3) + ": 3 of the 4 tracks that view it keep an RMS above 1 px"), std::string::npos)
+      << one.figures;
+  r.flagged = {0, 0, 0, 1, 0, 0, 1, 1};  // 3 of 8, 1 of image 2's 4, 2 of image 3's 4: half of image 3
+  EXPECT_FALSE(fit_trust(im, tracks, r, 1).ok());
+  r.flagged = {0, 0, 0, 1, 0, 0, 0, 1};  // 2 of 8, one of each image's 4
+  EXPECT_TRUE(fit_trust(im, tracks, r, 1).ok());
+  r.flagged = {1, 1, 0, 0, 1, 1, 0, 0};  // exactly half of all
+  EXPECT_NE(fit_trust(im, tracks, r, 1).message().find("4 of 8 tracks keep an RMS above 1 px after the fit"), std::string::npos);
+}
+
+// Issue 50, item 13: a ground point the model says nothing about is named (tp-rpc project writes nan for
+// it): latitude and longitude off the globe, the antipode, the Earth's centre; the scene and its margin
+// are not.
+TEST(RpcTrust, PointsFarOutsideTheModelAreOutsideItsDomain) {
+  const RpcModel m = pleiades()[0].model;
+  const Eigen::Vector3d centre(m.lon_off, m.lat_off, m.height_off);
+  EXPECT_EQ(m.outside_domain(centre), "");
+  EXPECT_EQ(m.outside_domain(centre + Eigen::Vector3d(9 * m.lon_scale, -9 * m.lat_scale, 9 * m.height_scale)), "");
+  EXPECT_NE(m.outside_domain({m.lon_off, 1000, 150}).find("latitude 1000 is outside [-90, 90]"), std::string::npos);
+  EXPECT_NE(m.outside_domain({545, m.lat_off, 150}).find("longitude 545 is outside [-180, 360)"), std::string::npos);
+  EXPECT_NE(m.outside_domain({m.lon_off + 180, -m.lat_off, 150}).find("more than 10 scales"), std::string::npos);
+  EXPECT_NE(m.outside_domain({0, 0, -6378137}).find("more than 10 scales"), std::string::npos);
+  EXPECT_NE(m.outside_domain(centre + Eigen::Vector3d(0, 0, 11 * m.height_scale)).find("more than 10 scales"), std::string::npos);
+}

@@ -18,7 +18,9 @@
 //
 // Conventions are converted here only: a Gcp is lon, lat (degrees), h (m above the WGS 84 ellipsoid),
 // sigmas east, north, up in metres, measurements in tpkit pixels. InputError (file:line) for a malformed
-// line, a sigma that is not positive, a latitude out of range, a point id given twice with other values.
+// line, a sigma that is not positive, a latitude out of range, a point id given twice with other values,
+// an id that is not an integer or beyond 2^53 (ids are kept as numbers, which a double holds exactly up
+// to there). A UTF-8 byte order mark at the start of a file is skipped; the path '-' is standard input.
 #pragma once
 #include <Eigen/Core>
 #include <string>
@@ -47,6 +49,9 @@ struct Gcp {
 
 // Reads either form (see above) by its first line: `# tpkit gcp` is tpkit's, anything else ASP's.
 std::vector<Gcp> read_gcp_file(const std::string& path);
+// The points of several files, in order. InputError for a file given twice (the same path, '-' twice, or
+// the same file by another name) and for an id in two files: each would count its points twice.
+std::vector<Gcp> read_gcp_files(const std::vector<std::string>& paths);
 // The same from text (tests; `source` names it in messages).
 std::vector<Gcp> parse_asp_gcp(const std::string& text, const std::string& source);
 std::vector<Gcp> parse_tpkit_gcp(const std::string& text, const std::string& source);

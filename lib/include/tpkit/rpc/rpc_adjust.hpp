@@ -110,6 +110,9 @@ struct AdjustOptions {
   int threads = 1;
   int max_iterations = 100;
   bool progress = false;        // progress line on a terminal (tool_support Progress)
+  // Return a fit that fit_trust() refuses instead of throwing its error, so that the caller can first ask
+  // whether a height prior or the GCPs dragged it there (check_height_prior, check_gcps name them).
+  bool keep_untrusted = false;
 };
 
 struct AdjustResult {
@@ -142,10 +145,25 @@ void check_tracks(const std::vector<AdjustImage>& images, const std::vector<Adju
 
 // Throws what check_tracks throws; NumericalError when no track can be intersected, when the cost is not
 // finite (an observation or a prior out of range), when the DEM or height prior reaches none of the
-// points, or when most tracks stay above flag_px after the fit (the models, the tracks or --flag are
-// wrong: the figures are in the message).
+// points, or (unless keep_untrusted) with fit_trust's message for a fit it cannot stand behind.
 AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                          const AdjustOptions& options);
+
+// Can the fit be trusted? Not when half or more of the intersected tracks keep an RMS above flag_px after
+// it (the models, the tracks or --flag are wrong), nor when half or more of the tracks that view one image
+// do (that image's model is wrong where the others hold: another image's, or one that diverges over the
+// image, as a corrupted cubic term does, which no bias model follows). Half, not most: the robust fit
+// holds the tracks it fits and flags the rest, so a fit that fits only half of them fits no model (a
+// diverging model flagged exactly half of the tracks, and its models were written). Empty `figures`:
+// trusted.
+struct FitTrust {
+  std::string figures;  // "N of M tracks keep an RMS above F px after the fit (...)", or that of one image
+  std::string cause;    // what is wrong, in words
+  bool ok() const { return figures.empty(); }
+  std::string message() const { return figures + ": " + cause; }
+};
+FitTrust fit_trust(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r,
+                   double flag_px);
 
 // Does a height prior (options.height: --height-prior or --dem) contradict the tie points? The adjustment
 // is solved again without it and the two compared: the prior contradicts them when, with it, the RMS
@@ -192,11 +210,14 @@ ControlEvaluation evaluate_controls(const std::vector<AdjustImage>& images, cons
 // 0.04 px at 1 px sigma on a tp-synth block; only a fit that the tie points' own sigma cannot explain
 // counts), or when a control point's normalized residual after the fit (the largest of its
 // ground residuals over their sigmas and its image residuals over their sigmas) exceeds 5: a GCP that the
-// other GCPs and the tie points cannot fit (a blunder in its coordinates or its measurements).
+// other GCPs and the tie points cannot fit (a blunder in its coordinates or its measurements), or when
+// they flag more than max(10, 1% of the tracks) tracks more (as check_height_prior: GCPs that drag the
+// fit over --flag).
 struct GcpCheck {
   bool contradicts = false;
   double rms_with = 0, rms_without = 0;  // px, over the tracks neither fit flags
   long common_tracks = 0;
+  long flagged_with = 0, flagged_without = 0;
   long long worst_id = 0;                // the control point of the largest normalized residual
   double worst_normalized = 0;           // that residual (sigmas)
   Eigen::Vector3d worst_enu = Eigen::Vector3d::Zero();  // its ground residual (adjusted minus known, m)
@@ -204,6 +225,42 @@ struct GcpCheck {
 };
 GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                     const AdjustOptions& options, const AdjustResult& with_gcps);
+
+// The GCPs against the delivered models, before any adjustment. GCPs wrong together (all moved by a wrong
+// zone, datum or coordinate order; heights above the geoid read as ellipsoidal) pull the whole block with
+// them, and the tie points, which see no absolute position, agree with them afterwards: only the
+// delivered models can tell. Per point (control and check): the RMS over its measurements of the
+// projection of its known position minus the measurement (pixels); their median is the decision figure
+// (a blunder or two moves no median). Also, over the measurements, the median offset (projected minus
+// measured, pixels) and the median ground offset (known minus the measurement localized at the known
+// height, metres east, north), and over the points measured in two or more images, the median of the
+// known height minus the height intersected on the delivered models (m).
+struct GcpModelCheck {
+  long points = 0, measurements = 0, intersected = 0;
+  std::vector<double> residual_px;                     // per point, in the order given
+  double median_px = 0;                                // median of residual_px
+  long long worst_id = 0;                              // the point of the largest residual_px
+  double worst_px = 0;
+  Eigen::Vector2d offset_px = Eigen::Vector2d::Zero();  // median projected minus measured, x y
+  Eigen::Vector2d offset_en = Eigen::Vector2d::Zero();  // median known minus localized, m east, north
+  double offset_u = std::nan("");                      // median known minus intersected height, m
+  double spread_u = std::nan("");                      // median |dh - offset_u|, m
+  double geoid_n = std::nan("");                       // EGM96 undulation at the points (NaN: no grid)
+  bool geoid_like = false;                             // |offset_u| is that undulation (see check_gcps_on_models)
+  std::string problem;                                 // what is wrong, in words ("": nothing: median_px and heights fine)
+  bool refuse = false;                                 // median_px above kGcpRefusePx
+  std::string figures;                                 // one line: the figures above
+};
+// Thresholds on median_px. Delivered models are within a few pixels to a few tens of pixels of the
+// ground: Pleiades 8.5 m CE90 without GCPs (17 px at 0.5 m), WorldView-3 3.5 m CE90 (11 px at 0.31 m);
+// the Jacksonville WorldView-3 models disagree with each other by a few pixels, tp-synth blocks' biases
+// are below 10 px. Above 30 px a GCP set is suspect (warned; an error under --strict); above 150 px (75 m
+// at 0.5 m GSD, nine times Pleiades' specified CE90) no delivered model explains it: refused unless forced.
+constexpr double kGcpWarnPx = 30, kGcpRefusePx = 150;
+// geoid_like: |offset_u| within max(5 m, 20% of N) of |N| (N the EGM96 undulation, |N| >= 15 m so that
+// it is told from the delivered models' own height error of a few metres) and the points agree on it
+// (spread_u below the same tolerance): heights above the geoid given as ellipsoidal, or the reverse.
+GcpModelCheck check_gcps_on_models(const std::vector<AdjustImage>& images, const std::vector<AdjustControl>& points);
 
 // RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0), pixels.
 double residual_rms(const AdjustResult& r, bool after, int image = -1);

@@ -18,6 +18,7 @@
 #include <array>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace tpkit {
@@ -57,6 +58,13 @@ T rpc_eval(const RpcPoly& c, const T* t) {
   return s;
 }
 
+// How far outside its validity box (normalized coordinates, +-1) a model is still evaluated
+// (RpcModel::outside_domain): 10 scales. The box is the image's footprint and its scene's height range (a
+// scale is half of each: kilometres for a full WorldView or Pleiades scene, hundreds of metres for a crop);
+// 10 scales off the centre is 4.5 footprints beyond the image's edge, never a ground point it sees, while
+// points just outside the box (outside_validity_box, a 10% margin) are extrapolated and only counted.
+constexpr double kFarOutsideScales = 10;
+
 struct RpcModel {
   double err_bias = 0, err_rand = 0;  // metres (RPC00B ERR_BIAS, ERR_RAND); carried, not used
   double line_off = 0, samp_off = 0, lat_off = 0, lon_off = 0, height_off = 0;
@@ -91,6 +99,13 @@ struct RpcModel {
   // True when the ground point lies outside the model's validity box, widened by `margin` (normalized
   // |lon|, |lat|, |h| above margin; 1.1: a tenth beyond lon_off +- lon_scale, ...).
   bool outside_validity_box(const Eigen::Vector3d& llh, double margin = 1.1) const;
+
+  // Why the ground point is one the model says nothing about ("" when it is not): a latitude outside
+  // [-90, 90], a longitude outside [-180, 360), or a normalized lon, lat or h beyond kFarOutsideScales
+  // (the point farther than that many of the model's scales from its offsets). The polynomials are fitted
+  // within +-1; beyond a few scales their cubic terms (up to 1000 times as large at 10) give a pixel that
+  // means nothing (the antipode, the Earth's centre), where a pole's nan would at least say so.
+  std::string outside_domain(const Eigen::Vector3d& llh) const;
 
   // Height range the model is valid for: height_off -/+ height_scale.
   double height_min() const { return height_off - height_scale; }

@@ -12,7 +12,8 @@
 // line. Numbers are written in the shortest form that reads back to the same double. A line with too
 // few columns or a value that is not a finite number is an InputError(source:line) (nothing is written:
 // the caller writes the returned text). A point without a solution (a localization that does not
-// converge, a pole of the model, a line of sight the DEM does not cover) is written "nan nan nan" with
+// converge, a pole of the model, a ground point that is none or far outside the model's box:
+// RpcModel::outside_domain, a line of sight the DEM does not cover) is written "nan nan nan" with
 // its extra columns, and counted.
 // With a ground system (GroundConverter: UTM in the zone of the model's centre, or ECEF), the ground
 // coordinates read by project and written by localize are in it (easting northing h, X Y Z) instead of
