@@ -19,6 +19,7 @@ void check_input_file(const std::string& path, InputKind kind) {
   if (S_ISDIR(st.st_mode)) throw InputError(path, 0, "is a directory");
   const bool regular = S_ISREG(st.st_mode), pipe = S_ISFIFO(st.st_mode);
   if (kind == InputKind::regular && !regular) throw InputError(path, 0, "not a regular file");
+  if (kind == InputKind::image && !regular) throw InputError(path, 0, "not a regular file: an image must be a file");
   if (kind == InputKind::file && !regular && !pipe) throw InputError(path, 0, "not a regular file or a pipe");
 }
 

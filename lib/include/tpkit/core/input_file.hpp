@@ -18,6 +18,9 @@ enum class InputKind {
   stream,   // a regular file, a pipe (FIFO, process substitution) or a device such as /dev/stdin
   file,     // a regular file or a pipe: no device (a list, a peer format's file)
   regular,  // a regular file only (binary files read whole)
+  image,    // a regular file only, said so for an image: it is read by random access (headers, tiles, blocks
+            // at their offsets), which a device or a pipe does not give, and read by format readers
+            // (libtiff, OpenImageIO) that would block on a FIFO or never reach the end of /dev/zero
 };
 
 // Throws InputError(path, 0, reason) unless `path` names something of that kind that can be read.

@@ -1,0 +1,39 @@
+# Trust campaign (issue 50), area "io": images that are no files, devices and pipes as text inputs,
+# sizes a file declares, tp-rpc's stream, and the messages for missing files and filesystem errors.
+set(_m "$SHARED/data/pleiades-marseille")
+set(_syn "tp-synth -o syn --size 256 --points 300 --seed 3 >/dev/null 2>&1")
+set(_views "syn/view1.tif syn/view2.tif syn/view3.tif")
+
+# Item 1: an image that is a device or a FIFO is refused at once (it spun at 100% CPU for ever), in every
+# tool that opens images, and as the image of a header line given to tp-report or tp-chain --coverage.
+tpkit_tool_test(trust-io.image-device-tp-match
+  COMMAND "timeout 20 tp-match /dev/zero ${_m}/img_01.tif -o z.matches"
+  EXPECT_FAIL STDERR_MATCH "^tp-match: /dev/zero: not a regular file: an image must be a file\n$" NO_FILE z.matches)
+tpkit_tool_test(trust-io.image-device-tp-ground
+  COMMAND "${_syn} && timeout 20 tp-ground /dev/urandom syn/view2.tif --tracks syn/truth.tracks -o g.points"
+  EXPECT_FAIL STDERR_MATCH "^tp-ground: /dev/urandom: not a regular file: an image must be a file\n$" NO_FILE g.points)
+tpkit_tool_test(trust-io.image-fifo-rpc-adjust
+  COMMAND "${_syn} && mkfifo f.tif && timeout 20 rpc-adjust f.tif syn/view2.tif --tracks syn/truth.tracks -o out"
+  EXPECT_FAIL STDERR_MATCH "^rpc-adjust: f.tif: not a regular file: an image must be a file\n$" NO_FILE out)
+tpkit_tool_test(trust-io.image-device-tp-plan
+  COMMAND "${_syn} && timeout 20 tp-plan -q -o w /dev/zero syn/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "^tp-plan: /dev/zero: not a regular file: an image must be a file\n$" NO_FILE w)
+tpkit_tool_test(trust-io.image-device-in-a-report-header
+  COMMAND "printf '# tpkit matches 1\\n# image1: /dev/zero 100 100\\n# image2: /dev/zero 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' > z.matches && timeout 20 tp-report z.matches -o page.html && grep -o 'no thumbnail: [a-z]*' page.html | sort -u"
+  STDOUT_MATCH "^no thumbnail: unreadable\n$")
+tpkit_tool_test(trust-io.image-device-in-chain-coverage
+  COMMAND "printf '# tpkit matches 1\\n# image1: /dev/zero 100 100\\n# image2: /dev/urandom 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' > z.matches && timeout 20 tp-chain -q z.matches --min-views 2 -o t.tracks --coverage cov.svg && grep -o 'no thumbnail: [a-z]*' cov.svg | sort -u"
+  STDOUT_MATCH "^no thumbnail: unreadable\n$")
+
+# Item 3: valid pipes: a process substitution and a named FIFO as --tracks (the sniffing consumed the
+# pipe, then opened it again: "headerless input with 1 fields", or a hang), and tp-report reading one.
+# A FIFO as --dem is no image: refused at once (it hung in libtiff's open).
+tpkit_tool_test(trust-io.dem-fifo
+  COMMAND "${_syn} && mkfifo d.tif && echo '10 10' | timeout 20 tp-rpc localize syn/view1.tif --dem d.tif"
+  EXPECT_FAIL STDERR_MATCH "^tp-rpc: d.tif: not a regular file: an image must be a file\n$")
+
+# Item 17: messages. A missing image is "no such file" (tp-rpc said "not a TIFF file"); a filesystem
+# error is said in the project's words, the file first (libstdc++'s "filesystem error: ..." reached the user).
+tpkit_tool_test(trust-io.rpc-missing-image
+  COMMAND "echo '1 2 3' | tp-rpc project /nonexistent/x.tif"
+  EXPECT_FAIL STDERR_MATCH "^tp-rpc: /nonexistent/x.tif: no such file\n$")
