@@ -37,3 +37,6 @@ tpkit_tool_test(trust-io.dem-fifo
 tpkit_tool_test(trust-io.rpc-missing-image
   COMMAND "echo '1 2 3' | tp-rpc project /nonexistent/x.tif"
   EXPECT_FAIL STDERR_MATCH "^tp-rpc: /nonexistent/x.tif: no such file\n$")
+tpkit_tool_test(trust-io.filesystem-error-in-project-words
+  COMMAND "mkdir run && ln -s loop run/loop && printf '# tpkit dem-dz 1\\n# columns: a b\\n1 2\\n' > run/g.dz && tp-report run -o page.html"
+  EXPECT_FAIL STDERR_MATCH "^tp-report: run/loop: status: Too many levels of symbolic links\n$" NO_FILE page.html)

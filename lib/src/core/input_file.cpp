@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -49,6 +50,15 @@ bool read_text_line(std::istream& in, std::string& line, const std::string& sour
       throw InputError(source, lineno, "line longer than " + std::to_string(max_line) + " bytes: not a text file");
     line.push_back(static_cast<char>(c));
   }
+}
+
+std::string filesystem_error_message(const std::filesystem::filesystem_error& e) {
+  std::string what = e.what();
+  const std::string prefix = "filesystem error: ";
+  if (what.compare(0, prefix.size(), prefix) == 0) what.erase(0, prefix.size());
+  const std::string paths = e.path1().empty() ? "" : e.path1().string() + (e.path2().empty() ? "" : ", " + e.path2().string());
+  if (!paths.empty()) what.erase(std::min(what.size(), what.find(" [" + e.path1().string() + "]")));
+  return paths.empty() ? what : paths + ": " + what;
 }
 
 }  // namespace tpkit

@@ -7,6 +7,7 @@
 // read throws std::ios_base::failure "basic_filebuf::underflow error reading the file: Is a directory",
 // which names no file.
 #pragma once
+#include <filesystem>
 #include <fstream>
 #include <istream>
 #include <string>
@@ -36,5 +37,10 @@ constexpr size_t kMaxTextLine = size_t(1) << 20;
 // Throws InputError(source, lineno, ...) for a NUL byte (binary data) or a line longer than max_line.
 bool read_text_line(std::istream& in, std::string& line, const std::string& source, long lineno,
                     size_t max_line = kMaxTextLine);
+
+// A std::filesystem error in the project's words, "PATH: what failed: reason" (libstdc++'s own text,
+// "filesystem error: what failed: reason [PATH]", puts the file last and the library first): for a tool's
+// main() and any page or message that shows an error to a person.
+std::string filesystem_error_message(const std::filesystem::filesystem_error& e);
 
 }  // namespace tpkit
