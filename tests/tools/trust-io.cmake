@@ -25,9 +25,33 @@ tpkit_tool_test(trust-io.image-device-in-chain-coverage
   COMMAND "printf '# tpkit matches 1\\n# image1: /dev/zero 100 100\\n# image2: /dev/urandom 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' > z.matches && timeout 20 tp-chain -q z.matches --min-views 2 -o t.tracks --coverage cov.svg && grep -o 'no thumbnail: [a-z]*' cov.svg | sort -u"
   STDOUT_MATCH "^no thumbnail: unreadable\n$")
 
+# Item 2: a device as a text input fails at its first line: the header-kind sniffing and the GCP and
+# tp-report readers read it whole (/dev/zero: 2.1 GB, then "out of memory"; under a memory limit they
+# stopped where memory did, the same message seconds later). A stream of NUL bytes is read no further
+# than the first block: its writer is cut off by the closed pipe, never reaching "writer done".
+set(_zeros "{ head -c 300000000 /dev/zero 2>/dev/null && echo writer done >&2 @SEMI@ }")
+tpkit_tool_test(trust-io.tracks-device-tp-ground
+  COMMAND "${_syn} && ${_zeros} | timeout 20 tp-ground ${_views} --tracks - -o g.points"
+  EXPECT_FAIL STDERR_MATCH "^tp-ground: <stdin>:1: binary data \\(NUL byte\\) in a text file\n$" NO_FILE g.points)
+tpkit_tool_test(trust-io.check-device-rpc-adjust
+  COMMAND "${_syn} && ${_zeros} | timeout 20 rpc-adjust ${_views} --tracks syn/truth.tracks --check - -o out"
+  EXPECT_FAIL STDERR_MATCH "^rpc-adjust: <stdin>:1: binary data \\(NUL byte\\) in a text file\n$" NO_FILE out)
+tpkit_tool_test(trust-io.gcp-device-rpc-adjust
+  COMMAND "${_syn} && (ulimit -v 1500000 @SEMI@ timeout 20 rpc-adjust ${_views} --tracks syn/truth.tracks --gcp /dev/zero -o out)"
+  EXPECT_FAIL STDERR_MATCH "^rpc-adjust: /dev/zero:1: binary data \\(NUL byte\\) in a text file\n$" NO_FILE out LABELS rlimit)
+
 # Item 3: valid pipes: a process substitution and a named FIFO as --tracks (the sniffing consumed the
 # pipe, then opened it again: "headerless input with 1 fields", or a hang), and tp-report reading one.
 # A FIFO as --dem is no image: refused at once (it hung in libtiff's open).
+tpkit_tool_test(trust-io.tracks-process-substitution
+  COMMAND "${_syn} && timeout 60 tp-ground ${_views} --tracks <(cat syn/truth.tracks) -o g.points && grep -vc '^#' g.points"
+  STDOUT_MATCH "^300\n$")
+tpkit_tool_test(trust-io.tracks-named-fifo
+  COMMAND "${_syn} && mkfifo t.fifo && (cat syn/truth.tracks > t.fifo &) && timeout 60 tp-ground ${_views} --tracks t.fifo -o g.points && grep -vc '^#' g.points"
+  STDOUT_MATCH "^300\n$")
+tpkit_tool_test(trust-io.rpc-adjust-tracks-from-a-pipe
+  COMMAND "${_syn} && timeout 60 rpc-adjust ${_views} --tracks <(cat syn/truth.tracks) --model shift --fixed syn/view1.tif -o out 2>/dev/null && grep -c '^# observations: 900$' out/rpc.residuals"
+  STDOUT_MATCH "^1\n$")
 tpkit_tool_test(trust-io.dem-fifo
   COMMAND "${_syn} && mkfifo d.tif && echo '10 10' | timeout 20 tp-rpc localize syn/view1.tif --dem d.tif"
   EXPECT_FAIL STDERR_MATCH "^tp-rpc: d.tif: not a regular file: an image must be a file\n$")

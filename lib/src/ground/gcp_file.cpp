@@ -53,11 +53,13 @@ Eigen::Vector3d ecef_sigma_to_enu(const Eigen::Vector3d& s, double lon, double l
   return (R.cwiseAbs2() * s.cwiseAbs2()).cwiseSqrt();
 }
 
+// The file's text, read line by line with read_text_line's bound: a device or a binary file fails at its
+// first NUL byte or overlong line instead of filling memory.
 std::string read_text(const std::string& path) {
   std::ifstream f = open_input_file(path, InputKind::stream, true);
-  std::ostringstream os;
-  os << f.rdbuf();
-  return os.str();
+  std::string text, line;
+  for (long lineno = 1; read_text_line(f, line, path, lineno); ++lineno) text.append(line).push_back('\n');
+  return text;
 }
 
 }  // namespace
