@@ -39,6 +39,9 @@ tpkit_tool_test(trust-io.check-device-rpc-adjust
 tpkit_tool_test(trust-io.gcp-device-rpc-adjust
   COMMAND "${_syn} && (ulimit -v 1500000 @SEMI@ timeout 20 rpc-adjust ${_views} --tracks syn/truth.tracks --gcp /dev/zero -o out)"
   EXPECT_FAIL STDERR_MATCH "^rpc-adjust: /dev/zero:1: binary data \\(NUL byte\\) in a text file\n$" NO_FILE out LABELS rlimit)
+tpkit_tool_test(trust-io.report-device
+  COMMAND "${_zeros} | timeout 20 tp-report /dev/stdin -o page.html && grep -o 'not read: [^<]*' page.html"
+  STDOUT_MATCH "^not read: /dev/stdin:1: binary data \\(NUL byte\\) in a text file\n$" STDERR_MATCH "^tp-report: page.html: 1 files, 0 KiB\n$")
 
 # Item 3: valid pipes: a process substitution and a named FIFO as --tracks (the sniffing consumed the
 # pipe, then opened it again: "headerless input with 1 fields", or a hang), and tp-report reading one.
@@ -52,9 +55,22 @@ tpkit_tool_test(trust-io.tracks-named-fifo
 tpkit_tool_test(trust-io.rpc-adjust-tracks-from-a-pipe
   COMMAND "${_syn} && timeout 60 rpc-adjust ${_views} --tracks <(cat syn/truth.tracks) --model shift --fixed syn/view1.tif -o out 2>/dev/null && grep -c '^# observations: 900$' out/rpc.residuals"
   STDOUT_MATCH "^1\n$")
+tpkit_tool_test(trust-io.report-reads-a-pipe
+  COMMAND "${_syn} && timeout 60 tp-report --no-coverage <(cat syn/truth.tracks) -o page.html && grep -c 'unreadable' page.html @SEMI@ grep -c '(tracks, 300 records)' page.html"
+  STDOUT_MATCH "^0\n1\n$")
 tpkit_tool_test(trust-io.dem-fifo
   COMMAND "${_syn} && mkfifo d.tif && echo '10 10' | timeout 20 tp-rpc localize syn/view1.tif --dem d.tif"
   EXPECT_FAIL STDERR_MATCH "^tp-rpc: d.tif: not a regular file: an image must be a file\n$")
+
+# Item 4: sizes a file declares. An rpc-residuals image number outside the header's image lines is
+# refused (it drew 100000 panels: 40 s, a 693 MB page); a header's image size is not the thumbnail's
+# measure (the image's own is); a crop of a NITF declaring 819200^2 pixels in 40 kB is refused at once.
+tpkit_tool_test(trust-io.rpc-residuals-image-out-of-range
+  COMMAND "printf '# tpkit rpc-residuals 1\\n# image1: a.tif 100 100\\n# columns: track image x y dx_before dy_before dx_after dy_after flagged sigma\\n1 1 5 5 0 0 0 0 0 1\\n2 100000 5 5 0 0 0 0 0 1\\n' > r.res && timeout 20 tp-report r.res -o page.html && grep -o 'not drawn: [^<]*' page.html && test $(wc -c < page.html) -lt 10000 && echo small page"
+  STDOUT_MATCH "^not drawn: r.res:5: image 100000 is not one of the header's image lines \\(1 to 1\\)\nsmall page\n$")
+tpkit_tool_test(trust-io.thumbnail-size-from-the-image
+  COMMAND "printf '# tpkit matches 1\\n# image1: %s 100 100\\n# image2: %s 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' ${_m}/img_01.tif ${_m}/img_02.tif > m.matches && timeout 20 tp-report m.matches -o page.html && grep -o 'no thumbnail: the image is [0-9]* x [0-9]*, not 100 x 100' page.html | wc -l"
+  STDOUT_MATCH "^2\n$")
 
 # Item 17: messages. A missing image is "no such file" (tp-rpc said "not a TIFF file"); a filesystem
 # error is said in the project's words, the file first (libstdc++'s "filesystem error: ..." reached the user).
