@@ -72,6 +72,18 @@ tpkit_tool_test(trust-io.thumbnail-size-from-the-image
   COMMAND "printf '# tpkit matches 1\\n# image1: %s 100 100\\n# image2: %s 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' ${_m}/img_01.tif ${_m}/img_02.tif > m.matches && timeout 20 tp-report m.matches -o page.html && grep -o 'no thumbnail: the image is [0-9]* x [0-9]*, not 100 x 100' page.html | wc -l"
   STDOUT_MATCH "^2\n$")
 
+# Item 16: tp-rpc streams: `yes | tp-rpc project` prints as it reads (it held every line until the
+# input ended, growing without bound); a bad line stops the stream there, the lines before it written.
+tpkit_tool_test(trust-io.rpc-project-streams
+  COMMAND "${_syn} && yes '10 10 0' | timeout 20 tp-rpc -q localize syn/view1.tif | head -n 3 | wc -l"
+  STDOUT_MATCH "^3\n$")
+tpkit_tool_test(trust-io.rpc-stream-stops-at-a-bad-line
+  COMMAND "${_syn} && printf '10 10 0\\n20 20 0\\nx y z\\n30 30 0\\n' | tp-rpc -q localize syn/view1.tif > out.txt @SEMI@ echo \"exit $?\" @SEMI@ wc -l < out.txt"
+  STDOUT_MATCH "^exit 1\n2\n$" STDERR_MATCH "tp-rpc: stdin:3: ")
+tpkit_tool_test(trust-io.rpc-stream-file-output-atomic
+  COMMAND "${_syn} && printf '10 10 0\\n20 20 0\\nx y z\\n' | tp-rpc -q localize syn/view1.tif -o out.txt"
+  EXPECT_FAIL STDERR_MATCH "tp-rpc: stdin:3: " NO_FILE out.txt)
+
 # Item 17: messages. A missing image is "no such file" (tp-rpc said "not a TIFF file"); a filesystem
 # error is said in the project's words, the file first (libstdc++'s "filesystem error: ..." reached the user).
 tpkit_tool_test(trust-io.rpc-missing-image
