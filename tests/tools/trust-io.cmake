@@ -71,6 +71,13 @@ tpkit_tool_test(trust-io.rpc-residuals-image-out-of-range
 tpkit_tool_test(trust-io.thumbnail-size-from-the-image
   COMMAND "printf '# tpkit matches 1\\n# image1: %s 100 100\\n# image2: %s 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' ${_m}/img_01.tif ${_m}/img_02.tif > m.matches && timeout 20 tp-report m.matches -o page.html && grep -o 'no thumbnail: the image is [0-9]* x [0-9]*, not 100 x 100' page.html | wc -l"
   STDOUT_MATCH "^2\n$")
+tpkit_tool_test(trust-io.crop-of-a-nitf-declaring-more-than-it-holds
+  COMMAND "${_syn} && bash $SRC/tests/tools/masked_nitf.sh big.ntf 819200 819200 8192 && cp syn/view1_rpc.txt big_rpc.txt && timeout 20 tp-rpc crop big.ntf -o c.tif"
+  EXPECT_FAIL STDERR_MATCH "^tp-rpc: big.ntf: the window of 819200 x 819200 pixels is more than 1048576 pixels per byte of the file \\(40856 bytes\\)" NO_FILE c.tif)
+# (a masked NITF that declares what it can hold is cropped: the check is no refusal of masked images)
+tpkit_tool_test(trust-io.crop-of-a-small-masked-nitf
+  COMMAND "${_syn} && bash $SRC/tests/tools/masked_nitf.sh small.ntf 100 120 16 && cp syn/view1_rpc.txt small_rpc.txt && tp-rpc crop small.ntf -o c.tif && head -c 2 c.tif"
+  STDOUT_MATCH "^II$" STDERR_MATCH "crop 120 x 100 at \\(0, 0\\) of small.ntf")
 
 # Item 16: tp-rpc streams: `yes | tp-rpc project` prints as it reads (it held every line until the
 # input ended, growing without bound); a bad line stops the stream there, the lines before it written.
