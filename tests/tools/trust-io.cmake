@@ -75,6 +75,11 @@ tpkit_tool_test(trust-io.rpc-residuals-image-out-of-range
 tpkit_tool_test(trust-io.thumbnail-size-from-the-image
   COMMAND "printf '# tpkit matches 1\\n# image1: %s 100 100\\n# image2: %s 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' ${_m}/img_01.tif ${_m}/img_02.tif > m.matches && timeout 20 tp-report m.matches -o page.html && grep -o 'no thumbnail: the image is [0-9]* x [0-9]*, not 100 x 100' page.html | wc -l"
   STDOUT_MATCH "^2\n$")
+# (the issue's own case: 100 x 100 in the header over a NITF of 30000^2 pad blocks, whose thumbnail read
+# 3.5 GB; bounded here, where the old read ran out of memory and said "unreadable")
+tpkit_tool_test(trust-io.thumbnail-of-a-padded-nitf
+  COMMAND "bash $SRC/tests/tools/masked_nitf.sh pad.ntf 30000 30000 1000 && printf '# tpkit matches 1\\n# image1: pad.ntf 100 100\\n# image2: pad.ntf 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 5 5 1 6 6\\n' > m.matches && (ulimit -v 1500000 @SEMI@ timeout 20 tp-report m.matches -o page.html) && grep -o 'no thumbnail: [^<]*' page.html | sort -u"
+  STDOUT_MATCH "^no thumbnail: the image is 30000 x 30000, not 100 x 100\n$" LABELS rlimit)
 tpkit_tool_test(trust-io.crop-of-a-nitf-declaring-more-than-it-holds
   COMMAND "${_syn} && bash $SRC/tests/tools/masked_nitf.sh big.ntf 819200 819200 8192 && cp syn/view1_rpc.txt big_rpc.txt && timeout 20 tp-rpc crop big.ntf -o c.tif"
   EXPECT_FAIL STDERR_MATCH "^tp-rpc: big.ntf: the window of 819200 x 819200 pixels is more than 1048576 pixels per byte of the file \\(40856 bytes\\)" NO_FILE c.tif)
