@@ -91,17 +91,19 @@ int main(int argc, char** argv) {
       const RpcPointDirection dir = o->action == "project" ? RpcPointDirection::Project : RpcPointDirection::Localize;
       const GroundConverter crs(parse_ground_crs(o->crs), src.model.lon_off, src.model.lat_off);
       const GroundConverter* ground = o->crs == "geographic" ? nullptr : &crs;
+      // streamed, line by line as the points come: to stdout directly (a bad line stops the stream there,
+      // the lines before it written), to a file through an atomic output (a failed run leaves none)
       RpcPointStats st;
-      std::string text;
+      std::unique_ptr<AtomicOutput> file;
+      if (o->output != "-") file = std::make_unique<AtomicOutput>(o->output);
+      std::ostream& out = file ? file->stream() : std::cout;
       if (o->input == "-") {
-        text = transform_rpc_points(std::cin, "stdin", src.model, dir, dem.get(), &st, ground);
+        transform_rpc_points(std::cin, "stdin", out, src.model, dir, dem.get(), &st, ground);
       } else {
         std::ifstream in = open_input_file(o->input);
-        text = transform_rpc_points(in, o->input, src.model, dir, dem.get(), &st, ground);
+        transform_rpc_points(in, o->input, out, src.model, dir, dem.get(), &st, ground);
       }
-      AtomicOutput out(o->output);
-      out.stream() << text;
-      out.commit();
+      if (file) file->commit();
       if (!o->quiet)
         summary(o->action + " through " + src.path + " (" + rpc_form_name(src.form) + ")" + (ground ? ", ground in " + crs.description() : std::string()) +
                 ": " + std::to_string(st.points) +

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 
+#include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
 
 namespace tpkit {
@@ -14,19 +14,29 @@ constexpr int kThumb = 64;          // thumbnail cells along the longer side
 constexpr double kMaxPixels = 4e8;  // larger images get no thumbnail (read time), said in the note
 
 // Block means of band 0 on a kThumb grid, stretched 2-98% to grey levels 0..255; empty when unreadable.
+// `w` x `h`: the size the points' file gives the image (0: none); the image's own, from its file, decides
+// whether it is read: a header line is no measure of what a read costs.
 std::vector<int> thumbnail(const std::string& path, long w, long h, int& tx, int& ty, std::string& why) {
   std::vector<int> grey;
-  if (path.empty() || !std::filesystem::exists(path)) {
-    why = "no thumbnail: image not found";
+  ImageInfo info;
+  try {
+    info = image_info(path);
+  } catch (const InputError& e) {
+    why = e.reason() == "no such file" ? "no thumbnail: image not found" : "no thumbnail: unreadable";
     return grey;
   }
-  if (static_cast<double>(w) * h > kMaxPixels) {
+  if (w > 0 && h > 0 && (info.width != w || info.height != h)) {
+    why = "no thumbnail: the image is " + std::to_string(info.width) + " x " + std::to_string(info.height) + ", not " +
+          std::to_string(w) + " x " + std::to_string(h);
+    return grey;
+  }
+  if (static_cast<double>(info.width) * info.height > kMaxPixels) {
     why = "no thumbnail: image too large";
     return grey;
   }
   Raster r;
   try {
-    r = read_band(path, 0);
+    r = read_region(path, 0, 0, 0, info.width, info.height);
   } catch (const std::exception& e) {
     why = "no thumbnail: unreadable";
     return grey;

@@ -26,7 +26,7 @@ namespace tpkit {
 // (tiff_image.hpp), and the rest, or a TIFF layout libtiff's reader leaves aside, through OpenImageIO's
 // module (oiio_images.hpp).
 ImageInfo image_info(const std::string& path) {
-  check_input_file(path);  // "is a directory", "no such file"
+  check_input_file(path, InputKind::image);  // "is a directory", "no such file", "not a regular file"
   note_input(path);
   if (is_nitf_file(path)) return nitf_image_info(read_nitf_image(path));
   if (is_tiff_file(path))
@@ -35,7 +35,7 @@ ImageInfo image_info(const std::string& path) {
 }
 
 Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse) {
-  check_input_file(path);
+  check_input_file(path, InputKind::image);
   note_input(path);
   if (is_nitf_file(path)) return read_nitf_region(read_nitf_image(path), band, x0, y0, w, h);
   if (is_tiff_file(path))
@@ -207,6 +207,7 @@ int tiff_first_ifd_tag_type(const std::string& path, uint16_t tag) {
 }  // namespace
 
 std::optional<RpcTagValues> read_rpc_tag(const std::string& path) {
+  check_input_file(path, InputKind::image);  // before libtiff, whose message would be "not a TIFF file" for them all
   register_tiff_tags();
   note_input(path);
   TIFF* tif = TIFFOpen(path.c_str(), "r");
@@ -235,6 +236,7 @@ std::optional<RpcTagValues> read_rpc_tag(const std::string& path) {
 }
 
 void copy_tiff_with_rpc_tag(const std::string& src, const std::string& dst, const RpcTagValues& values) {
+  check_input_file(src, InputKind::image);
   note_input(src);
   claim_output(dst);
   std::string tmp = claim_temp(dst);
@@ -309,6 +311,7 @@ void write_geotiff_grid(const std::string& path, const GeoGrid& g) {
 
 GeoGrid read_geotiff_grid(const std::string& path, const GeoBounds* within) {
   // georeferencing from the GeoTIFF tags, pixels through read_region
+  check_input_file(path, InputKind::image);
   register_tiff_tags();
   note_input(path);
   TIFF* tif = TIFFOpen(path.c_str(), "r");

@@ -27,7 +27,7 @@ namespace {
 class ByteFile {
  public:
   explicit ByteFile(const std::string& path) : path_(path) {
-    check_input_file(path, InputKind::regular);
+    check_input_file(path, InputKind::image);
     note_input(path);
     f_ = std::fopen(path.c_str(), "rb");
     if (!f_) throw InputError(path, 0, std::string("cannot open for reading: ") + std::strerror(errno));
@@ -519,6 +519,8 @@ std::string complexity_level(long w, long h, uint64_t file_bytes) {
 // ---------------------------------------------------------------- headers
 
 bool is_nitf_file(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;  // a FIFO would block the open
   FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) return false;
   char b[4] = {};

@@ -12,6 +12,7 @@
 
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/version.hpp"
 
 namespace tpkit {
@@ -366,6 +367,9 @@ int run_tool(const std::string& tool, int argc, char** argv, const ToolSetup& se
     return 1;
   } catch (const std::bad_alloc&) {
     std::cerr << tool << ": out of memory\n";
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {  // a folder made, a size asked for, a folder walked
+    std::cerr << tool << ": " << one_line(filesystem_error_message(e)) << "\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << tool << ": " << one_line(e.what()) << "\n";

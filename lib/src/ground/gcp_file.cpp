@@ -66,17 +66,19 @@ Eigen::Vector3d ecef_sigma_to_enu(const Eigen::Vector3d& s, double lon, double l
   return (R.cwiseAbs2() * s.cwiseAbs2()).cwiseSqrt();
 }
 
-// The file's text ('-': standard input), without a UTF-8 byte order mark at its start (editors on Windows
-// write one; left in, it made the first id "\xEF\xBB\xBF1" or hid the "# tpkit gcp" line).
+// The file's text ('-': standard input), read line by line with read_text_line's bound (a device or a
+// binary file fails at its first NUL byte or overlong line instead of filling memory), without a UTF-8
+// byte order mark at its start (editors on Windows write one; left in, it made the first id
+// "\xEF\xBB\xBF1" or hid the "# tpkit gcp" line).
 std::string read_text(const std::string& path) {
-  std::ostringstream os;
-  if (path == "-") {
-    os << std::cin.rdbuf();
-  } else {
-    std::ifstream f = open_input_file(path, InputKind::stream, true);
-    os << f.rdbuf();
+  std::ifstream f;
+  std::istream* in = &std::cin;
+  if (path != "-") {
+    f = open_input_file(path, InputKind::stream, true);
+    in = &f;
   }
-  std::string text = os.str();
+  std::string text, line;
+  for (long lineno = 1; read_text_line(*in, line, path, lineno); ++lineno) text.append(line).push_back('\n');
   if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
   return text;
 }

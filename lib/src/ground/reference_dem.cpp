@@ -18,6 +18,7 @@
 #include <unordered_map>
 
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 
 namespace tpkit {
 
@@ -415,6 +416,7 @@ bool ReferenceDem::Impl::bilinear(double fc, double fr, double& z, double* dz_dc
 ReferenceDem::ReferenceDem(const std::string& path, const ReferenceDemOptions& options) : impl_(std::make_unique<Impl>()) {
   Impl& d = *impl_;
   d.path = path;
+  check_input_file(path, InputKind::image);  // libtiff's open blocks on a FIFO for ever
   TIFFSetErrorHandler(nullptr);
   TIFFSetWarningHandler(nullptr);
   d.tif = open_tiff(path, "r");

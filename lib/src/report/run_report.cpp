@@ -10,6 +10,7 @@
 #include "tpkit/core/coverage_plot.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/formats.hpp"
+#include "tpkit/core/input_file.hpp"
 #include "tpkit/core/residual_field.hpp"
 #include "tpkit/core/svg_plot.hpp"
 #include "tpkit/core/text_table.hpp"
@@ -21,30 +22,41 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The kind of a tpkit table file ("# tpkit KIND VERSION"), "" for anything else (a makefile's comment).
+// The kind of a tpkit table file ("# tpkit KIND VERSION"), "" for anything else (a makefile's comment, an
+// image): its first line only, read with a header's bound, so that a large file without a line break in a
+// folder is not read whole. (Not open_input_file: a file looked at here is no input of the run unless it
+// is a tpkit file; the page may be written into the folder it reports on.)
 std::string tpkit_kind(const fs::path& p) {
-  std::ifstream in(p);
-  std::string line, hash, tpkit, kind;
-  int version = 0;
-  if (!in || !std::getline(in, line)) return "";
-  std::istringstream ls(line);
-  if (!(ls >> hash >> tpkit >> kind >> version) || hash != "#" || tpkit != "tpkit") return "";
-  std::string rest;
-  return ls >> rest ? "" : kind;
+  constexpr size_t kMaxHeaderLine = 4096;
+  std::ifstream in(p, std::ios::binary);
+  std::string line;
+  try {
+    if (!in || !read_text_line(in, line, p.string(), 1, kMaxHeaderLine)) return "";
+  } catch (const InputError&) {
+    return "";  // binary data, or a first line longer than any header
+  }
+  return tpkit_header_kind(line);
 }
 
 // By kind: tracks and matches through their own readers (nan views allowed), any other kind with
 // records as numbers (nan shown as it is written: an empty slope class of a dem-dz file, a check point not
-// intersected in an accuracy file) and rows of any length.
+// intersected in an accuracy file) and rows of any length. The input is read once: it may be a pipe.
 TextTable read_any(const std::string& path) {
-  const std::string kind = tpkit_kind(path);
-  if (kind == "tracks") return read_table_file(path, tracks_read_options());
-  if (kind == "matches") return read_table_file(path, matches_read_options());
+  TextInput in(path);
+  const std::string kind = in.header_kind();
+  if (kind == "tracks") return read_table(in.stream(), path, tracks_read_options());
+  if (kind == "matches") return read_table(in.stream(), path, matches_read_options());
   ReadOptions o;
   o.max_version = 99;
   o.columnar = false;
   o.may_be_missing = [](const std::string&) { return true; };
-  return read_table_file(path, o);
+  return read_table(in.stream(), path, o);
+}
+
+// An error for the page: a std::filesystem error in the project's words.
+std::string error_text(const std::exception& e) {
+  if (const auto* f = dynamic_cast<const fs::filesystem_error*>(&e)) return filesystem_error_message(*f);
+  return e.what();
 }
 
 std::string esc(const std::string& s) { return svg_escape(s); }
@@ -100,8 +112,18 @@ std::string track_lengths(const TextTable& t) {
   return o.str();
 }
 
+// Every record as long as the columns line (the table is read with rows of any length, for kinds
+// without a figure): a figure reads its columns by index.
+void require_full_records(const TextTable& t) {
+  for (size_t k = 0; k < t.rows.size(); ++k)
+    if (t.rows[k].size() < t.columns.size())
+      throw InputError(t.source, t.row_line[k], std::to_string(t.rows[k].size()) + " fields for " +
+                                                    std::to_string(t.columns.size()) + " columns");
+}
+
 // reproj-eval's residuals: columns x1..y3, dx1..dy3, check (0 fit, 1 check).
 std::string eval_section(const TextTable& t) {
+  require_full_records(t);
   const int ck = col(t, "check");
   std::vector<ResidualView> views;
   std::vector<HistogramSet> hist = {{"fit", "#4c78a8", {}}, {"check", "#e45756", {}}};
@@ -131,8 +153,16 @@ std::string eval_section(const TextTable& t) {
 std::string rpc_residuals_section(const TextTable& t) {
   const int im = t.require("image"), x = t.require("x"), y = t.require("y");
   const int bx = t.require("dx_before"), by = t.require("dy_before"), ax = t.require("dx_after"), ay = t.require("dy_after");
-  int n = static_cast<int>(t.images.size());
-  for (const auto& r : t.rows) n = std::max(n, static_cast<int>(r[im]));
+  require_full_records(t);
+  // a pair of panels per image line of the header; an image number that names none of them is refused
+  // before anything is drawn (a file saying image 100000 would get 100000 panels)
+  const int n = static_cast<int>(t.images.size());
+  for (size_t k = 0; k < t.rows.size(); ++k) {
+    const double i = t.rows[k][im];
+    if (!(i >= 1 && i <= n && i == std::floor(i)))
+      throw InputError(t.source, t.row_line[k], "image " + format_id(i) + " is not one of the header's image lines (" +
+                                                    (n ? "1 to " + std::to_string(n) : std::string("none")) + ")");
+  }
   const int cols = std::min(std::max(n, 1), 4);
   std::vector<ResidualView> grid;
   std::vector<HistogramSet> hist = {{"before", "#bab0ac", {}}, {"after", "#4c78a8", {}}};
@@ -183,17 +213,22 @@ std::string header_html(const TextTable& t) {
   return o.str();
 }
 
-std::string file_section(const std::string& path, const ReportOptions& opt, bool matches_coverage,
-                         std::vector<std::string>& contents) {
+// A file of the run as read: its table, or why it could not be read.
+struct RunFile {
+  std::string path;
+  TextTable table;
+  std::string error;  // "" when read
+};
+
+std::string file_section(const RunFile& f, const ReportOptions& opt, bool matches_coverage, std::vector<std::string>& contents) {
   std::ostringstream o;
   const std::string id = "f" + std::to_string(contents.size());
-  TextTable t;
-  try {
-    t = read_any(path);
-  } catch (const std::exception& e) {
+  const std::string& path = f.path;
+  if (!f.error.empty()) {
     contents.push_back("<li><a href=\"#" + id + "\">" + esc(path) + "</a> (unreadable)</li>");
-    return "<section id=\"" + id + "\"><h2>" + esc(path) + "</h2><p class=\"error\">not read: " + esc(e.what()) + "</p></section>\n";
+    return "<section id=\"" + id + "\"><h2>" + esc(path) + "</h2><p class=\"error\">not read: " + esc(f.error) + "</p></section>\n";
   }
+  const TextTable& t = f.table;
   contents.push_back("<li><a href=\"#" + id + "\">" + esc(path) + "</a> (" + esc(t.kind) + ", " + std::to_string(t.rows.size()) +
                      " records)</li>");
   o << "<section id=\"" << id << "\"><h2>" << esc(path) << " <small>" << esc(t.kind) << "</small></h2>\n" << header_html(t);
@@ -214,7 +249,7 @@ std::string file_section(const std::string& path, const ReportOptions& opt, bool
       o << table_html(t, 50);
     }
   } catch (const std::exception& e) {
-    o << "<p class=\"error\">not drawn: " << esc(e.what()) << "</p>\n";
+    o << "<p class=\"error\">not drawn: " << esc(error_text(e)) << "</p>\n";
   }
   o << "</section>\n";
   return o.str();
@@ -251,28 +286,34 @@ std::vector<std::string> report_inputs(const std::vector<std::string>& args) {
 }
 
 std::string run_report_html(const std::vector<std::string>& files, const ReportOptions& opt) {
+  // each file read once, first: a pipe cannot be read twice, and the kinds decide what the sections draw
+  std::vector<RunFile> run;
+  for (const auto& f : files) {
+    RunFile r{f, {}, {}};
+    try {
+      r.table = read_any(f);
+    } catch (const std::exception& e) {
+      r.error = error_text(e);
+    }
+    run.push_back(std::move(r));
+  }
   std::vector<std::string> contents;
   // counts per pair first; the tracks' coverage covers every image, so a run with tracks draws no
   // coverage per pair
   bool tracks = false;
   std::ostringstream pairs;
   long pair_count = 0;
-  for (const auto& f : files) {
-    const std::string kind = tpkit_kind(f);
-    tracks |= kind == "tracks";
-    if (kind != "matches") continue;
-    try {
-      const TextTable t = read_any(f);
-      if (pair_count++ == 0) pairs << "<h2>Matches per pair</h2>\n<table><tr><th>file</th><th>image 1</th><th>image 2</th><th>matches</th></tr>\n";
-      pairs << "<tr><td>" << esc(f) << "</td><td>" << esc(image_name(t, 0)) << "</td><td>" << esc(image_name(t, 1))
-            << "</td><td>" << t.rows.size() << "</td></tr>\n";
-    } catch (const std::exception&) {
-      // listed with its error in its own section
-    }
+  for (const auto& r : run) {
+    tracks |= r.error.empty() && r.table.kind == "tracks";
+    if (!r.error.empty() || r.table.kind != "matches") continue;  // an unreadable file is listed with its error in its own section
+    const TextTable& t = r.table;
+    if (pair_count++ == 0) pairs << "<h2>Matches per pair</h2>\n<table><tr><th>file</th><th>image 1</th><th>image 2</th><th>matches</th></tr>\n";
+    pairs << "<tr><td>" << esc(r.path) << "</td><td>" << esc(image_name(t, 0)) << "</td><td>" << esc(image_name(t, 1))
+          << "</td><td>" << t.rows.size() << "</td></tr>\n";
   }
   if (pair_count) pairs << "</table>\n";
   std::string body = pairs.str();
-  for (const auto& f : files) body += file_section(f, opt, !tracks, contents);
+  for (const auto& r : run) body += file_section(r, opt, !tracks, contents);
   std::ostringstream o;
   o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << esc(opt.title) << "</title>\n"
     << "<style>body{font-family:sans-serif;margin:1.5em;color:#222}h2{border-bottom:1px solid #aaa;margin-top:2em}"

@@ -6,9 +6,6 @@
 #include <cstring>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
-#include <sstream>
 #include <limits>
 #include <memory>
 #include <thread>
@@ -834,25 +831,6 @@ double checked_sigma(double s, const std::string& source, long line, const std::
     throw InputError(source, line, column + " " + format_number(s) + " is not a standard deviation (pixels, >= 0; nan when not known)");
   return s;
 }
-
-// The kind a file's header names ("" without one). Reads the first line only; stdin is read whole into
-// *text (it cannot be read twice).
-std::string header_kind(const std::string& path, std::string* text) {
-  std::string first;
-  if (path == "-") {
-    std::ostringstream os;
-    os << std::cin.rdbuf();
-    *text = os.str();
-    first = text->substr(0, text->find('\n'));
-  } else {
-    std::ifstream f = open_input_file(path, InputKind::stream, true);
-    std::getline(f, first);
-  }
-  std::istringstream ls(first);
-  std::string hash, tpkit, kind;
-  ls >> hash >> tpkit >> kind;
-  return hash == "#" && tpkit == "tpkit" ? kind : "";
-}
 }  // namespace
 
 std::vector<AdjustTrack> tracks_to_adjust(const Tracks& t, const std::vector<int>& image_of_view) {
@@ -931,16 +909,13 @@ std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, co
     return map;
   };
   for (const auto& f : files) {
-    std::string text;
-    const std::string kind = header_kind(f, &text);
+    // the kind from the header, the input read once (a pipe cannot be read twice)
+    TextInput input(f);
+    const std::string kind = input.header_kind();
     const bool is_matches = kind == "matches";
     if (!kind.empty() && kind != "matches" && kind != "tracks")
       throw InputError(f == "-" ? "<stdin>" : f, 1, "a " + kind + " file: tie points are a tracks or a matches file");
-    auto table = [&](const ReadOptions& opt) {
-      if (f != "-") return read_table_file(f, opt);
-      std::istringstream in(text);
-      return read_table(in, "-", opt);
-    };
+    auto table = [&](const ReadOptions& opt) { return read_table(input.stream(), f, opt); };
     std::vector<AdjustTrack> part;
     if (is_matches) {
       Matches m = matches_from_table(table(matches_read_options()));

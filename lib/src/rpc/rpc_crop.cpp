@@ -5,6 +5,7 @@
 #include <cctype>
 #include <memory>
 #include <cmath>
+#include <filesystem>
 #include <vector>
 
 #include "tpkit/core/error.hpp"
@@ -40,6 +41,18 @@ double crop_image_with_rpc(const std::string& image, int band, const RpcModel& m
     throw InputError(image, 0, "the window " + std::to_string(x0) + " " + std::to_string(y0) + " " + std::to_string(w) + " " +
                                    std::to_string(h) + " is not inside the image (" + std::to_string(info.width) + " x " +
                                    std::to_string(info.height) + ")");
+  // A header's sizes are no measure of the pixels a file holds: a NITF may declare 99999999 x 99999999
+  // pixels in blocks its mask leaves out (pad), in a few kilobytes, and a crop takes time and output in
+  // proportion to its window. No codec stores real pixels at a million per byte (deflate's limit is about
+  // a thousand): a window beyond that is padding, refused before any work.
+  constexpr double kMaxPixelsPerByte = 1 << 20;
+  std::error_code ec;
+  const double file_bytes = static_cast<double>(std::filesystem::file_size(image, ec));
+  if (!ec && static_cast<double>(w) * static_cast<double>(h) > kMaxPixelsPerByte * std::max(1.0, file_bytes))
+    throw InputError(image, 0, "the window of " + std::to_string(w) + " x " + std::to_string(h) + " pixels is more than " +
+                                   std::to_string(static_cast<long>(kMaxPixelsPerByte)) + " pixels per byte of the file (" +
+                                   std::to_string(static_cast<long>(file_bytes)) + " bytes): padding or blocks the file leaves out, " +
+                                   "not pixels it holds");
   const RpcModel shifted = shift_rpc_model(model, static_cast<double>(x0), static_cast<double>(y0));
   double change = 0;
   std::unique_ptr<TiffWriterU16> tiff;

@@ -6,6 +6,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <ostream>
+#include <string_view>
 #include <vector>
 
 #include "tpkit/core/error.hpp"
@@ -92,11 +94,10 @@ double line_of_sight_on_dem(const RpcModel& m, const HeightPrior& ground, double
 
 }  // namespace
 
-std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
-                                 RpcPointDirection direction, const ReferenceDem* dem, RpcPointStats* stats,
-                                 const GroundConverter* crs) {
+void transform_rpc_points(std::istream& in, const std::string& source, std::ostream& out, const RpcModel& model,
+                          RpcPointDirection direction, const ReferenceDem* dem, RpcPointStats* stats, const GroundConverter* crs) {
   RpcPointStats st;
-  std::string out, line;
+  std::string line;
   HeightPrior ground;
   if (dem) ground = reference_dem_prior(std::shared_ptr<const ReferenceDem>(dem, [](const ReferenceDem*) {}), 1);  // not owned
   const int columns = direction == RpcPointDirection::Localize && dem ? 2 : 3;
@@ -104,7 +105,7 @@ std::string transform_rpc_points(std::istream& in, const std::string& source, co
     size_t first = 0;
     while (first < line.size() && blank(line[first])) ++first;
     if (first == line.size() || line[first] == '#' || line[first] == '\r') {
-      out += line + '\n';
+      out << line << '\n';
       ++st.comments;
       continue;
     }
@@ -139,14 +140,13 @@ std::string transform_rpc_points(std::istream& in, const std::string& source, co
     } catch (const NumericalError& e) {
       // no solution for this point (it is no bad input): marked nan, counted, the first reason kept
       if (st.unsolved++ == 0) st.first_unsolved = source + ":" + std::to_string(lineno) + ": " + e.what();
-      out += "nan nan nan" + line.substr(rest) + '\n';
+      out << "nan nan nan" << std::string_view(line).substr(rest) << '\n';
       continue;
     }
-    out += format_number(a) + ' ' + format_number(b) + ' ' + format_number(c) + line.substr(rest) + '\n';
+    out << format_number(a) << ' ' << format_number(b) << ' ' << format_number(c) << std::string_view(line).substr(rest) << '\n';
     ++st.points;
   }
   if (stats) *stats = st;
-  return out;
 }
 
 }  // namespace tpkit

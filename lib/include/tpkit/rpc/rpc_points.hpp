@@ -9,9 +9,11 @@
 //              over the model's height range, its highest sign change refined by bisection to 1e-4 m.
 // Lines that are empty or start with '#' pass through unchanged; the coordinate columns (separated by
 // blanks or tabs) are replaced, everything after them is kept byte for byte; one output line per input
-// line. Numbers are written in the shortest form that reads back to the same double. A line with too
-// few columns or a value that is not a finite number is an InputError(source:line) (nothing is written:
-// the caller writes the returned text). A point without a solution (a localization that does not
+// line. Numbers are written in the shortest form that reads back to the same double. Each output line is
+// written as its input line is read, so that a filter on a pipe answers as the points come and holds no
+// more than a line (as cct). A line with too few columns or a value that is not a finite number is an
+// InputError(source:line), thrown after the lines before it were written (a caller that must leave
+// nothing behind writes to an atomic output). A point without a solution (a localization that does not
 // converge, a pole of the model, a ground point that is none or far outside the model's box:
 // RpcModel::outside_domain, a line of sight the DEM does not cover) is written "nan nan nan" with
 // its extra columns, and counted.
@@ -20,6 +22,7 @@
 // lon lat h; the pixel side keeps its height above the ellipsoid.
 #pragma once
 #include <istream>
+#include <ostream>
 #include <string>
 
 #include "tpkit/rpc/rpc_model.hpp"
@@ -39,10 +42,10 @@ struct RpcPointStats {
   std::string first_unsolved;  // "source:line: reason" of the first of them
 };
 
-// The transformed text of `in` (named `source` in messages). `dem` (localize only, may be null): the ground
+// The transformed text of `in` (named `source` in messages), written to `out`. `dem` (localize only, may be null): the ground
 // (reference_dem.hpp, any CRS and vertical datum) where each line of sight meets it.
-std::string transform_rpc_points(std::istream& in, const std::string& source, const RpcModel& model,
-                                 RpcPointDirection direction, const ReferenceDem* dem, RpcPointStats* stats = nullptr,
-                                 const GroundConverter* crs = nullptr);
+void transform_rpc_points(std::istream& in, const std::string& source, std::ostream& out, const RpcModel& model,
+                          RpcPointDirection direction, const ReferenceDem* dem, RpcPointStats* stats = nullptr,
+                          const GroundConverter* crs = nullptr);
 
 }  // namespace tpkit
