@@ -8,7 +8,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <map>
 
 #include "tpkit/core/atomic_output.hpp"
@@ -175,37 +174,6 @@ void write_image_u16(const std::string& path, long width, long height, const std
   write_whole(path, width, height, data.data(), data.size(), 16);
 }
 
-namespace {
-// The field type (TIFF type code: 11 FLOAT, 12 DOUBLE, ...) of `tag` in the first directory of a classic or
-// Big TIFF, 0 when absent or unreadable. libtiff converts a FLOAT array to the DOUBLE it was registered
-// with, silently, so the type on disk is read here.
-int tiff_first_ifd_tag_type(const std::string& path, uint16_t tag) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char h[16];
-  if (!in.read(reinterpret_cast<char*>(h), 16)) return 0;
-  const bool le = h[0] == 'I';
-  auto u = [&](const unsigned char* p, int n) {
-    uint64_t v = 0;
-    for (int k = 0; k < n; ++k) v |= uint64_t(p[le ? k : n - 1 - k]) << (8 * k);
-    return v;
-  };
-  const uint64_t magic = u(h + 2, 2);
-  if (magic != 42 && magic != 43) return 0;
-  const bool big = magic == 43;
-  const uint64_t ifd = big ? u(h + 8, 8) : u(h + 4, 4);
-  const int count_size = big ? 8 : 2, entry_size = big ? 20 : 12;
-  unsigned char c[8];
-  if (!in.seekg(static_cast<std::streamoff>(ifd)) || !in.read(reinterpret_cast<char*>(c), count_size)) return 0;
-  const uint64_t n = u(c, count_size);
-  for (uint64_t e = 0; e < n && e < 65536; ++e) {
-    unsigned char d[20];
-    if (!in.read(reinterpret_cast<char*>(d), entry_size)) return 0;
-    if (u(d, 2) == tag) return static_cast<int>(u(d + 2, 2));
-  }
-  return 0;
-}
-}  // namespace
-
 std::optional<RpcTagValues> read_rpc_tag(const std::string& path) {
   check_input_file(path, InputKind::image);  // before libtiff, whose message would be "not a TIFF file" for them all
   register_tiff_tags();
@@ -227,7 +195,9 @@ std::optional<RpcTagValues> read_rpc_tag(const std::string& path) {
   }
   TIFFClose(tif);
   if (out) {
-    const int type = tiff_first_ifd_tag_type(path, TIFFTAG_RPCCOEFFICIENT);
+    // libtiff converts a FLOAT array to the DOUBLE the tag was registered with, silently: the type on disk
+    const auto entry = tiff_first_ifd_tag(path, TIFFTAG_RPCCOEFFICIENT);
+    const int type = entry ? entry->type : 0;
     if (type != 0 && type != TIFF_DOUBLE)
       throw InputError(path, 0, "RPC tag 50844 is stored as " + std::string(type == TIFF_FLOAT ? "FLOAT" : "TIFF type " + std::to_string(type)) +
                                     ", not DOUBLE: its values have lost their precision (give the model in a sidecar or with --rpc)");
