@@ -103,8 +103,7 @@ int run(const Opts& o) {
     for (const auto& im : o.images) outputs.push_back({"--models", (fs::path(o.models) / fs::path(im).stem()).string() + "_rpc.txt"});
   }
   check_outputs(outputs, inputs);
-  auto overrides = parse_rpc_overrides(o.rpc);
-  check_rpc_overrides(overrides, o.images);
+  const auto overrides = resolve_rpc_overrides(parse_rpc_overrides(o.rpc), o.images);
   std::vector<RpcSource> src;
   std::vector<ImageRef> refs;
   std::vector<AdjustImage> images;

@@ -21,3 +21,19 @@ tpkit_tool_test(trust-misc.ground-failed-align-removes-models-folder
 tpkit_tool_test(trust-misc.match-coverage-device-fails-whole-run
   COMMAND "tp-synth -o syn --size 128 --seed 1 > /dev/null && tp-match syn/view1.tif syn/view2.tif --coverage /dev/full -o p.matches"
   EXPECT_FAIL STDERR_MATCH "tp-match: /dev/full: write error" NO_FILE p.matches)
+# Item 15: --rpc and --fixed name an image as a tracks file's image lines do: ./syn/view2.tif is
+# syn/view2.tif. The wrong model given so (view3's) is used, and fails the fit; the right one passes.
+tpkit_tool_test(trust-misc.rpc-other-spelling
+  COMMAND "${misc_synth} && ${misc_ground3} --rpc ./syn/view2.tif=syn/view3_rpc.txt -o bad.points @SEMI@ echo rc $? @SEMI@ ${misc_ground3} --rpc ./syn/view2.tif=syn/view2_rpc.txt -o g.points && echo ok"
+  STDOUT_MATCH "^rc 1\nok\n$"
+  STDERR_MATCH "tracks have an RMS residual above --flag 2 px")
+tpkit_tool_test(trust-misc.rpc-two-names-of-one-image
+  COMMAND "${misc_synth} && ${misc_ground3} --rpc ./syn/view2.tif=syn/view2_rpc.txt --rpc syn/view2.tif=syn/view2_rpc.txt -o g.points"
+  EXPECT_FAIL STDERR_MATCH "\ntp-ground: --rpc syn/view2.tif=syn/view2_rpc.txt: syn/view2.tif has another --rpc already\n$" NO_FILE g.points)
+tpkit_tool_test(trust-misc.fixed-other-spelling
+  COMMAND "${misc_synth} && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/truth.tracks --fixed ./syn/view1.tif -o adj"
+  STDERR_MATCH "rpc-adjust: image1 syn/view1.tif \\(fixed\\)")
+tpkit_tool_test(trust-misc.plan-fixed-through-a-link
+  COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && ln -s s/view1.tif link.tif && tp-plan -q -o w --fixed link.tif s/view1.tif s/view2.tif && grep -o -- \"--fixed '[^']*'\" w/jobs/adjust.jobs"
+  STDOUT_MATCH "^--fixed '/[^']*/s/view1.tif'\n$")
+

@@ -202,10 +202,14 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
   std::vector<size_t> chained;
   for (size_t i = 0; i < images.size(); ++i)
     if (paired[i]) chained.push_back(i);
+  std::vector<std::string> paths;
+  for (const PlanImage& im : images) paths.push_back(im.path);
+  std::vector<size_t> fixed;  // named as the plan names them, whatever the spelling of --fixed
   for (const auto& f : o.fixed) {
-    const auto it = std::find_if(images.begin(), images.end(), [&](const PlanImage& im) { return im.path == f; });
-    if (it == images.end()) throw UsageError("--fixed " + f + ": not one of the plan's images");
-    if (!paired[static_cast<size_t>(it - images.begin())]) throw UsageError("--fixed " + f + ": left out of the plan (it overlaps no other image)");
+    const int i = image_index(f, paths);
+    if (i < 0) throw UsageError("--fixed " + f + ": " + (i == -2 ? "ambiguous among" : "not one of") + " the plan's images");
+    if (!paired[static_cast<size_t>(i)]) throw UsageError("--fixed " + f + ": left out of the plan (it overlaps no other image)");
+    fixed.push_back(static_cast<size_t>(i));
   }
   if (o.adjust == Mode::off) return;
   // what the adjustment needs of the images, else the reason
@@ -243,7 +247,7 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
   for (size_t i : chained) imgs += " " + shell_quote(images[i].path);
   PlanJob adjust{"adjusted/rpc.bias", {"tracks.tracks"}, {},
                  tool(o, "rpc-adjust") + imgs + " --tracks " + tracks + " --model " + o.adjust_model};
-  for (const auto& f : o.fixed) adjust.command += " --fixed " + shell_quote(f);
+  for (size_t i : fixed) adjust.command += " --fixed " + shell_quote(images[i].path);
   adjust.command += threads;
   for (const auto& a : o.adjust_args) adjust.command += " " + shell_quote(a);
   adjust.command += " -o " + in_work(o, "adjusted");

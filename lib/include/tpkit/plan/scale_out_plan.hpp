@@ -81,7 +81,7 @@ struct PlanOptions {
   enum class Adjust { automatic, on, off };
   Adjust adjust = Adjust::automatic;
   std::string adjust_model = "affine";    // rpc-adjust --model: shift, drift or affine (rpc-adjust's default)
-  std::vector<std::string> fixed;         // rpc-adjust --fixed: absolute paths, images of the chain
+  std::vector<std::string> fixed;         // rpc-adjust --fixed: absolute paths, each naming an image of the chain (image_index)
   std::vector<std::string> adjust_args;   // more rpc-adjust arguments (relative file names already made absolute)
   std::vector<std::string> ground_args;   // more tp-ground arguments (the same)
 };
