@@ -36,4 +36,7 @@ tpkit_tool_test(trust-misc.fixed-other-spelling
 tpkit_tool_test(trust-misc.plan-fixed-through-a-link
   COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && ln -s s/view1.tif link.tif && tp-plan -q -o w --fixed link.tif s/view1.tif s/view2.tif && grep -o -- \"--fixed '[^']*'\" w/jobs/adjust.jobs"
   STDOUT_MATCH "^--fixed '/[^']*/s/view1.tif'\n$")
-
+# Item 11: a matches file's sigma -1 is refused with its line (it became 0.7071 px in the tracks).
+tpkit_tool_test(trust-misc.chain-negative-sigma
+  COMMAND "printf '# tpkit matches 1\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n1 10 10 1 11 11 0.5\\n2 20 20 2 21 21 -1\\n' > m.matches && tp-chain m.matches -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "^tp-chain: m.matches:6: sigma -1 is not a standard deviation \\(pixels, >= 0\\)\n$" NO_FILE t.tracks)
