@@ -40,3 +40,8 @@ tpkit_tool_test(trust-misc.plan-fixed-through-a-link
 tpkit_tool_test(trust-misc.chain-negative-sigma
   COMMAND "printf '# tpkit matches 1\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n1 10 10 1 11 11 0.5\\n2 20 20 2 21 21 -1\\n' > m.matches && tp-chain m.matches -o t.tracks"
   EXPECT_FAIL STDERR_MATCH "^tp-chain: m.matches:6: sigma -1 is not a standard deviation \\(pixels, >= 0\\)\n$" NO_FILE t.tracks)
+# Item 11: the file options of --adjust-options and --ground-options are made absolute (the jobs run in
+# the work folder): --gcp, --align, --dz, --models as --dem and --check were.
+tpkit_tool_test(trust-misc.plan-file-options-absolute
+  COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && tp-plan -q -o w --adjust-options '--gcp g.gcp' --ground-options '--align s/truth.dem.tif --dz dz.txt --models m' s/view1.tif s/view2.tif && grep -o \"'--[a-z]*' '[^']*'\" w/jobs/adjust.jobs w/jobs/ground.jobs"
+  STDOUT_MATCH "adjust.jobs:'--gcp' '/[^']*/g.gcp'\n.*ground.jobs:'--align' '/[^']*/s/truth.dem.tif'\n.*ground.jobs:'--dz' '/[^']*/dz.txt'\n.*ground.jobs:'--models' '/[^']*/m'\n")

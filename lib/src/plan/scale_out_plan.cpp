@@ -358,10 +358,15 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
     if (opt == "--rpc") return "the models are those found beside the images, as for the footprints and tp-match";
     return "tp-plan sets it (the work folder's files)";
   };
-  auto absolute = [](const std::string& f) { return fs::absolute(f).lexically_normal().string(); };
+  auto absolute = [](const std::string& f) { return f == "-" ? f : fs::absolute(f).lexically_normal().string(); };
+  // the options that name files (and folders), read and written by the jobs in the work folder: one file
+  // each, or (--check) files until the next option
+  const std::vector<std::string> one_file =
+      adjust ? std::vector<std::string>{"--dem", "--gcp"} : std::vector<std::string>{"--compare", "--align", "--dz", "--models"};
+  const std::string many_files = adjust ? "--check" : "";
   std::vector<std::string> out;
   std::istringstream in(text);
-  std::string file_option;  // the option whose file names follow (--dem: one, --check: until the next option)
+  std::string file_option;  // the option whose file names follow
   for (std::string a; in >> a;) {
     const bool is_option = a.size() > 1 && a[0] == '-' && !(std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.');
     if (is_option) {
@@ -370,7 +375,7 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
       for (const auto& r : refused)
         if (name == r || (r == "-o" && a.rfind("-o", 0) == 0 && a.rfind("--", 0) != 0))
           throw UsageError(option_name + ": " + r + " is refused there: " + why(r));
-      if (name == "--dem" || name == "--check") {
+      if (name == many_files || std::find(one_file.begin(), one_file.end(), name) != one_file.end()) {
         if (name.size() < a.size()) {
           a = name + "=" + absolute(a.substr(name.size() + 1));
         } else {
@@ -382,7 +387,7 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
     }
     if (!file_option.empty()) {
       a = absolute(a);
-      if (file_option == "--dem") file_option.clear();
+      if (file_option != many_files) file_option.clear();
     }
     out.push_back(a);
   }

@@ -113,7 +113,8 @@ std::string plan_result(const Plan& p);
 // --adjust-options / --ground-options, split at white space: the options tp-plan sets itself are
 // refused (UsageError naming option_name: -o, --tracks, --threads, --rpc (the models are those found
 // beside the images, as for the footprints and tp-match), and for rpc-adjust --model and --fixed), and the
-// file names of --dem and --check made absolute (the jobs run in other folders).
+// file names made absolute (the jobs run in other folders): rpc-adjust's --dem, --gcp and --check,
+// tp-ground's --compare, --align, --dz and --models.
 std::vector<std::string> plan_tool_args(const std::string& text, const std::string& which, const std::string& option_name);
 
 // Image sizes read from the files; throws InputError for an unreadable image, UsageError for fewer
