@@ -45,3 +45,7 @@ tpkit_tool_test(trust-misc.chain-negative-sigma
 tpkit_tool_test(trust-misc.plan-file-options-absolute
   COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && tp-plan -q -o w --adjust-options '--gcp g.gcp' --ground-options '--align s/truth.dem.tif --dz dz.txt --models m' s/view1.tif s/view2.tif && grep -o \"'--[a-z]*' '[^']*'\" w/jobs/adjust.jobs w/jobs/ground.jobs"
   STDOUT_MATCH "adjust.jobs:'--gcp' '/[^']*/g.gcp'\n.*ground.jobs:'--align' '/[^']*/s/truth.dem.tif'\n.*ground.jobs:'--dz' '/[^']*/dz.txt'\n.*ground.jobs:'--models' '/[^']*/m'\n")
+# Item 11: --dates 0 is not a number of acquisitions (0 stood for the default inside).
+tpkit_tool_test(trust-misc.synth-dates-zero
+  COMMAND "tp-synth -o s --views 6 --dates 0 --size 64"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --dates: must be > 0, got '0'" NO_FILE s)
