@@ -36,6 +36,7 @@ tpkit_tool_test(trust-misc.fixed-other-spelling
 tpkit_tool_test(trust-misc.plan-fixed-through-a-link
   COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && ln -s s/view1.tif link.tif && tp-plan -q -o w --fixed link.tif s/view1.tif s/view2.tif && grep -o -- \"--fixed '[^']*'\" w/jobs/adjust.jobs"
   STDOUT_MATCH "^--fixed '/[^']*/s/view1.tif'\n$")
+
 # Item 11: a matches file's sigma -1 is refused with its line (it became 0.7071 px in the tracks).
 tpkit_tool_test(trust-misc.chain-negative-sigma
   COMMAND "printf '# tpkit matches 1\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# columns: id1 x1 y1 id2 x2 y2 sigma\\n1 10 10 1 11 11 0.5\\n2 20 20 2 21 21 -1\\n' > m.matches && tp-chain m.matches -o t.tracks"
@@ -49,3 +50,10 @@ tpkit_tool_test(trust-misc.plan-file-options-absolute
 tpkit_tool_test(trust-misc.synth-dates-zero
   COMMAND "tp-synth -o s --views 6 --dates 0 --size 64"
   EXPECT_FAIL STDERR_MATCH "^tp-synth: --dates: must be > 0, got '0'" NO_FILE s)
+# Item 11: tp-sample reads a version-2 tracks file (a block's, views not seen "nan nan") as every
+# tracks reader does, and writes it as version 2.
+tpkit_tool_test(trust-misc.sample-tracks-version-2
+  COMMAND "printf '# tpkit tracks 2\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# image3: c.tif 100 100\\n# columns: track x1 y1 x2 y2 x3 y3\\n1 1 1 2 2 nan nan\\n2 3 3 4 4 5 5\\n3 6 6 nan nan 7 7\\n' > t.tracks && tp-sample t.tracks -n 2 --seed 3 -o s.tracks && tp-sample --kind tracks t.tracks -n 2 --seed 3 -o k.tracks && cmp s.tracks k.tracks && grep -c nan s.tracks"
+  STDOUT_MATCH "^[12]\n$"
+  CHECK_FILE s.tracks FILE_MATCH "^# tpkit tracks 2\n")
+
