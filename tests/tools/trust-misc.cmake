@@ -56,4 +56,7 @@ tpkit_tool_test(trust-misc.sample-tracks-version-2
   COMMAND "printf '# tpkit tracks 2\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# image3: c.tif 100 100\\n# columns: track x1 y1 x2 y2 x3 y3\\n1 1 1 2 2 nan nan\\n2 3 3 4 4 5 5\\n3 6 6 nan nan 7 7\\n' > t.tracks && tp-sample t.tracks -n 2 --seed 3 -o s.tracks && tp-sample --kind tracks t.tracks -n 2 --seed 3 -o k.tracks && cmp s.tracks k.tracks && grep -c nan s.tracks"
   STDOUT_MATCH "^[12]\n$"
   CHECK_FILE s.tracks FILE_MATCH "^# tpkit tracks 2\n")
-
+# Item 17: a UTF-8 byte order mark at the start of a --list file is not part of the first path.
+tpkit_tool_test(trust-misc.plan-list-bom
+  COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && printf '\\xef\\xbb\\xbfs/view1.tif\\r\\ns/view2.tif\\r\\n' > list && tp-plan -o w --list list"
+  STDERR_MATCH "tp-plan: 2 images, 1 pairs")

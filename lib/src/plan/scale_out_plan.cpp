@@ -136,6 +136,7 @@ std::vector<std::string> read_image_list(const std::string& path) {
   std::vector<std::string> out;
   std::string line;
   for (long n = 1; read_text_line(in, line, path, n, kMaxPath); ++n) {
+    if (n == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // a UTF-8 byte order mark (Notepad's)
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || line[0] == '#') continue;
     out.push_back(line);

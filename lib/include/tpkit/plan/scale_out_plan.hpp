@@ -121,8 +121,8 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
 // than two images or no overlapping pair.
 std::vector<PlanImage> plan_images(const std::vector<std::string>& paths);
 
-// The image list of --list: one path a line (spaces are part of it, a trailing '\r' is not), blank
-// lines and lines starting with '#' skipped. A regular file or a pipe; InputError for a folder, a
+// The image list of --list: one path a line (spaces are part of it, a trailing '\r' and a UTF-8 byte
+// order mark at the start of the file are not), blank lines and lines starting with '#' skipped. A regular file or a pipe; InputError for a folder, a
 // device, binary content (a NUL byte) or a line longer than PATH_MAX (4096 bytes), found as the line
 // is read (a device such as /dev/zero fails at once).
 std::vector<std::string> read_image_list(const std::string& path);
