@@ -60,3 +60,11 @@ tpkit_tool_test(trust-misc.sample-tracks-version-2
 tpkit_tool_test(trust-misc.plan-list-bom
   COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && printf '\\xef\\xbb\\xbfs/view1.tif\\r\\ns/view2.tif\\r\\n' > list && tp-plan -o w --list list"
   STDERR_MATCH "tp-plan: 2 images, 1 pairs")
+# Item 17: an option of a fixed count given one value short takes the next argument and names itself
+# in the error (it was the images' count: "IMAGES: At least 2 required but received 1").
+tpkit_tool_test(trust-misc.match-region-one-number-short
+  COMMAND "tp-match --region 0 0 100 a.tif b.tif -o r.matches"
+  EXPECT_FAIL STDERR_MATCH "^tp-match: --region: X0 Y0 W H are whole pixels, got 'a.tif' \\(see tp-match --help\\)\n$" NO_FILE r.matches)
+tpkit_tool_test(trust-misc.match-height-range-one-number-short
+  COMMAND "tp-match --height-range 0 a.tif b.tif -o r.matches"
+  EXPECT_FAIL STDERR_MATCH "^tp-match: [^\n]*--height-range[^\n]*a.tif" NO_FILE r.matches)
