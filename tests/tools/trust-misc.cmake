@@ -68,3 +68,8 @@ tpkit_tool_test(trust-misc.match-region-one-number-short
 tpkit_tool_test(trust-misc.match-height-range-one-number-short
   COMMAND "tp-match --height-range 0 a.tif b.tif -o r.matches"
   EXPECT_FAIL STDERR_MATCH "^tp-match: [^\n]*--height-range[^\n]*a.tif" NO_FILE r.matches)
+# Item 17: OpenCV's TBB pool is not asked for more workers than the processors (--threads 64 printed an
+# unprefixed "TBB Warning: The number of workers is currently limited to ...").
+tpkit_tool_test(trust-misc.match-threads-above-cores-no-tbb-warning
+  COMMAND "tp-synth -o syn --size 128 --seed 1 > /dev/null && tp-match syn/view1.tif syn/view2.tif --threads 64 -q -o m.matches 2> err @SEMI@ echo \"rc $? tbb $(grep -c TBB err)\""
+  STDOUT_MATCH "^rc 0 tbb 0\n$")
