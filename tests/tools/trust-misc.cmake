@@ -56,6 +56,7 @@ tpkit_tool_test(trust-misc.sample-tracks-version-2
   COMMAND "printf '# tpkit tracks 2\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# image3: c.tif 100 100\\n# columns: track x1 y1 x2 y2 x3 y3\\n1 1 1 2 2 nan nan\\n2 3 3 4 4 5 5\\n3 6 6 nan nan 7 7\\n' > t.tracks && tp-sample t.tracks -n 2 --seed 3 -o s.tracks && tp-sample --kind tracks t.tracks -n 2 --seed 3 -o k.tracks && cmp s.tracks k.tracks && grep -c nan s.tracks"
   STDOUT_MATCH "^[12]\n$"
   CHECK_FILE s.tracks FILE_MATCH "^# tpkit tracks 2\n")
+
 # Item 17: a UTF-8 byte order mark at the start of a --list file is not part of the first path.
 tpkit_tool_test(trust-misc.plan-list-bom
   COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 > /dev/null && printf '\\xef\\xbb\\xbfs/view1.tif\\r\\ns/view2.tif\\r\\n' > list && tp-plan -o w --list list"
@@ -73,3 +74,11 @@ tpkit_tool_test(trust-misc.match-height-range-one-number-short
 tpkit_tool_test(trust-misc.match-threads-above-cores-no-tbb-warning
   COMMAND "tp-synth -o syn --size 128 --seed 1 > /dev/null && tp-match syn/view1.tif syn/view2.tif --threads 64 -q -o m.matches 2> err @SEMI@ echo \"rc $? tbb $(grep -c TBB err)\""
   STDOUT_MATCH "^rc 0 tbb 0\n$")
+# Item 17: -o after --images is the output option (already right: CLI11 ends a list at an option); the
+# MATCHES files after --images are taken as images, and the error now says so.
+tpkit_tool_test(trust-misc.chain-output-after-images
+  COMMAND "printf '# tpkit matches 1\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 10 10 1 11 11\\n' > m.matches && tp-chain m.matches --images a.tif b.tif -o t.tracks"
+  CHECK_FILE t.tracks FILE_MATCH "^# tpkit tracks 1\n")
+tpkit_tool_test(trust-misc.chain-matches-after-images
+  COMMAND "printf '# tpkit matches 1\\n# image1: a.tif 100 100\\n# image2: b.tif 100 100\\n# columns: id1 x1 y1 id2 x2 y2\\n1 10 10 1 11 11\\n' > m.matches && tp-chain --images a.tif b.tif m.matches -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "^tp-chain: no MATCHES files given: --images took every name after it \\(the last m.matches\\): put the matches files first, or end the images with --\n$" NO_FILE t.tracks)
