@@ -1056,12 +1056,7 @@ std::vector<std::string> rpc_sidecar_candidates(const std::string& image) {
 }
 
 std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides) {
-  auto it = overrides.find(image);
-  if (it == overrides.end()) {
-    std::error_code ec;
-    for (auto o = overrides.begin(); o != overrides.end(); ++o)
-      if (fs::exists(o->first, ec) && fs::exists(image, ec) && fs::equivalent(o->first, image, ec)) it = o;
-  }
+  const auto it = overrides.find(image);
   if (it != overrides.end()) return RpcSource{read_rpc_file(it->second), it->second, rpc_form_of(it->second)};
   std::string ext = fs::path(image).extension().string();
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));

@@ -97,7 +97,8 @@ struct RpcSource {
   std::string path;  // the file read (the image itself for the tag)
   RpcForm form = RpcForm::tiff;
 };
-// Nothing when the image has no model anywhere.
+// Nothing when the image has no model anywhere. `overrides` are keyed by the image as given
+// (resolve_rpc_overrides): the override of `image` is the one under that very name.
 std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
 // The same, throwing InputError("IMAGE: no RPC model: no tag 50844 and none of SIDECARS") when there is none.
 RpcSource load_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
