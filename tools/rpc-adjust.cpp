@@ -38,8 +38,7 @@ struct Opts {
 
 
 std::vector<AdjustImage> load_images(const Opts& o, std::vector<RpcSource>& sources) {
-  auto overrides = parse_rpc_overrides(o.rpc);
-  check_rpc_overrides(overrides, o.images);
+  const auto overrides = resolve_rpc_overrides(parse_rpc_overrides(o.rpc), o.images);
   std::vector<AdjustImage> out;
   std::set<std::string> stems;
   for (const auto& path : o.images) {
@@ -55,9 +54,9 @@ std::vector<AdjustImage> load_images(const Opts& o, std::vector<RpcSource>& sour
     out.push_back(im);
   }
   for (const auto& f : o.fixed) {
-    auto it = std::find(o.images.begin(), o.images.end(), f);
-    if (it == o.images.end()) throw UsageError("--fixed " + f + ": not one of the images");
-    out[it - o.images.begin()].fixed = true;
+    const int i = image_index(f, o.images);  // as --rpc and the tracks files name the images
+    if (i < 0) throw UsageError("--fixed " + f + ": " + (i == -2 ? "ambiguous among" : "not one of") + " the images");
+    out[static_cast<size_t>(i)].fixed = true;
   }
   return out;
 }

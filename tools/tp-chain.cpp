@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
       "tp-chain", argc, argv,
       [&](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<Opts>();
-        app.add_option("MATCHES", o->files, "matches files")->required();
+        app.add_option("MATCHES", o->files, "matches files");  // required: checked below, with the reason
         app.add_option("--images", o->images, "images of the output, in column order (first = reference)");
         app.add_option("--min-views", o->min_views, "fewest views of a written track (default: 3 with three images, else 2)")
             ->check(CLI::Validator(
@@ -51,6 +51,11 @@ int main(int argc, char** argv) {
         app.add_option("--coverage", o->coverage, "SVG figure: tie points per cell over each image's thumbnail");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
+          // --images takes every name up to the next option, the matches files after it too
+          if (o->files.empty())
+            throw tpkit::UsageError(o->images.empty() ? "no MATCHES files given"
+                                                      : "no MATCHES files given: --images took every name after it (the last " +
+                                                            o->images.back() + "): put the matches files first, or end the images with --");
           tpkit::check_outputs({{"-o", o->out}, {"--coverage", o->coverage}}, o->files);
           for (size_t i = 0; i < o->images.size(); ++i)
             for (size_t j = 0; j < i; ++j)

@@ -100,12 +100,11 @@ int run(const Opts& o) {
   if (!o.align.empty()) inputs.push_back(o.align);
   if (!o.dz.empty()) outputs.push_back({"--dz", o.dz});
   if (!o.models.empty()) {
-    fs::create_directories(o.models);
+    create_output_dir(o.models);  // removed again if the run fails
     for (const auto& im : o.images) outputs.push_back({"--models", (fs::path(o.models) / fs::path(im).stem()).string() + "_rpc.txt"});
   }
   check_outputs(outputs, inputs);
-  auto overrides = parse_rpc_overrides(o.rpc);
-  check_rpc_overrides(overrides, o.images);
+  const auto overrides = resolve_rpc_overrides(parse_rpc_overrides(o.rpc), o.images);
   std::vector<RpcSource> src;
   std::vector<ImageRef> refs;
   std::vector<AdjustImage> images;
@@ -155,7 +154,9 @@ int run(const Opts& o) {
                    {"flagged_residual", std::to_string(g.residual_flagged)},
                    {"flagged_outside_box", std::to_string(g.outside_box)}};
   write_ground(o.output, table, conv);
-  std::cerr << "tp-ground: " << g.intersected << " ground points, residual rms " << g.rms_px << " px\n";
+  std::ostringstream line;
+  line << g.intersected << " ground points, residual rms " << g.rms_px << " px";
+  summary(line.str());  // printed once the outputs are committed
   const long failed = static_cast<long>(tracks.size()) - g.intersected;
   if (failed) warn(std::to_string(failed) + " tracks could not be intersected (left out)");
   if (g.residual_flagged)

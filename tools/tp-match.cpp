@@ -73,8 +73,7 @@ struct Opts {
 void load_rpcs(Opts& o) {
   o.rpc_of.assign(o.images.size(), nullptr);
   if (o.no_rpc || o.global) return;
-  const auto overrides = tpkit::parse_rpc_overrides(o.rpc_files);
-  tpkit::check_rpc_overrides(overrides, o.images);
+  const auto overrides = tpkit::resolve_rpc_overrides(tpkit::parse_rpc_overrides(o.rpc_files), o.images);
   o.rpc.reserve(o.images.size());
   for (size_t k = 0; k < o.images.size(); ++k) {
     if (o.rpc_guided) {

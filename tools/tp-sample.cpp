@@ -26,7 +26,8 @@ tpkit::ReadOptions options_for(const std::string& kind) {
   if (kind == "matches") return tpkit::matches_read_options();
   if (kind == "points") return tpkit::points_read_options();
   if (kind.empty()) {
-    tpkit::ReadOptions o;  // any kind, header required
+    tpkit::ReadOptions o;  // any kind, header required: read by its kind's options (tracks version 2, say)
+    o.of_kind = [](const std::string& k) { return k == "tracks" || k == "matches" || k == "points" ? options_for(k) : tpkit::ReadOptions(); };
     return o;
   }
   throw tpkit::UsageError("--kind must be tracks, matches or points");

@@ -38,7 +38,8 @@ int main(int argc, char** argv) {
         app.add_option("--origin", o->origin, "LAT,LON,H of the scene centre (degrees, degrees, m above the WGS84 ellipsoid)");
         app.add_option("--rpc-bias", o->rpc_bias, "VIEW:dx,dy[,dxy,dyy[,dxx,dyx]]: bias injected into a view's RPC (px, px/px)");
         app.add_option("--views", o->p.views, "views in all (3: the tri-stereo; 2 to 96)");
-        app.add_option("--dates", o->p.dates, "acquisitions of a block (default: views / 3)");
+        app.add_option("--dates", o->p.dates, "acquisitions of a block (default: views / 3)")
+            ->check(tpkit::Positive);  // 0 is the default's mark in SynthParams, not a count to give
         app.add_option("--second-date", o->p.date2, "views 2..N from a second date: strength 0..1 of tone, season, texture, sun changes");
         app.add_option("--clouds", o->p.clouds, "views 2..N: fraction of the ground under clouds, with their shadows");
         app.add_option("--water", o->p.water, "fraction of the ground under featureless water (every view)");

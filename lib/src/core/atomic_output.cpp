@@ -402,7 +402,22 @@ void commit_pending(std::vector<Pending>& pending, const std::vector<std::string
       throw InputError(p.target, 0, why);
     }
   }
-  // the files first (any of them may still fail), standard output last
+  // Text held for standard output, a device or a FIFO next: a full device (/dev/full) or a closed pipe
+  // fails only when written, and nothing has been handed over yet, so such a failure still leaves no
+  // output. Once written it cannot be taken back; the renames that follow were all checked above.
+  try {
+    for (const auto& p : pending)
+      if (p.to_stdout) {
+        if (p.direct) write_direct(p.target, [&](std::ostream& f) { p.text->write_to(f); });
+        else p.text->write_to(std::cout);
+      }
+    std::cout.flush();
+    if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
+  } catch (...) {
+    for (const auto& q : pending)
+      if (!q.to_stdout) discard_temp(q.tmp);
+    throw;
+  }
   for (size_t i = 0; i < pending.size(); ++i) {
     if (pending[i].to_stdout) continue;
     try {
@@ -418,13 +433,6 @@ void commit_pending(std::vector<Pending>& pending, const std::vector<std::string
     for (const auto& p : pending) rewritten = rewritten || (!p.to_stdout && same_file(p.target, s));
     if (!rewritten) std::remove(s.c_str());
   }
-  for (const auto& p : pending)
-    if (p.to_stdout) {
-      if (p.direct) write_direct(p.target, [&](std::ostream& f) { p.text->write_to(f); });
-      else p.text->write_to(std::cout);
-    }
-  std::cout.flush();
-  if (!std::cout) throw InputError("-", 0, "write error on standard output: " + errno_text());
 }
 }  // namespace
 

@@ -100,7 +100,8 @@ bool parse_long(const std::string& s, long& v) {
 
 }  // namespace
 
-TextTable read_table(std::istream& in, const std::string& source_in, const ReadOptions& opt) {
+TextTable read_table(std::istream& in, const std::string& source_in, const ReadOptions& given) {
+  ReadOptions opt = given;  // with of_kind: replaced by the options of the header's kind
   TextTable t;
   t.source = source_in == "-" ? "<stdin>" : source_in;
   std::string line;
@@ -122,6 +123,7 @@ TextTable read_table(std::istream& in, const std::string& source_in, const ReadO
           if (w.size() != 3) throw InputError(t.source, lineno, "malformed header; expected '# tpkit KIND VERSION'");
           long ver = 0;
           if (!parse_long(w[2], ver) || ver < 1) throw InputError(t.source, lineno, "bad version '" + w[2] + "' in header");
+          if (opt.kind.empty() && opt.of_kind) opt = opt.of_kind(w[1]);
           if (!opt.kind.empty() && w[1] != opt.kind)
             throw InputError(t.source, lineno, "wrong header kind: expected '" + opt.kind + "', found '" + w[1] + "'");
           if (ver > opt.max_version)

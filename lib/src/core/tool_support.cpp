@@ -272,10 +272,12 @@ std::string undocumented_options(const CLI::App& app, const std::string& page) {
 // Every option that takes a fixed number of values (--height-range LO HI, --region X0 Y0 W H, ...) takes
 // exactly that many: CLI11 lets a vector option go on taking the arguments that follow, so that
 // `--height-range 0 100 IMG1 IMG2` swallowed the images and failed with "At Most 2 required but received 4".
+// Its values are checked as they are parsed: one number short, `--region 0 0 100 IMG1 IMG2` took IMG1 for
+// H, and the error reported was the images' count ("IMAGES: At least 2 required"), not the option's.
 void fix_value_counts(CLI::App& app) {
   for (CLI::Option* opt : app.get_options()) {
     const int lo = opt->get_items_expected_min(), hi = opt->get_items_expected_max();
-    if (lo == hi && hi > 1) opt->allow_extra_args(false);
+    if (lo == hi && hi > 1) opt->allow_extra_args(false)->trigger_on_parse();
   }
 }
 

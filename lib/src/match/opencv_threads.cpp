@@ -1,5 +1,6 @@
 #include "tpkit/match/opencv_threads.hpp"
 
+#include <algorithm>
 #include <mutex>
 #include <opencv2/core/utility.hpp>
 
@@ -10,7 +11,7 @@ bool set_opencv_threads(int threads) {
   static std::once_flag once;
   bool set = false;
   std::call_once(once, [&]() {
-    cv::setNumThreads(threads);
+    cv::setNumThreads(std::min(threads, cv::getNumberOfCPUs()));
     set = true;
   });
   return set;

@@ -175,7 +175,12 @@ void TrackChainer::Impl::add(const Matches& m) {
     occ[ab[1]].push_back({m.id2[r], kx, ky});
     lx2.push_back(m.xy(e, 2));
     ly2.push_back(m.xy(e, 3));
-    lsig.push_back(cs >= 0 ? static_cast<float>(m.extra.values(e, cs)) : std::numeric_limits<float>::quiet_NaN());
+    const double sigma = cs >= 0 ? m.extra.values(e, cs) : std::numeric_limits<double>::quiet_NaN();
+    // squared into a variance, -1 would pass as 1 (rpc-adjust and tp-ground refuse it alike)
+    if (sigma < 0)
+      throw InputError(m.source, r < m.line.size() ? m.line[r] : 0,
+                       "sigma " + format_number(sigma) + " is not a standard deviation (pixels, >= 0)");
+    lsig.push_back(static_cast<float>(sigma));
   }
   files.push_back({ab[0], ab[1], begin, lu.size()});
 }

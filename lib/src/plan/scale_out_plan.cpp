@@ -136,6 +136,7 @@ std::vector<std::string> read_image_list(const std::string& path) {
   std::vector<std::string> out;
   std::string line;
   for (long n = 1; read_text_line(in, line, path, n, kMaxPath); ++n) {
+    if (n == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // a UTF-8 byte order mark (Notepad's)
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || line[0] == '#') continue;
     out.push_back(line);
@@ -202,10 +203,14 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
   std::vector<size_t> chained;
   for (size_t i = 0; i < images.size(); ++i)
     if (paired[i]) chained.push_back(i);
+  std::vector<std::string> paths;
+  for (const PlanImage& im : images) paths.push_back(im.path);
+  std::vector<size_t> fixed;  // named as the plan names them, whatever the spelling of --fixed
   for (const auto& f : o.fixed) {
-    const auto it = std::find_if(images.begin(), images.end(), [&](const PlanImage& im) { return im.path == f; });
-    if (it == images.end()) throw UsageError("--fixed " + f + ": not one of the plan's images");
-    if (!paired[static_cast<size_t>(it - images.begin())]) throw UsageError("--fixed " + f + ": left out of the plan (it overlaps no other image)");
+    const int i = image_index(f, paths);
+    if (i < 0) throw UsageError("--fixed " + f + ": " + (i == -2 ? "ambiguous among" : "not one of") + " the plan's images");
+    if (!paired[static_cast<size_t>(i)]) throw UsageError("--fixed " + f + ": left out of the plan (it overlaps no other image)");
+    fixed.push_back(static_cast<size_t>(i));
   }
   if (o.adjust == Mode::off) return;
   // what the adjustment needs of the images, else the reason
@@ -243,7 +248,7 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
   for (size_t i : chained) imgs += " " + shell_quote(images[i].path);
   PlanJob adjust{"adjusted/rpc.bias", {"tracks.tracks"}, {},
                  tool(o, "rpc-adjust") + imgs + " --tracks " + tracks + " --model " + o.adjust_model};
-  for (const auto& f : o.fixed) adjust.command += " --fixed " + shell_quote(f);
+  for (size_t i : fixed) adjust.command += " --fixed " + shell_quote(images[i].path);
   adjust.command += threads;
   for (const auto& a : o.adjust_args) adjust.command += " " + shell_quote(a);
   adjust.command += " -o " + in_work(o, "adjusted");
@@ -354,10 +359,15 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
     if (opt == "--rpc") return "the models are those found beside the images, as for the footprints and tp-match";
     return "tp-plan sets it (the work folder's files)";
   };
-  auto absolute = [](const std::string& f) { return fs::absolute(f).lexically_normal().string(); };
+  auto absolute = [](const std::string& f) { return f == "-" ? f : fs::absolute(f).lexically_normal().string(); };
+  // the options that name files (and folders), read and written by the jobs in the work folder: one file
+  // each, or (--check) files until the next option
+  const std::vector<std::string> one_file =
+      adjust ? std::vector<std::string>{"--dem", "--gcp"} : std::vector<std::string>{"--compare", "--align", "--dz", "--models"};
+  const std::string many_files = adjust ? "--check" : "";
   std::vector<std::string> out;
   std::istringstream in(text);
-  std::string file_option;  // the option whose file names follow (--dem: one, --check: until the next option)
+  std::string file_option;  // the option whose file names follow
   for (std::string a; in >> a;) {
     const bool is_option = a.size() > 1 && a[0] == '-' && !(std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.');
     if (is_option) {
@@ -366,7 +376,7 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
       for (const auto& r : refused)
         if (name == r || (r == "-o" && a.rfind("-o", 0) == 0 && a.rfind("--", 0) != 0))
           throw UsageError(option_name + ": " + r + " is refused there: " + why(r));
-      if (name == "--dem" || name == "--check") {
+      if (name == many_files || std::find(one_file.begin(), one_file.end(), name) != one_file.end()) {
         if (name.size() < a.size()) {
           a = name + "=" + absolute(a.substr(name.size() + 1));
         } else {
@@ -378,7 +388,7 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
     }
     if (!file_option.empty()) {
       a = absolute(a);
-      if (file_option == "--dem") file_option.clear();
+      if (file_option != many_files) file_option.clear();
     }
     out.push_back(a);
   }

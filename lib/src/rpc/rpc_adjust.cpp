@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cstring>
 #include <cmath>
-#include <filesystem>
 #include <limits>
 #include <memory>
 #include <thread>
@@ -16,6 +15,7 @@
 #include "tpkit/core/input_file.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/tool_support.hpp"
 #include "tpkit/ground/reference_dem.hpp"
@@ -95,9 +95,6 @@ class HeightPriorCost : public ceres::SizedCostFunction<1, 3> {
   const HeightPrior* prior_;
   double h_start_;
 };
-
-// The image of `images` a file's reference names (defined with gather_tracks); -1 none, -2 ambiguous.
-int match_image(const std::string& file, const std::string& ref, const std::vector<std::string>& images);
 
 // A control point's ground prior: (g - known) in metres east, north, up (metres per degree of lon and lat
 // at the known latitude) times w_k = s_ref / sigma_k.
@@ -567,7 +564,7 @@ std::vector<AdjustControl> gcps_to_adjust(const std::vector<Gcp>& gcps, GcpRole 
     c.sigma_enu = g.sigma_enu;
     const std::string id = (role == GcpRole::control ? "control point " : "check point ") + std::to_string(g.id);
     for (const GcpMeasurement& m : g.measurements) {
-      const int i = match_image(g.source, m.image, paths);
+      const int i = image_index(m.image, paths, g.source);
       if (i < 0)
         throw InputError(g.source, m.line, id + ": image '" + m.image + "' is " + (i == -2 ? "ambiguous among" : "not one of") + " the images given");
       const AdjustImage& im = images[i];
@@ -803,27 +800,6 @@ RpcFit fold_bias(const RpcModel& m, const ImageBias& bias, long width, long heig
 namespace tpkit {
 
 namespace {
-namespace fs = std::filesystem;
-int match_image(const std::string& track_file, const std::string& ref, const std::vector<std::string>& images) {
-  for (size_t i = 0; i < images.size(); ++i)
-    if (images[i] == ref) return static_cast<int>(i);
-  std::error_code ec;
-  fs::path base = fs::path(track_file).parent_path();
-  for (const fs::path& cand : {fs::path(ref), base / ref})
-    if (fs::exists(cand, ec))
-      for (size_t i = 0; i < images.size(); ++i)
-        if (fs::exists(images[i], ec) && fs::equivalent(cand, images[i], ec)) return static_cast<int>(i);
-  int found = -1;
-  for (size_t i = 0; i < images.size(); ++i)
-    if (fs::path(images[i]).filename() == fs::path(ref).filename()) {
-      if (found >= 0) return -2;  // ambiguous
-      found = static_cast<int>(i);
-    }
-  return found;
-}
-}  // namespace
-
-namespace {
 // A sigma read from a file: NaN (not known) or >= 0; negative or infinite refused with its line.
 double checked_sigma(double s, const std::string& source, long line, const std::string& column) {
   if (std::isnan(s)) return s;
@@ -896,7 +872,7 @@ std::vector<AdjustTrack> gather_tracks(const std::vector<std::string>& files, co
   auto image_of = [&](const std::string& f, const std::string& source, const std::vector<ImageRef>& refs) {
     std::vector<int> map;
     for (size_t k = 0; k < refs.size(); ++k) {
-      int i = match_image(f, refs[k].path, images);
+      int i = image_index(refs[k].path, images, f);
       if (i < 0)
         throw InputError(source, 0, "image" + std::to_string(k + 1) + " '" + refs[k].path + "' is " +
                                         (i == -2 ? "ambiguous among" : "not one of") + " the images given");

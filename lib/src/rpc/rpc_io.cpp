@@ -1149,12 +1149,7 @@ std::vector<std::string> rpc_sidecar_candidates(const std::string& image) {
 }
 
 std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides) {
-  auto it = overrides.find(image);
-  if (it == overrides.end()) {
-    std::error_code ec;
-    for (auto o = overrides.begin(); o != overrides.end(); ++o)
-      if (fs::exists(o->first, ec) && fs::exists(image, ec) && fs::equivalent(o->first, image, ec)) it = o;
-  }
+  const auto it = overrides.find(image);
   if (it != overrides.end()) return RpcSource{read_rpc_file(it->second), it->second, rpc_form_of(it->second)};
   std::string ext = fs::path(image).extension().string();
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -1212,10 +1207,35 @@ std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::st
   return out;
 }
 
-void check_rpc_overrides(const std::map<std::string, std::string>& overrides, const std::vector<std::string>& images) {
-  for (const auto& kv : overrides)
-    if (std::find(images.begin(), images.end(), kv.first) == images.end())
-      throw UsageError("--rpc " + kv.first + "=" + kv.second + ": " + kv.first + " is not one of the images");
+int image_index(const std::string& ref, const std::vector<std::string>& images, const std::string& listed_in) {
+  for (size_t i = 0; i < images.size(); ++i)
+    if (images[i] == ref) return static_cast<int>(i);
+  std::error_code ec;
+  const fs::path base = fs::path(listed_in).parent_path();
+  for (const fs::path& cand : {fs::path(ref), base / ref})
+    if (fs::exists(cand, ec))
+      for (size_t i = 0; i < images.size(); ++i)
+        if (fs::exists(images[i], ec) && fs::equivalent(cand, images[i], ec)) return static_cast<int>(i);
+  int found = -1;
+  for (size_t i = 0; i < images.size(); ++i)
+    if (fs::path(images[i]).filename() == fs::path(ref).filename()) {
+      if (found >= 0) return -2;  // ambiguous
+      found = static_cast<int>(i);
+    }
+  return found;
+}
+
+std::map<std::string, std::string> resolve_rpc_overrides(const std::map<std::string, std::string>& overrides,
+                                                         const std::vector<std::string>& images) {
+  std::map<std::string, std::string> out;
+  for (const auto& [image, file] : overrides) {
+    const int i = image_index(image, images);
+    if (i < 0)
+      throw UsageError("--rpc " + image + "=" + file + ": " + image + " is " + (i == -2 ? "ambiguous among" : "not one of") + " the images");
+    if (!out.emplace(images[static_cast<size_t>(i)], file).second)
+      throw UsageError("--rpc " + image + "=" + file + ": " + images[static_cast<size_t>(i)] + " has another --rpc already");
+  }
+  return out;
 }
 
 }  // namespace tpkit

@@ -242,6 +242,13 @@ TEST(ScaleOutPlan, AdjustAndGroundOptions) {
             (std::vector<std::string>{"--crs", "utm", "--model", "x"}));
   for (const char* refused : {"-o x", "--output=x", "--tracks t", "--threads 4", "--rpc a=b"})
     EXPECT_THROW(plan_tool_args(refused, "tp-ground", "--ground-options"), UsageError) << refused;
+  // issue 50, item 11: every file option of the two tools, not --dem and --check only (stdout stays "-")
+  EXPECT_EQ(plan_tool_args("--gcp g.gcp --gcp=h.gcp --dem-sigma 2", "rpc-adjust", "--adjust-options"),
+            (std::vector<std::string>{"--gcp", cwd + "/g.gcp", "--gcp=" + cwd + "/h.gcp", "--dem-sigma", "2"}));
+  EXPECT_EQ(plan_tool_args("--align ref.tif --dz dz.txt --models=m --crs utm", "tp-ground", "--ground-options"),
+            (std::vector<std::string>{"--align", cwd + "/ref.tif", "--dz", cwd + "/dz.txt", "--models=" + cwd + "/m", "--crs", "utm"}));
+  EXPECT_EQ(plan_tool_args("--compare d/ref.tif --dz -", "tp-ground", "--ground-options"),
+            (std::vector<std::string>{"--compare", cwd + "/d/ref.tif", "--dz", "-"}));
   try {
     plan_tool_args("--fixed a.tif", "rpc-adjust", "--adjust-options");
   } catch (const UsageError& e) {

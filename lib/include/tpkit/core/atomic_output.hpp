@@ -3,8 +3,9 @@
 // AtomicOutput writes to a temporary file in the target's folder (or, for "-" and for an existing
 // device or FIFO such as /dev/null, to a buffer written there at commit) and hands it over on commit(). Outside a transaction the temporary file replaces the target at once.
 // Inside one (run_tool opens one around every tool's body) the hand-over waits: commit_outputs() renames
-// every finished temporary onto its target when the tool has succeeded, abort_outputs() removes them
-// all when it has failed, so a failed run leaves no output at all, not some of them. A target claimed
+// every finished temporary onto its target when the tool has succeeded (after writing the text held for
+// stdout and devices, whose write can fail too), abort_outputs() removes them all when it has failed, so
+// a failed run leaves no output at all, not some of them. A target claimed
 // twice in one transaction (two options naming one file, "-" twice) or one that is an input of the run
 // is refused before anything is written. Temporary files are removed on SIGINT, SIGTERM, SIGHUP and
 // SIGPIPE (install_output_signal_cleanup), so an interrupted run leaves nothing behind either.

@@ -69,6 +69,10 @@ struct ReadOptions {
   // every other column, and for infinities everywhere, a non-finite field is an error. Empty: none. Rows of
   // any length (columnar false): asked with "" for a field beyond the named columns.
   std::function<bool(const std::string& column)> may_be_missing;
+  // With no kind expected: the options of the kind the header names, taken on when the header is read (a
+  // reader of any kind reads a tracks file by the tracks options: version 2, views not seen). Unset: these
+  // options for every kind.
+  std::function<ReadOptions(const std::string& kind)> of_kind;
 };
 
 // Parses a whole stream. `source` names it in messages.

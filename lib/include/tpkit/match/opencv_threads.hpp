@@ -11,8 +11,10 @@
 
 namespace tpkit {
 
-// Sizes OpenCV's pool for the whole process (threads >= 1, at most kMaxThreads). The first call wins;
-// later calls do nothing and return false, as does a call with a count out of range.
+// Sizes OpenCV's pool for the whole process (threads >= 1, at most kMaxThreads), to the processors at
+// most: TBB's pool is already made for them, and a bigger one asked of it prints an unprefixed "TBB
+// Warning: The number of workers is currently limited to N" (tp-match --threads 8 on two cores). The
+// first call wins; later calls do nothing and return false, as does a call with a count out of range.
 bool set_opencv_threads(int threads);
 
 }  // namespace tpkit

@@ -81,7 +81,7 @@ struct PlanOptions {
   enum class Adjust { automatic, on, off };
   Adjust adjust = Adjust::automatic;
   std::string adjust_model = "affine";    // rpc-adjust --model: shift, drift or affine (rpc-adjust's default)
-  std::vector<std::string> fixed;         // rpc-adjust --fixed: absolute paths, images of the chain
+  std::vector<std::string> fixed;         // rpc-adjust --fixed: absolute paths, each naming an image of the chain (image_index)
   std::vector<std::string> adjust_args;   // more rpc-adjust arguments (relative file names already made absolute)
   std::vector<std::string> ground_args;   // more tp-ground arguments (the same)
 };
@@ -113,15 +113,16 @@ std::string plan_result(const Plan& p);
 // --adjust-options / --ground-options, split at white space: the options tp-plan sets itself are
 // refused (UsageError naming option_name: -o, --tracks, --threads, --rpc (the models are those found
 // beside the images, as for the footprints and tp-match), and for rpc-adjust --model and --fixed), and the
-// file names of --dem and --check made absolute (the jobs run in other folders).
+// file names made absolute (the jobs run in other folders): rpc-adjust's --dem, --gcp and --check,
+// tp-ground's --compare, --align, --dz and --models.
 std::vector<std::string> plan_tool_args(const std::string& text, const std::string& which, const std::string& option_name);
 
 // Image sizes read from the files; throws InputError for an unreadable image, UsageError for fewer
 // than two images or no overlapping pair.
 std::vector<PlanImage> plan_images(const std::vector<std::string>& paths);
 
-// The image list of --list: one path a line (spaces are part of it, a trailing '\r' is not), blank
-// lines and lines starting with '#' skipped. A regular file or a pipe; InputError for a folder, a
+// The image list of --list: one path a line (spaces are part of it, a trailing '\r' and a UTF-8 byte
+// order mark at the start of the file are not), blank lines and lines starting with '#' skipped. A regular file or a pipe; InputError for a folder, a
 // device, binary content (a NUL byte) or a line longer than PATH_MAX (4096 bytes), found as the line
 // is read (a device such as /dev/zero fails at once).
 std::vector<std::string> read_image_list(const std::string& path);

@@ -97,7 +97,8 @@ struct RpcSource {
   std::string path;  // the file read (the image itself for the tag)
   RpcForm form = RpcForm::tiff;
 };
-// Nothing when the image has no model anywhere.
+// Nothing when the image has no model anywhere. `overrides` are keyed by the image as given
+// (resolve_rpc_overrides): the override of `image` is the one under that very name.
 std::optional<RpcSource> find_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
 // The same, throwing InputError("IMAGE: no RPC model: no tag 50844 and none of SIDECARS") when there is none.
 RpcSource load_image_rpc(const std::string& image, const std::map<std::string, std::string>& overrides = {});
@@ -106,7 +107,14 @@ RpcSource load_image_rpc(const std::string& image, const std::map<std::string, s
 RpcSource load_rpc_model(const std::string& image_or_model);
 // "--rpc IMG=FILE" values -> map image -> file; UsageError for a value without '='.
 std::map<std::string, std::string> parse_rpc_overrides(const std::vector<std::string>& values);
-// UsageError for an --rpc IMAGE=FILE whose IMAGE is not one of `images` (as written): a typo is not ignored.
-void check_rpc_overrides(const std::map<std::string, std::string>& overrides, const std::vector<std::string>& images);
+// The index in `images` of the image that `ref` names, the one rule for every reference to a given image
+// (a tracks or GCP file's image lines, --rpc IMAGE=FILE, --fixed): the same path as written, else the same
+// file (found as written or, for a file's reference, relative to the folder of `listed_in`, the file that
+// names it), else the one image of that file name. -1 when none matches, -2 when several share the name.
+int image_index(const std::string& ref, const std::vector<std::string>& images, const std::string& listed_in = "");
+// The --rpc overrides keyed by the image of `images` each names (image_index: "./a.tif" names a.tif).
+// UsageError for an IMAGE that is not one of them (a typo is not ignored) and for two that name one image.
+std::map<std::string, std::string> resolve_rpc_overrides(const std::map<std::string, std::string>& overrides,
+                                                         const std::vector<std::string>& images);
 
 }  // namespace tpkit
