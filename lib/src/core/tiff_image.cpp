@@ -181,6 +181,7 @@ std::optional<ImageInfo> tiff_image_info(const std::string& path) {
   info.bands = L.spp;
   info.format = type_name(L);
   info.bits = L.bits;
+  info.rgb = L.photometric == PHOTOMETRIC_RGB && L.spp >= 3;
   char* nd = nullptr;
   if (TIFFGetField(t.tif, 42113, &nd) && nd) {
     char* end = nullptr;

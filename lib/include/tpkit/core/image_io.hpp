@@ -20,6 +20,10 @@ struct ImageInfo {
   std::string format;  // "uint8", "uint16", "float", ...
   int bits = 0;        // bits per sample as stored (e.g. 12 for a 12-bit range in 16-bit words, when tagged)
   std::optional<double> nodata;  // from the GDAL_NODATA tag, when present
+  // Bands 1 to 3 are red, green and blue: a TIFF whose photometric interpretation is RGB (libtiff's
+  // default for 3 or more samples without the tag), a NITF whose IREP is RGB or RGB/LUT, a 3- or
+  // 4-channel image of another format (PNG, JPEG: RGB or RGBA). Not a multispectral image's bands.
+  bool rgb = false;
 };
 
 // Throws InputError(path: reason) when the file is not a readable image.
