@@ -63,21 +63,18 @@ Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long 
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const double nd = src.nodata ? *src.nodata : 0;
   auto nodata = [&](float v) { return src.nodata && (v == static_cast<float>(nd) || (std::isnan(nd) && std::isnan(v))); };
-  // the bands of the rendering summed into r (a single band's weight of 1 leaves its values exact), a
-  // pixel that is nodata in any of them NaN
-  Raster r, b;
-  bool first = true;
-  for (size_t k = 0; k < src.weights.size(); ++k) {
-    const float wk = src.weights[k];
-    if (wk == 0) continue;
-    if (first) {
-      r = read_region(src.path, static_cast<int>(k), x0, y0, w, h, std::move(reuse));
-      for (float& v : r.data) v = nodata(v) ? nan : wk * v;
-      first = false;
-      continue;
-    }
-    b = read_region(src.path, static_cast<int>(k), x0, y0, w, h, std::move(b));
-    for (size_t i = 0; i < r.data.size(); ++i) r.data[i] = nodata(b.data[i]) ? nan : r.data[i] + wk * b.data[i];
+  // the bands of the rendering read together (a TIFF that interleaves them decoded once) and summed into
+  // the first (a single band's weight of 1 leaves its values exact), a pixel nodata in any of them NaN
+  std::vector<int> bands;
+  std::vector<float> weights;
+  for (size_t k = 0; k < src.weights.size(); ++k)
+    if (src.weights[k] != 0) bands.push_back(static_cast<int>(k)), weights.push_back(src.weights[k]);
+  std::vector<Raster> b = read_region_bands(src.path, bands, x0, y0, w, h, std::move(reuse));
+  Raster& r = b.front();
+  for (float& v : r.data) v = nodata(v) ? nan : weights[0] * v;
+  for (size_t j = 1; j < b.size(); ++j) {
+    const float wj = weights[j];
+    for (size_t i = 0; i < r.data.size(); ++i) r.data[i] = nodata(b[j].data[i]) ? nan : r.data[i] + wj * b[j].data[i];
   }
   if (!src.mask.empty() && !r.data.empty()) {
     Raster m = read_region(src.mask, 0, r.x0, r.y0, r.width, r.height);
@@ -86,7 +83,7 @@ Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long 
   }
   for (float& v : r.data)
     if (!std::isfinite(v)) v = nan;
-  return r;
+  return std::move(r);  // b's first raster
 }
 
 long stretch_step(long width, long height, long max_samples) {

@@ -48,6 +48,10 @@ Raster crop_region(const Raster& r, long x0, long y0, long w, long h);
 // band of a large image is tens of megabytes: fresh, each of its pages costs a fault and the kernel's
 // and the vector's zeroing); the result is the same.
 Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse = {});
+// Several bands of the region, in the order asked for (`reuse`: the first's memory): a TIFF that
+// interleaves its bands is decoded once for all of them, other files band by band.
+std::vector<Raster> read_region_bands(const std::string& path, const std::vector<int>& bands, long x0, long y0, long w, long h,
+                                      Raster reuse = {});
 // Whole band.
 Raster read_band(const std::string& path, int band = 0);
 // For the readers: the raster of the region's part inside a width x height image (its samples

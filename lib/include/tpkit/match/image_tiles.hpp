@@ -41,8 +41,7 @@ void default_rendering(const ImageInfo& info, std::vector<float>& weights, std::
 
 // Region [x0, x0 + w) x [y0, y0 + h) clipped to the image, as float, invalid pixels NaN (a pixel is
 // invalid when any band read is nodata). `reuse` as read_region's. A rendering of several bands reads
-// them one after the other (each decoding of the region: a pixel-interleaved file is decoded once per
-// band) into one more raster of the region's size.
+// them together (read_region_bands), a raster of the region's size for each.
 Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h, Raster reuse = {});
 
 // Grey levels at the low and high percentiles (0..100) of the valid pixels, from a regular subsample
