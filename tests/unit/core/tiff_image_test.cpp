@@ -125,7 +125,9 @@ TEST(TiffImage, EveryLayoutReadsItsValuesAndAgreesWithOpenImageIO) {
     EXPECT_EQ(info->height, H);
     EXPECT_EQ(info->bands, L.bands);
     EXPECT_EQ(info->bits, L.bits);
+    EXPECT_EQ(info->rgb, L.bands == 3);  // photometric RGB as write_layout writes it; 2 bands MINISBLACK
     const ImageInfo oi = oiio_image_info(p);
+    EXPECT_EQ(oi.rgb, L.bands == 3);
     EXPECT_EQ(oi.width, W);
     EXPECT_EQ(oi.bands, L.bands);
     EXPECT_EQ(info->format, oi.format);
