@@ -52,7 +52,7 @@ std::function<bool(const CLI::results_t&)> auto_or_pixels(std::optional<double>&
 struct Opts {
   std::vector<std::string> images;
   std::string out = "-", mask1, mask2, coverage;
-  int band = 1;
+  int band = 0;  // --band N (from 1); 0: the image's default rendering (open_image_source)
   std::optional<double> nodata;
   int threads = 0;
   bool no_refine = false, drop_unrefined = false, no_mutual = false, global = false, l2 = false, quiet = false;
@@ -156,7 +156,7 @@ int main(int argc, char** argv) {
             ->expected(2, 1 << 16);
         app.add_option("-o,--output", o->out, "output matches file (- = stdout); with more than two images, a folder");
         app.add_option("--coverage", o->coverage, "SVG figure: matches per cell over each image's thumbnail (two images)");
-        app.add_option("--band", o->band, "band, from 1")->check(tpkit::Positive);
+        app.add_option("--band", o->band, "band, from 1 (default: the luminance of an RGB image, the mean of a multispectral one)")->check(tpkit::Positive);
         app.add_option("--nodata", o->nodata, "nodata grey level (default: the GDAL_NODATA tag)");
         app.add_option("--mask1", o->mask1, "mask image of IMG1 (0 = invalid)");
         app.add_option("--mask2", o->mask2, "mask image of IMG2 (0 = invalid)");
@@ -285,7 +285,7 @@ int main(int argc, char** argv) {
             tpkit::check_outputs({{"-o", o->out}, {"--coverage", o->coverage}}, inputs);
           std::vector<tpkit::ImageSource> src;
           for (size_t i = 0; i < n; ++i)
-            src.push_back(tpkit::open_image_source(o->images[i], o->band - 1, o->nodata, i == 0 ? o->mask1 : i == 1 ? o->mask2 : ""));
+            src.push_back(tpkit::open_image_source(o->images[i], o->band > 0 ? std::optional<int>(o->band - 1) : std::nullopt, o->nodata, i == 0 ? o->mask1 : i == 1 ? o->mask2 : ""));
           load_rpcs(*o);
           auto report = [&](const std::string& what, const tpkit::PairMatchStats& st) {
             if (!st.overlap)

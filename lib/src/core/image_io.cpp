@@ -42,6 +42,17 @@ Raster read_region(const std::string& path, int band, long x0, long y0, long w, 
   return oiio_read_region(path, band, x0, y0, w, h);
 }
 
+std::vector<Raster> read_region_bands(const std::string& path, const std::vector<int>& bands, long x0, long y0, long w, long h,
+                                      Raster reuse) {
+  check_input_file(path, InputKind::image);  // before is_tiff_file opens it
+  note_input(path);
+  if (bands.size() > 1 && is_tiff_file(path))
+    if (auto r = read_tiff_bands(path, bands, x0, y0, w, h, std::move(reuse))) return std::move(*r);
+  std::vector<Raster> out;
+  for (size_t j = 0; j < bands.size(); ++j) out.push_back(read_region(path, bands[j], x0, y0, w, h, j == 0 ? std::move(reuse) : Raster()));
+  return out;
+}
+
 Raster clipped_raster(const std::string& path, long width, long height, int bands, int band, long x0, long y0, long w, long h,
                       Raster reuse) {
   if (band < 0 || band >= bands)

@@ -558,7 +558,8 @@ NitfImage read_nitf_image(const std::string& path) {
   im.rows = static_cast<long>(s.number(8, "NROWS"));
   im.cols = static_cast<long>(s.number(8, "NCOLS"));
   im.pvtype = s.trimmed(3, "PVTYPE");
-  s.skip(8 + 8, "IREP, ICAT");
+  im.irep = s.trimmed(8, "IREP");
+  s.skip(8, "ICAT");
   im.abpp = static_cast<int>(s.number(2, "ABPP"));
   im.pjust = s.text(1, "PJUST")[0];
   if (s.text(1, "ICORDS") != " ") s.skip(60, "IGEOLO");
@@ -627,6 +628,7 @@ ImageInfo nitf_image_info(const NitfImage& im) {
   info.height = im.rows;
   info.bands = im.bands;
   info.bits = im.abpp;
+  info.rgb = (im.irep == "RGB" || im.irep == "RGB/LUT") && im.bands >= 3;
   if (im.pvtype == "R")
     info.format = im.nbpp == 32 ? "float" : "double";
   else

@@ -89,6 +89,7 @@ ImageInfo oiio_image_info(const std::string& path) {
   info.bands = i.bands;
   info.format = i.format;
   info.bits = i.bits;
+  info.rgb = i.bands == 3 || i.bands == 4;  // these formats' colour images: RGB, RGBA
   if (i.has_nodata) info.nodata = i.nodata;
   return info;
 }

@@ -181,6 +181,7 @@ std::optional<ImageInfo> tiff_image_info(const std::string& path) {
   info.bands = L.spp;
   info.format = type_name(L);
   info.bits = L.bits;
+  info.rgb = L.photometric == PHOTOMETRIC_RGB && L.spp >= 3;
   char* nd = nullptr;
   if (TIFFGetField(t.tif, 42113, &nd) && nd) {
     char* end = nullptr;
@@ -191,21 +192,41 @@ std::optional<ImageInfo> tiff_image_info(const std::string& path) {
 }
 
 std::optional<Raster> read_tiff_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse) {
+  auto r = read_tiff_bands(path, {band}, x0, y0, w, h, std::move(reuse));
+  if (!r) return std::nullopt;
+  return std::move(r->front());
+}
+
+std::optional<std::vector<Raster>> read_tiff_bands(const std::string& path, const std::vector<int>& bands, long x0, long y0, long w,
+                                                   long h, Raster reuse) {
   TiffHandle t(open_tiff(path));
   TIFF* tif = t.tif;
   const Layout L = layout_of(tif);
   if (!handled(L)) return std::nullopt;
-  // every branch below writes every sample of the region (or throws)
-  Raster r = clipped_raster(path, L.width, L.height, L.spp, band, x0, y0, w, h, std::move(reuse));
-  if (r.data.empty()) return r;
-  const long xa = r.x0, ya = r.y0, xb = r.x0 + r.width, yb = r.y0 + r.height;
-
   // Chunk geometry: a contiguous chunk interleaves the bands (stride spp), a separate one holds one band.
   const bool contig = L.planar == PLANARCONFIG_CONTIG;
+  if (!contig && bands.size() > 1) {  // separate planes: one band's chunks hold nothing of another's
+    std::vector<Raster> out;
+    for (size_t j = 0; j < bands.size(); ++j)
+      out.push_back(*read_tiff_region(path, bands[j], x0, y0, w, h, j == 0 ? std::move(reuse) : Raster()));
+    return out;
+  }
+  // every branch below writes every sample of the region in every band asked for (or throws)
+  std::vector<Raster> out;
+  for (size_t j = 0; j < bands.size(); ++j)
+    out.push_back(clipped_raster(path, L.width, L.height, L.spp, bands[j], x0, y0, w, h, j == 0 ? std::move(reuse) : Raster()));
+  const Raster& r = out.front();
+  if (r.data.empty()) return out;
+  const long xa = r.x0, ya = r.y0, xb = r.x0 + r.width, yb = r.y0 + r.height;
+
   const size_t bps = L.bits / 8, stride = contig ? L.spp : 1, pixel_bytes = bps * stride;
-  const size_t band_offset = contig ? static_cast<size_t>(band) * bps : 0;
-  const uint16_t plane = contig ? 0 : static_cast<uint16_t>(band);
+  const uint16_t plane = contig ? 0 : static_cast<uint16_t>(bands.front());
   const Converter to_float = converter_for(L);
+  // n pixels of a decoded chunk from `px` on, into the samples out[j].data[at ...] of each band asked for
+  auto put = [&](const unsigned char* px, size_t n, size_t at) {
+    for (size_t j = 0; j < bands.size(); ++j)
+      to_float(px + (contig ? static_cast<size_t>(bands[j]) * bps : 0), stride, n, out[j].data.data() + at);
+  };
   std::error_code ec;
   const uint64_t file_bytes = std::filesystem::file_size(path, ec);
   const uint32_t chunks = L.tiled ? TIFFNumberOfTiles(tif) : TIFFNumberOfStrips(tif);
@@ -241,9 +262,9 @@ std::optional<Raster> read_tiff_region(const std::string& path, int band, long x
         else if (bps == 4) TIFFSwabArrayOfLong(reinterpret_cast<uint32_t*>(buf.data()), n);
         else if (bps == 8) TIFFSwabArrayOfDouble(reinterpret_cast<double*>(buf.data()), n);
       }
-      to_float(buf.data() + band_offset, stride, static_cast<size_t>(r.width), r.data.data() + static_cast<size_t>(y - ya) * r.width);
+      put(buf.data(), static_cast<size_t>(r.width), static_cast<size_t>(y - ya) * r.width);
     }
-    return r;
+    return out;
   }
 
   if (!L.tiled) {
@@ -262,10 +283,10 @@ std::optional<Raster> read_tiff_region(const std::string& path, int band, long x
       if (row0 + rows < std::min<long>(yb, row0 + L.rows_per_strip))
         throw InputError(path, 0, "read error: strip " + std::to_string(strip) + " is short (truncated file?)");
       for (long y = std::max(ya, row0); y < std::min(yb, row0 + rows); ++y)
-        to_float(buf.data() + static_cast<size_t>(y - row0) * row_bytes + static_cast<size_t>(xa) * pixel_bytes + band_offset, stride,
-                 static_cast<size_t>(r.width), r.data.data() + static_cast<size_t>(y - ya) * r.width);
+        put(buf.data() + static_cast<size_t>(y - row0) * row_bytes + static_cast<size_t>(xa) * pixel_bytes, static_cast<size_t>(r.width),
+            static_cast<size_t>(y - ya) * r.width);
     }
-    return r;
+    return out;
   }
 
   // tiles: each tile that meets the region is decoded whole
@@ -283,10 +304,10 @@ std::optional<Raster> read_tiff_region(const std::string& path, int band, long x
         throw InputError(path, 0, "read error: tile " + std::to_string(tile) + " cannot be decoded (truncated or corrupt file?)");
       const long cx0 = std::max(xa, tx), cx1 = std::min(xb, tx + tw);
       for (long y = std::max(ya, ty); y < std::min(yb, ty + th); ++y)
-        to_float(buf.data() + static_cast<size_t>(y - ty) * tile_row_bytes + static_cast<size_t>(cx0 - tx) * pixel_bytes + band_offset, stride,
-                 static_cast<size_t>(cx1 - cx0), r.data.data() + static_cast<size_t>(y - ya) * r.width + (cx0 - xa));
+        put(buf.data() + static_cast<size_t>(y - ty) * tile_row_bytes + static_cast<size_t>(cx0 - tx) * pixel_bytes,
+            static_cast<size_t>(cx1 - cx0), static_cast<size_t>(y - ya) * r.width + (cx0 - xa));
     }
-  return r;
+  return out;
 }
 
 TiffRowWriter::TiffRowWriter(const std::string& path, long width, long height, int bits, int zip_level,

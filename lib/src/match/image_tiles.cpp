@@ -11,14 +11,42 @@
 
 namespace tpkit {
 
-ImageSource open_image_source(const std::string& path, int band, std::optional<double> nodata, const std::string& mask) {
+// Luminance weights of R, G, B: ITU-R BT.601's luma, what OpenCV's cvtColor (COLOR_RGB2GRAY) gives.
+// COLMAP 3.8 matches FreeImage's grey conversion, BT.709's 0.2126, 0.7152, 0.0722 (more green); on eight
+// pairs of the WorldView-3 Jacksonville crops BT.601 found 11920 verified matches in all, BT.709 11839,
+// band 1 alone 9248 and band 2 alone 11764: the weights matter little, using every band does.
+constexpr float kLuma[3] = {0.299f, 0.587f, 0.114f};
+constexpr const char* kLumaName = "luminance=0.299R+0.587G+0.114B";
+
+void default_rendering(const ImageInfo& info, std::vector<float>& weights, std::string& rendering) {
+  if (info.rgb && info.bands >= 3) {
+    weights.assign(static_cast<size_t>(info.bands), 0.0f);
+    std::copy(kLuma, kLuma + 3, weights.begin());
+    rendering = kLumaName;
+  } else if (info.bands > 1) {
+    weights.assign(static_cast<size_t>(info.bands), 1.0f / static_cast<float>(info.bands));
+    rendering = "mean=bands1-" + std::to_string(info.bands);
+  } else {
+    weights.assign(1, 1.0f);
+    rendering = "band=1";
+  }
+}
+
+ImageSource open_image_source(const std::string& path, std::optional<int> band, std::optional<double> nodata,
+                              const std::string& mask) {
   ImageSource s;
   s.path = path;
-  s.band = band;
   s.info = image_info(path);
-  if (band < 0 || band >= s.info.bands)
-    throw InputError(path, 0, "band " + std::to_string(band + 1) + " does not exist (the image has " +
+  if (band && (*band < 0 || *band >= s.info.bands))
+    throw InputError(path, 0, "band " + std::to_string(*band + 1) + " does not exist (the image has " +
                                   std::to_string(s.info.bands) + (s.info.bands == 1 ? " band)" : " bands)"));
+  if (band) {
+    s.weights.assign(static_cast<size_t>(*band) + 1, 0.0f);
+    s.weights.back() = 1.0f;
+    s.rendering = "band=" + std::to_string(*band + 1);
+  } else {
+    default_rendering(s.info, s.weights, s.rendering);
+  }
   if (s.info.width <= 0 || s.info.height <= 0) throw InputError(path, 0, "empty image");
   s.nodata = nodata ? nodata : s.info.nodata;
   if (!mask.empty()) {
@@ -32,12 +60,21 @@ ImageSource open_image_source(const std::string& path, int band, std::optional<d
 }
 
 Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h, Raster reuse) {
-  Raster r = read_region(src.path, src.band, x0, y0, w, h, std::move(reuse));
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  if (src.nodata) {
-    const double nd = *src.nodata;
-    for (float& v : r.data)
-      if (v == static_cast<float>(nd) || (std::isnan(nd) && std::isnan(v))) v = nan;
+  const double nd = src.nodata ? *src.nodata : 0;
+  auto nodata = [&](float v) { return src.nodata && (v == static_cast<float>(nd) || (std::isnan(nd) && std::isnan(v))); };
+  // the bands of the rendering read together (a TIFF that interleaves them decoded once) and summed into
+  // the first (a single band's weight of 1 leaves its values exact), a pixel nodata in any of them NaN
+  std::vector<int> bands;
+  std::vector<float> weights;
+  for (size_t k = 0; k < src.weights.size(); ++k)
+    if (src.weights[k] != 0) bands.push_back(static_cast<int>(k)), weights.push_back(src.weights[k]);
+  std::vector<Raster> b = read_region_bands(src.path, bands, x0, y0, w, h, std::move(reuse));
+  Raster& r = b.front();
+  for (float& v : r.data) v = nodata(v) ? nan : weights[0] * v;
+  for (size_t j = 1; j < b.size(); ++j) {
+    const float wj = weights[j];
+    for (size_t i = 0; i < r.data.size(); ++i) r.data[i] = nodata(b[j].data[i]) ? nan : r.data[i] + wj * b[j].data[i];
   }
   if (!src.mask.empty() && !r.data.empty()) {
     Raster m = read_region(src.mask, 0, r.x0, r.y0, r.width, r.height);
@@ -46,7 +83,7 @@ Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long 
   }
   for (float& v : r.data)
     if (!std::isfinite(v)) v = nan;
-  return r;
+  return std::move(r);  // b's first raster
 }
 
 long stretch_step(long width, long height, long max_samples) {
@@ -66,7 +103,11 @@ void add_stretch_samples(const Raster& strip, long step, std::vector<float>& sam
 }
 
 Stretch stretch_of_samples(std::vector<float> samples, double p_lo, double p_hi, const ImageSource& src) {
-  if (samples.empty()) throw InputError(src.path, 0, "every pixel of band " + std::to_string(src.band + 1) + " is nodata or masked");
+  if (samples.empty()) {
+    std::string what = src.rendering;  // "band 2", "luminance 0.299R+0.587G+0.114B"
+    what[what.find('=')] = ' ';
+    throw InputError(src.path, 0, "every pixel of " + what + " is nodata or masked");
+  }
   Stretch s;
   s.valid_samples = static_cast<long>(samples.size());
   // the order of the samples does not matter: nth_element gives the value of rank i

@@ -24,7 +24,7 @@ std::string detector_tag(const SiftOptions& o, const ImageSource& src) {
   // tpkit-N: the version of tpkit's SIFT, raised whenever its keypoints or descriptors change, so that a
   // keypoint cache of another version is not reused (2: every octave's descriptors sample every second pixel;
   // 3: an extremum's sub-pixel steps move it 6 octave pixels at most; 4: tpkit's own Gaussian blur, OpenCV's to rounding)
-  s << "sift tpkit-4 band=" << src.band + 1 << " tile=" << o.tile << " overlap=" << o.overlap
+  s << "sift tpkit-4 " << src.rendering << " tile=" << o.tile << " overlap=" << o.overlap
     << " max_per_tile=" << o.max_per_tile << " contrast=" << format_number(o.contrast) << " edge=" << format_number(o.edge)
     << " sigma=" << format_number(o.sigma) << " layers=" << o.octave_layers << " descriptor=rootsift stretch=" << format_number(o.stretch_lo)
     << "," << format_number(o.stretch_hi) << " ids=tile-rank";

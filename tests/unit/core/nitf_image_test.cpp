@@ -37,7 +37,7 @@ std::string num(uint64_t v, size_t n) {
 struct Layout {
   long rows = 29, cols = 37;
   int bands = 1, nbpp = 16, abpp = 16;
-  std::string pvtype = "INT", ic = "NC", version = "NITF02.10";
+  std::string pvtype = "INT", ic = "NC", version = "NITF02.10", irep = "MONO";
   char imode = 'B', pjust = 'R';
   long nppbh = 16, nppbv = 12;
   int image_segments = 1;
@@ -48,7 +48,7 @@ long nbpc(const Layout& l) { return (l.rows + l.nppbv - 1) / l.nppbv; }
 
 std::string nitf_bytes(const Layout& l, const std::string& data, const std::string& tres = "") {
   std::string sub = "IM" + field("t", 10) + "20261203000000" + field("", 17) + field("", 80) + "U" + field("", 166) + "0" + field("", 42);
-  sub += num(l.rows, 8) + num(l.cols, 8) + field(l.pvtype, 3) + field("MONO", 8) + field("VIS", 8) + num(l.abpp, 2) + l.pjust;
+  sub += num(l.rows, 8) + num(l.cols, 8) + field(l.pvtype, 3) + field(l.irep, 8) + field("VIS", 8) + num(l.abpp, 2) + l.pjust;
   sub += " 0" + l.ic + (l.ic == "NC" || l.ic == "NM" ? "" : "N010") + num(l.bands, 1);
   for (int b = 0; b < l.bands; ++b) sub += field("M", 2) + field("", 6) + "N" + field("", 3) + "0";
   sub += "0" + std::string(1, l.imode) + num(nbpr(l), 4) + num(nbpc(l), 4) + num(l.nppbh, 4) + num(l.nppbv, 4) + num(l.nbpp, 2);
@@ -190,6 +190,20 @@ TEST(NitfImage, EveryInterleaveAndPadding) {
         expect_region(path, l, v, b, 30, 20, 50, 50);  // clipped at the padded edge
       }
     }
+}
+
+// IREP RGB marks bands 1 to 3 as red, green and blue (tp-match reads their luminance); a multispectral
+// (MULTI) or single-band (MONO) image is no colour image.
+TEST(NitfImage, IrepRgbMarksColourBands) {
+  for (const char* irep : {"RGB", "MULTI", "MONO"}) {
+    Layout l;
+    l.bands = std::string(irep) == "MONO" ? 1 : 3;
+    l.irep = irep;
+    l.nbpp = l.abpp = 8;
+    Value v = [](int b, long x, long y) { return std::fmod(pattern(b, x, y), 256.0); };
+    const std::string path = write_temp(std::string("irep_") + irep + ".ntf", nitf_bytes(l, image_data(l, v)));
+    EXPECT_EQ(image_info(path).rgb, std::string(irep) == "RGB") << irep;
+  }
 }
 
 TEST(NitfImage, SampleTypesAndJustification) {

@@ -111,6 +111,7 @@ TEST(TiffImage, EveryLayoutReadsItsValuesAndAgreesWithOpenImageIO) {
       {"u16-rgb-tiles-contig-be", 16, SAMPLEFORMAT_UINT, 3, false, true, true, COMPRESSION_NONE},
       {"f64-2band-planar-tiles", 64, SAMPLEFORMAT_IEEEFP, 2, true, true, false, COMPRESSION_ADOBE_DEFLATE},
       {"u32-strips", 32, SAMPLEFORMAT_UINT, 1, false, false, true, COMPRESSION_NONE},
+      {"u8-rgb-contig-strips", 8, SAMPLEFORMAT_UINT, 3, false, false, false, COMPRESSION_NONE},
   };
   const long W = 75, H = 41;
   for (const Layout& L : layouts) {
@@ -124,7 +125,9 @@ TEST(TiffImage, EveryLayoutReadsItsValuesAndAgreesWithOpenImageIO) {
     EXPECT_EQ(info->height, H);
     EXPECT_EQ(info->bands, L.bands);
     EXPECT_EQ(info->bits, L.bits);
+    EXPECT_EQ(info->rgb, L.bands == 3);  // photometric RGB as write_layout writes it; 2 bands MINISBLACK
     const ImageInfo oi = oiio_image_info(p);
+    EXPECT_EQ(oi.rgb, L.bands == 3);
     EXPECT_EQ(oi.width, W);
     EXPECT_EQ(oi.bands, L.bands);
     EXPECT_EQ(info->format, oi.format);
@@ -156,6 +159,21 @@ TEST(TiffImage, EveryLayoutReadsItsValuesAndAgreesWithOpenImageIO) {
         ASSERT_EQ(q->data.size(), r->data.size());
         for (size_t i = 0; i < r->data.size(); ++i) ASSERT_EQ(q->data[i], r->data[i]) << "sample " << i << ", reused " << held;
       }
+    }
+    // several bands at once (tp-match's luminance), in any order, one of them twice: each as read alone
+    std::vector<int> bands;
+    for (int b = L.bands - 1; b >= 0; --b) bands.push_back(b);
+    bands.push_back(L.bands - 1);
+    const auto m = read_tiff_bands(p, bands, 29, 13, 60, 40);
+    ASSERT_TRUE(m.has_value());
+    ASSERT_EQ(m->size(), bands.size());
+    for (size_t j = 0; j < bands.size(); ++j) {
+      const auto r = read_tiff_region(p, bands[j], 29, 13, 60, 40);
+      EXPECT_EQ((*m)[j].x0, r->x0);
+      EXPECT_EQ((*m)[j].y0, r->y0);
+      EXPECT_EQ((*m)[j].width, r->width);
+      EXPECT_EQ((*m)[j].height, r->height);
+      EXPECT_EQ((*m)[j].data, r->data) << "band " << bands[j];
     }
     try {
       read_tiff_region(p, L.bands, 0, 0, 4, 4);

@@ -20,6 +20,10 @@ struct ImageInfo {
   std::string format;  // "uint8", "uint16", "float", ...
   int bits = 0;        // bits per sample as stored (e.g. 12 for a 12-bit range in 16-bit words, when tagged)
   std::optional<double> nodata;  // from the GDAL_NODATA tag, when present
+  // Bands 1 to 3 are red, green and blue: a TIFF whose photometric interpretation is RGB (libtiff's
+  // default for 3 or more samples without the tag), a NITF whose IREP is RGB or RGB/LUT, a 3- or
+  // 4-channel image of another format (PNG, JPEG: RGB or RGBA). Not a multispectral image's bands.
+  bool rgb = false;
 };
 
 // Throws InputError(path: reason) when the file is not a readable image.
@@ -44,6 +48,10 @@ Raster crop_region(const Raster& r, long x0, long y0, long w, long h);
 // band of a large image is tens of megabytes: fresh, each of its pages costs a fault and the kernel's
 // and the vector's zeroing); the result is the same.
 Raster read_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse = {});
+// Several bands of the region, in the order asked for (`reuse`: the first's memory): a TIFF that
+// interleaves its bands is decoded once for all of them, other files band by band.
+std::vector<Raster> read_region_bands(const std::string& path, const std::vector<int>& bands, long x0, long y0, long w, long h,
+                                      Raster reuse = {});
 // Whole band.
 Raster read_band(const std::string& path, int band = 0);
 // For the readers: the raster of the region's part inside a width x height image (its samples

@@ -35,6 +35,7 @@ struct NitfImage {
   int image_segments = 0;
   long rows = 0, cols = 0;  // NROWS, NCOLS
   int bands = 0;
+  std::string irep;      // IREP: MONO, RGB, RGB/LUT, MULTI, ...
   std::string pvtype;    // INT (unsigned), SI (signed), R (real)
   int nbpp = 0;          // bits per sample as stored (8, 16, 32, 64)
   int abpp = 0;          // significant bits (e.g. 11 in 16-bit words)

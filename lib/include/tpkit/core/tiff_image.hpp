@@ -45,6 +45,10 @@ std::optional<ImageInfo> tiff_image_info(const std::string& path);
 // declares more samples than the file holds: refused before anything that size is allocated) and a
 // chunk that cannot be decoded. `reuse` as read_region's.
 std::optional<Raster> read_tiff_region(const std::string& path, int band, long x0, long y0, long w, long h, Raster reuse = {});
+// Several bands of the region, in the order asked for (reuse: the first's memory), each chunk decoded
+// once for all of them when the file interleaves the bands; otherwise as read_tiff_region.
+std::optional<std::vector<Raster>> read_tiff_bands(const std::string& path, const std::vector<int>& bands, long x0, long y0, long w,
+                                                   long h, Raster reuse = {});
 
 // libtiff's field definitions for the tags tpkit reads and writes beyond the baseline: RPC tag 50844,
 // the GeoTIFF tags and GDAL_NODATA; libtiff's own warnings silenced (errors are reported by the callers).

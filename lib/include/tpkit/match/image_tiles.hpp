@@ -1,6 +1,7 @@
-// One band of an image as tp-match sees it: the original radiometry as float with invalid pixels
-// (nodata value, zero in a mask image) set to NaN, an 8-bit rendering by a robust percentile stretch
-// for the detector, and a grid of overlapping tiles so that large images are read region by region.
+// An image as tp-match sees it: one grey level per pixel (one band, or a weighted sum of bands: the
+// luminance of an RGB image) in the original radiometry as float, with invalid pixels (nodata value,
+// zero in a mask image) set to NaN, an 8-bit rendering by a robust percentile stretch for the detector,
+// and a grid of overlapping tiles so that large images are read region by region.
 // Pixels: x = column, y = row, (0, 0) the centre of the top-left pixel; regions in whole pixels.
 #pragma once
 #include <cstdint>
@@ -14,19 +15,33 @@ namespace tpkit {
 
 struct ImageSource {
   std::string path;
-  int band = 0;                   // 0-based
+  // The grey level read: the sum of weights[k] x band k (0-based) over the bands; a band of weight 0
+  // is not read. One band: a single weight of 1.
+  std::vector<float> weights;
+  // The rendering as the detector line names it (so that a keypoint cache or pair geometry made from
+  // another rendering is not reused): "band=2", "luminance=0.299R+0.587G+0.114B", "mean=bands1-8".
+  std::string rendering;
   std::optional<double> nodata;   // pixels equal to it are invalid (default: the file's GDAL_NODATA tag)
   std::string mask;               // optional mask image of the same size: 0 = invalid
   ImageInfo info;                 // filled by open_image_source()
 };
 
-// Checks the file, the band and the mask, and fills `info`; takes the file's nodata tag when `nodata`
+// Checks the file, the band and the mask, and fills `info` and the rendering: band `band` (0-based)
+// when given, else the image's default (default_rendering); takes the file's nodata tag when `nodata`
 // is unset. Throws InputError (path: reason) for an unreadable file, a missing band or a mask of
 // another size.
-ImageSource open_image_source(const std::string& path, int band, std::optional<double> nodata, const std::string& mask);
+ImageSource open_image_source(const std::string& path, std::optional<int> band, std::optional<double> nodata,
+                              const std::string& mask);
 
-// Region [x0, x0 + w) x [y0, y0 + h) clipped to the image, as float, invalid pixels NaN. `reuse` as
-// read_region's.
+// The weights and name of an image's default rendering: its band for a single-band image; for an RGB
+// image (ImageInfo::rgb) the luminance 0.299 R + 0.587 G + 0.114 B of bands 1 to 3 (further bands,
+// such as an alpha channel, are not read); for another multi-band image (multispectral: bands that are
+// not colours of a display) the mean of all bands.
+void default_rendering(const ImageInfo& info, std::vector<float>& weights, std::string& rendering);
+
+// Region [x0, x0 + w) x [y0, y0 + h) clipped to the image, as float, invalid pixels NaN (a pixel is
+// invalid when any band read is nodata). `reuse` as read_region's. A rendering of several bands reads
+// them together (read_region_bands), a raster of the region's size for each.
 Raster read_valid_region(const ImageSource& src, long x0, long y0, long w, long h, Raster reuse = {});
 
 // Grey levels at the low and high percentiles (0..100) of the valid pixels, from a regular subsample
