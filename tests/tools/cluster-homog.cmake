@@ -124,3 +124,8 @@ tpkit_tool_test(cluster-homog.four-points-auto-rejected
 tpkit_tool_test(cluster-homog.figures-render
   COMMAND "cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points -o ab.homography --plot fig6.svg && bash $SRC/tests/tools/figure_check.sh fig6.svg && sed -n '/<g class=\"legend\"/,/<\\/g>/p' fig6.svg | grep -c -e '<circle' -e 'L[0-9.]* [0-9.]*M[0-9.]*' && printf 'px1=0\\npy1=0\\nrho1=800000\\nalpha1=1.57\\nbeta1=0.55\\nres1=20\\ntheta1=0.1\\ncx1=1\\ncy1=1\\npx2=100\\npy2=100\\nrho2=800000\\nalpha2=0.8\\nbeta2=1\\ngamma2=1.57\\nres2=20\\ntheta2=0.1\\ncx2=1\\ncy2=1\\n' > truth.txt && cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init truth.txt --optimizer none --scan alpha1 --range 1.4 1.75 --steps 31 --plot a.svg -o a.scan && bash $SRC/tests/tools/figure_check.sh a.svg && grep -o 'alpha1 (rad)' a.svg"
   STDOUT_MATCH "figure ok: 1000x560\n4\n.*figure ok: 720x460\nalpha1 \\(rad\\)\n")
+# --init is read with the bounded line reader (issue 50, item 2: every text input): a device fails at its
+# first NUL byte instead of filling memory, a directory is named as one.
+tpkit_tool_test(cluster-homog.init-device
+  COMMAND "timeout 20 cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init /dev/zero -o ab.homography @SEMI@ echo \"rc \$?\" @SEMI@ cluster-homog ${_s}/cluster-a.points ${_s}/cluster-b.points --init . -o ab.homography"
+  EXPECT_FAIL STDOUT_MATCH "^rc 1\n$" STDERR_MATCH "cluster-homog: /dev/zero:1: binary data \\(NUL byte\\) in a text file\ncluster-homog: \\.: is a directory\n" NO_FILE ab.homography)

@@ -8,9 +8,9 @@
 #include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 #include "tpkit/core/error.hpp"
+#include "tpkit/core/input_file.hpp"
 
 namespace tpkit {
 
@@ -51,8 +51,7 @@ ClusterInit read_cluster_init(std::istream& in, const std::string& source) {
   std::map<std::string, std::pair<double, long>> kv;
   std::string line;
   long lineno = 0;
-  while (std::getline(in, line)) {
-    ++lineno;
+  while (read_text_line(in, line, source, ++lineno)) {
     size_t hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
     line = trim(line);
@@ -141,8 +140,7 @@ ClusterInit read_cluster_init(std::istream& in, const std::string& source) {
 }
 
 ClusterInit read_cluster_init_file(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError(path, 0, "cannot open the init file");
+  std::ifstream f = open_input_file(path);  // "no such file", "is a directory"; read with the line bound
   return read_cluster_init(f, path);
 }
 
