@@ -40,9 +40,9 @@ scratch=$(mktemp -d /tmp/tpkit-bench.XXXXXX)
 trap 'rm -rf "$scratch"' EXIT
 # a section of RESULTS.md: between '<!-- bench NAME -->' and '<!-- end NAME -->'
 section() {  # NAME CMD: runs it, prints the section
-  local name=$1 cmd=$2 work=$scratch/$1 start status=0
+  local name=$1 cmd=$2 work=$scratch/$1 start load status=0
   mkdir -p "$work"
-  start=$(date +%s)
+  start=$(date +%s) load=$(cut -d' ' -f1 /proc/loadavg)
   echo "run-all: $name: $cmd" >&2
   # progress lines (carriage returns) are not figures
   (export work; nice -n 19 bash -c "set -o pipefail; $cmd" 2>&1 | tr '\r' '\n' | grep -v '^ *$' > "$work.out") || status=$?
@@ -51,7 +51,8 @@ section() {  # NAME CMD: runs it, prints the section
   echo
   echo "\`$cmd\`"
   echo
-  echo "$(date -u +%Y-%m-%d), $(nproc) cores ($(uname -m)), $(( $(date +%s) - start )) s wall$([ "$status" = 0 ] || echo ", exit status $status")"
+  # the load average at the start says how much of the machine the benchmark had (it runs under nice)
+  echo "$(date -u +%Y-%m-%d), $(nproc) cores ($(uname -m)), load average $load at the start, $(( $(date +%s) - start )) s wall$([ "$status" = 0 ] || echo ", exit status $status")"
   echo
   echo '```text'
   cat "$work.out"
