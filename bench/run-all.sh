@@ -20,7 +20,7 @@ benches=(
   "cluster|build/bin/bench_cluster --section families && build/bin/bench_cluster --section unrelated --n 100 --trials 3000"
   "trifocal|build/bin/bench_trifocal --accuracy"
   "synth|build/bin/bench_synth --agreement"
-  "match_accuracy|build/bin/tp-synth -o \$work/syn > /dev/null && build/bin/bench_match_accuracy --synth \$work/syn --threads 2"
+  "match_accuracy|build/bin/tp-synth --out \$work/s --size 512 --seed 3 --relief 15 > /dev/null && build/bin/bench_match_accuracy --synth \$work/s --threads 2"
   "trifocal_real_table|sh bench/trifocal_real_table.sh build \$work"
   "gcp_accuracy|bash bench/gcp_accuracy.sh \$work"
   "dem_align|bash bench/dem_align.sh \$work"
