@@ -1,8 +1,8 @@
 # What `cmake --install build [--prefix P]` and the Debian package (cpack -G DEB) install:
 #   bin/                       the tools
-#   share/man/man1, man5       their pages (man tp-match, man tpkit-formats), uncompressed (man reads
-#                              both; the package stays byte-identical to the sources)
-#   share/tpkit/               the paper's clusters and the other data the README and Makefile.examples use
+#   share/man/man1, man5, man7 their pages (man tp-match, man tpkit-formats, man tpkit), uncompressed
+#                              (man reads both; the package stays byte-identical to the sources)
+#   share/tpkit/               the paper's clusters and the other data the README, docs/ and Makefile.examples use
 #   include/tpkit/<component>/ the public headers; lib/ the static component libraries;
 #   lib/cmake/tpkit/           tpkitConfig.cmake: find_package(tpkit) then link tpkit::tpkit (or one
 #                              component, tpkit::match ...); lib/pkgconfig/tpkit.pc for pkg-config
@@ -11,6 +11,7 @@ include(CMakePackageConfigHelpers)
 
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/man/ DESTINATION ${CMAKE_INSTALL_MANDIR}/man1 FILES_MATCHING PATTERN "*.1")
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/man/ DESTINATION ${CMAKE_INSTALL_MANDIR}/man5 FILES_MATCHING PATTERN "*.5")
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/man/ DESTINATION ${CMAKE_INSTALL_MANDIR}/man7 FILES_MATCHING PATTERN "*.7")
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/share/tpkit/ DESTINATION ${CMAKE_INSTALL_DATADIR}/tpkit)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/lib/include/tpkit DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 

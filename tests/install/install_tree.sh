@@ -22,7 +22,7 @@ done
 [ "$(ls "$prefix/bin" | wc -l)" = "$(echo "$tools" | wc -w)" ] || fail "bin/ holds more than the tools: $(ls "$prefix/bin")"
 
 # the man pages, where man looks
-for page in "$src"/man/*.[15]; do
+for page in "$src"/man/*.[157]; do
   name=$(basename "$page"); sec=${name##*.}
   inst=$prefix/share/man/man$sec/$name
   cmp -s "$page" "$inst" || fail "share/man/man$sec/$name: not installed"
@@ -31,6 +31,7 @@ for page in "$src"/man/*.[15]; do
 done
 if command -v man >/dev/null; then
   [ "$(MANPATH=$prefix/share/man man -w tp-match)" = "$prefix/share/man/man1/tp-match.1" ] || fail "man -w tp-match: not the installed page"
+  [ "$(MANPATH=$prefix/share/man man -w tpkit)" = "$prefix/share/man/man7/tpkit.7" ] || fail "man -w tpkit: not the installed overview"
 fi
 for f in "$src"/share/tpkit/*; do cmp -s "$f" "$prefix/share/tpkit/$(basename "$f")" || fail "share/tpkit/$(basename "$f"): not installed"; done
 [ -f "$prefix/include/tpkit/core/formats.hpp" ] || fail "include/tpkit/core/formats.hpp: not installed"
@@ -45,4 +46,4 @@ g++ -std=c++17 -O1 "$src/tests/install/consumer/main.cpp" -o "$work/consumer-pc"
   $(PKG_CONFIG_PATH=$prefix/lib/pkgconfig pkg-config --cflags --libs tpkit)
 out=$("$work/consumer-pc" "$prefix/share/tpkit/cluster-a.points")
 [[ $out == "100 points, tpkit "* ]] || fail "consumer (pkg-config): $out"
-echo "install: $(echo "$tools" | wc -w) tools, $(ls "$src"/man/*.[15] | wc -l) man pages, headers, libraries, CMake package and pkg-config file under $prefix"
+echo "install: $(echo "$tools" | wc -w) tools, $(ls "$src"/man/*.[157] | wc -l) man pages, headers, libraries, CMake package and pkg-config file under $prefix"

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The man pages as man(1) renders them: groff reports no warning (a line it cannot adjust, an unknown
-# macro, a bad escape), and no option is described twice. Each tool's --help is this page (run_tool), so
+# macro, a bad escape), and no option is described twice; the overview tpkit(7) names every page. Each tool's --help is this page (run_tool), so
 # what is checked here is also what --help prints.
 #   man_pages.sh [SOURCE_DIR]
 set -euo pipefail
@@ -28,6 +28,12 @@ for page in "$src"/man/*.[1-8]; do
     echo "$dups" | sed "s#^#man_pages: $name: described twice: #"
     bad=1
   fi
+done
+# the overview, tpkit(7), names every tool's page and the formats page (.BR NAME (SECTION))
+for page in "$src"/man/*.[15]; do
+  name=$(basename "$page"); sec=${name##*.}; name=${name%.*}
+  grep -qxF ".BR $name ($sec)," "$src/man/tpkit.7" || grep -qxF ".BR $name ($sec)" "$src/man/tpkit.7" ||
+    { echo "man_pages: man/tpkit.7: does not name $name($sec)"; bad=1; }
 done
 [ $bad = 0 ] && echo "man_pages: $(ls "$src"/man/*.[1-8] | wc -l) pages, no groff warning, no option described twice"
 exit $bad

@@ -25,7 +25,7 @@ trifocal-fit -m ml --ransac 1.5 colmap.tracks --inliers colmap-flagged.tracks -o
 reproj-eval colmap.trifocal colmap.tracks -o colmap.eval
 awk '/^#/ || $NF == 1' colmap-flagged.tracks > colmap-inliers.tracks
 reproj-eval colmap.trifocal colmap-inliers.tracks -o colmap-inliers.eval
-# tpkit on the same triplet (the 16-bit originals), as in README.md "A tour"
+# tpkit on the same triplet (the 16-bit originals), as in README.md "A five-minute tour"
 tp-match $D/img_01.tif $D/img_02.tif $D/img_03.tif --cache kp -o pairs -q
 tp-chain pairs/*.matches --images $D/img_01.tif $D/img_02.tif $D/img_03.tif -o tpkit.tracks
 trifocal-fit -m ml --ransac 1.5 tpkit.tracks --inliers tpkit-flagged.tracks -o tpkit.trifocal
