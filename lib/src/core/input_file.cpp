@@ -84,8 +84,9 @@ TextInput::TextInput(const std::string& path) {
   }
   const std::string source = path == "-" ? "<stdin>" : path;
   std::string head;
-  if (read_text_line(*src, first_, source, 1)) head = first_ + '\n';
-  if (first_.compare(0, 3, "\xEF\xBB\xBF") == 0) first_.erase(0, 3);  // a UTF-8 byte order mark
+  const bool line = read_text_line(*src, first_, source, 1);
+  if (first_.compare(0, 3, "\xEF\xBB\xBF") == 0) first_.erase(0, 3);  // a UTF-8 byte order mark, gone from stream() too
+  if (line) head = first_ + '\n';
   replay_ = std::make_unique<Replay>(std::move(head), src->rdbuf());
   in_.rdbuf(replay_.get());
 }

@@ -5,7 +5,6 @@
 #include <Eigen/Dense>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <map>
 #include <sstream>
 
@@ -66,20 +65,14 @@ Eigen::Vector3d ecef_sigma_to_enu(const Eigen::Vector3d& s, double lon, double l
   return (R.cwiseAbs2() * s.cwiseAbs2()).cwiseSqrt();
 }
 
-// The file's text ('-': standard input), read line by line with read_text_line's bound (a device or a
-// binary file fails at its first NUL byte or overlong line instead of filling memory), without a UTF-8
-// byte order mark at its start (editors on Windows write one; left in, it made the first id
-// "\xEF\xBB\xBF1" or hid the "# tpkit gcp" line).
+// The file's text ('-': standard input; TextInput drops a UTF-8 byte order mark, which editors on Windows
+// write and which made the first id "\xEF\xBB\xBF1" or hid the "# tpkit gcp" line), read line by line with
+// read_text_line's bound: a device or a binary file fails at its first NUL byte or overlong line instead
+// of filling memory.
 std::string read_text(const std::string& path) {
-  std::ifstream f;
-  std::istream* in = &std::cin;
-  if (path != "-") {
-    f = open_input_file(path, InputKind::stream, true);
-    in = &f;
-  }
+  TextInput in(path);
   std::string text, line;
-  for (long lineno = 1; read_text_line(*in, line, path, lineno); ++lineno) text.append(line).push_back('\n');
-  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
+  for (long lineno = 1; read_text_line(in.stream(), line, path, lineno); ++lineno) text.append(line).push_back('\n');
   return text;
 }
 

@@ -55,7 +55,7 @@ class TextInput {
   const std::string& first_line() const { return first_; }
   // tpkit_header_kind(first_line()).
   std::string header_kind() const;
-  // The whole input from its first byte, to be read once.
+  // The whole input, its first line as first_line() gives it, to be read once.
   std::istream& stream() { return in_; }
 
  private:
