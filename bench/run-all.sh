@@ -27,6 +27,7 @@ benches=(
   "block_adjust|bash bench/block_adjust.sh \$work"
   "match_speed_colmap|bash bench/match_speed_colmap.sh build ../shared/data/pleiades-marseille \$work"
   "dates_conditions|bash bench/dates_conditions.sh build \$work"
+  "real_multidate|bash bench/real_multidate.sh build \$work"
   "scale_out|build/bin/tp-synth --out \$work/s10k --size 10000 --seed 1 --supersample 1 > /dev/null && bash bench/scale_out.sh build/bin \$work/s10k"
 )
 if [ "${1:-}" = --list ]; then for b in "${benches[@]}"; do echo "${b%%|*}"; done; exit 0; fi
