@@ -142,6 +142,15 @@ SynthNodeFilter synth_node_filter(int n) {
   return f;
 }
 
+SynthNodeFilter synth_box_node_filter(int n) {
+  SynthNodeFilter f;
+  f.m = n;
+  f.r = n - 1;
+  f.w.assign(static_cast<size_t>(2 * f.r + 1), 0.0);
+  for (int k = 0; k < n; ++k) f.w[static_cast<size_t>(f.r + k)] = 1.0 / n;
+  return f;
+}
+
 double synth_finish_dn(const SynthScene& scene, int view, long x, long y, double radiance) {
   return DnFinish(scene, view)(x, y, radiance);
 }
@@ -172,8 +181,14 @@ void synth_reference_rows(const SynthScene& scene, int view, long y0, long rows,
 
 TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const {
   const long W = params().size;
-  const SynthNodeFilter flt = synth_node_filter(static_cast<int>(params().supersample));
+  // Scenes with buildings and trees: walls, roof and crown edges and cast shadows are discontinuities that
+  // the Catmull-Rom interpolation of nodes rings at; there the nodes are the samples themselves (the box
+  // filter of synth_box_node_filter, node I at (I + 0.5) / n - 0.5 px), each on its exact surface.
+  const bool structured = has_structures();
+  const SynthNodeFilter flt = structured ? synth_box_node_filter(static_cast<int>(params().supersample))
+                                         : synth_node_filter(static_cast<int>(params().supersample));
   const long m = flt.m, r = flt.r;
+  const double shift = structured ? 0.5 / m - 0.5 : 0.0;  // node position I / m + shift (px)
   const double nan = std::numeric_limits<double>::quiet_NaN();
   // Nodes I in [I0, I1], J in [J0, J1] (image position (I / m, J / m)); coarse casts at multiples of kCoarse.
   const long kCoarse = kCoarsePx * m;  // in nodes
@@ -189,7 +204,10 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
   std::vector<double> tc(static_cast<size_t>((R1 - R0 + 1) * NC));
   for (long R = R0; R <= R1; ++R)
     for (long C = C0; C <= C1; ++C) {
-      cam.ray(static_cast<double>(C * kCoarse) / m, static_cast<double>(R * kCoarse) / m, z_top, o, d);
+      if (structured)
+        cam.ray(static_cast<double>(C * kCoarse) / m + shift, static_cast<double>(R * kCoarse) / m + shift, z_top, o, d);
+      else
+        cam.ray(static_cast<double>(C * kCoarse) / m, static_cast<double>(R * kCoarse) / m, z_top, o, d);
       const auto t = terrain_().intersect(o, d, 1e-3);
       tc[static_cast<size_t>((R - R0) * NC + (C - C0))] = t ? *t : nan;
     }
@@ -220,10 +238,7 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
   const std::unique_ptr<double[]> hx(new double[nh]), hy(new double[nh]), hgx(new double[nh]), hgy(new double[nh]);
   // Scenes with buildings and trees: each node's surface is the nearer of the terrain point above and the
   // first structure the ray enters before it (exact: closed-form, synth_structures.hpp), shaded with the
-  // view's sun and its cast shadows (surface_radiance). The node lattice and the pixel filter are as above;
-  // across a roof or crown edge the Catmull-Rom interpolation of the nodes rings a little (bounded by the
-  // agreement test against the per-sample reference, synth_scene_test).
-  const bool structured = has_structures();
+  // view's sun and its cast shadows (surface_radiance).
   std::vector<SynthSurface> surf(structured ? nh : 0);
   for (long Jg = J0; Jg <= J1; Jg += kRowGroup) {
     const long nk = std::min(kRowGroup, J1 - Jg + 1);
@@ -258,7 +273,10 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
       const double fx = static_cast<double>(I - C * kCoarse) / kCoarse;
       for (long k = 0; k < nk; ++k) {
         Row& w = rw[k];
-        cam.ray(static_cast<double>(I) / m, static_cast<double>(Jg + k) / m, z_top, o[k], d[k]);
+        if (structured)
+          cam.ray(static_cast<double>(I) / m + shift, static_cast<double>(Jg + k) / m + shift, z_top, o[k], d[k]);
+        else
+          cam.ray(static_cast<double>(I) / m, static_cast<double>(Jg + k) / m, z_top, o[k], d[k]);
         t[k] = bil[k] = nan;
         if (cell_smooth[k]) {
           const double t00 = corner[k][0], t10 = corner[k][1], t01 = corner[k][2], t11 = corner[k][3];

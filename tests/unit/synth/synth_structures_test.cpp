@@ -215,8 +215,11 @@ TEST(SynthStructures, TruthOnTheSurfaceAndVisible) {
 }
 
 TEST(SynthStructures, FastRenderingAgreesWithReference) {
-  // render_rows against an exact cast of every sample (synth_render.hpp), noise off: walls, roof edges and
-  // crowns are discontinuities the node lattice's Catmull-Rom interpolation rings at.
+  // render_rows against an exact cast of every sample (synth_render.hpp), noise off. Walls, roof and crown
+  // edges and cast shadows are discontinuities: with structures the nodes are the samples themselves
+  // (synth_box_node_filter), so only the Newton positions (1e-4 m) and the order of the sums differ
+  // (measured 0.06 and 0 DN RMS, no pixel off by more than 1 DN; the Catmull-Rom lattice of the default
+  // scene gave 17.7 and 6.0 DN RMS here, 27 pixels off by more than 100 DN).
   SynthParams p = town(0.45, 0.35);
   p.noise = 0;
   p.size = 160;
@@ -231,12 +234,12 @@ TEST(SynthStructures, FastRenderingAgreesWithReference) {
     for (size_t i = 0; i < fast.size(); ++i) {
       const double e = static_cast<double>(fast[i]) - ref[i];
       ss += e * e;
-      far += std::abs(e) > 100;
+      far += std::abs(e) > 10;
     }
     const double rms = std::sqrt(ss / static_cast<double>(fast.size()));
-    std::cerr << "view " << v << ": fast - exact rms " << rms << " DN, " << far << " of " << fast.size() << " pixels off by > 100 DN\n";
-    EXPECT_LT(rms, 25.0) << "view " << v;
-    EXPECT_LE(far, static_cast<long>(fast.size()) / 50) << "view " << v;
+    std::cerr << "view " << v << ": fast - exact rms " << rms << " DN, " << far << " of " << fast.size() << " pixels off by > 10 DN\n";
+    EXPECT_LT(rms, 0.5) << "view " << v;
+    EXPECT_LE(far, static_cast<long>(fast.size()) / 500) << "view " << v;
   }
 }
 
