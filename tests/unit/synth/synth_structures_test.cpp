@@ -250,6 +250,16 @@ TEST(SynthStructures, NoneByDefaultAndParamsRoundTrip) {
   EXPECT_EQ(p.buildings, 0.45);
   EXPECT_EQ(p.trees, 0.35);
   EXPECT_THROW(apply_scene_preset("castle", p), UsageError);
+  // scene.params keeps them, and the scene loaded from it is the same town
+  const std::string path = ::testing::TempDir() + "/structures.params";
+  save_params(path, p);
+  const SynthParams q = load_params(path);
+  EXPECT_EQ(q.buildings, 0.45);
+  EXPECT_EQ(q.trees, 0.35);
+  const SynthScene a(p), b(q);
+  EXPECT_EQ(a.structures().buildings(), b.structures().buildings());
+  EXPECT_EQ(a.structures().trees(), b.structures().trees());
+  EXPECT_EQ(a.height(40.3, 51.7), b.height(40.3, 51.7));
   p.buildings = 1.5;
   EXPECT_THROW(check_params(p), UsageError);
 }
