@@ -482,6 +482,12 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     meta_set(meta, "conditions", "second_date " + format_number(p.date2) + " clouds " + format_number(p.clouds) + " water " +
                                      format_number(p.water) + " nodata_band " + format_number(p.nodata) +
                                      " (view 1 the reference date; DN 0 = nodata)");
+  if (scene.has_structures())  // geometric (synth_structures.hpp): the truth goes through them
+    meta_set(meta, "structures", "buildings " + format_number(p.buildings) + " trees " + format_number(p.trees) + ": " +
+                                     std::to_string(scene.structures().buildings()) + " buildings, " +
+                                     std::to_string(scene.structures().trees()) +
+                                     " trees; truth points on the surface (ground, roofs, crowns), hidden where a wall "
+                                     "or crown stands between them and a view; truth.dem.tif is the surface model");
   if (!p.cross_track.empty()) {  // given by --cross-track (else seeded, and no line, as before)
     std::string ct;
     for (double c : p.cross_track) ct += (ct.empty() ? "" : ",") + format_number(c);
