@@ -6,6 +6,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/synth/synth_scene.hpp"
+#include "tpkit/synth/synth_structures.hpp"
 #include "tpkit/core/tool_support.hpp"
 
 extern const char* const tpkit_man_page;
@@ -19,6 +20,8 @@ int main(int argc, char** argv) {
     std::string origin;
     std::vector<std::string> rpc_bias;
     double random_bias = 0;
+    std::string scene = "default";
+    double buildings = 0, trees = 0;  // where given (else the --scene preset's)
   };
   return tpkit::run_tool(
       "tp-synth", argc, argv,
@@ -47,10 +50,16 @@ int main(int argc, char** argv) {
         app.add_option("--blur", o->p.blur, "views 2..N: Gaussian PSF of this sigma (pixels, 0 to 5) before the noise");
         app.add_option("--resolution-ratio", o->p.resolution_ratio, "views 2..N: R times the ground sampling distance (1 to 4)");
         app.add_option("--rotation", o->p.rotation, "views 2..N: image axes turned about the optical axis (degrees)");
+        app.add_option("--scene", o->scene, "default, or buildings: a town of buildings and trees (--buildings 0.45 --trees 0.35)");
+        CLI::Option* ob = app.add_option("--buildings", o->buildings, "fraction of the 30 m lots that hold a building (0 to 1; vertical walls, flat roofs)");
+        CLI::Option* ot = app.add_option("--trees", o->trees, "fraction of the other lots that hold trees (0 to 1)");
         app.add_option("--random-bias", o->random_bias,
                        "seeded RPC bias of at most PX pixels (shift, drift, affine) on every view but view 1 and those of --rpc-bias");
-        return [o]() {
+        return [o, ob, ot]() {
           if (!o->cross_track.empty()) o->p.cross_track = tpkit::parse_cross_track(o->cross_track);
+          tpkit::apply_scene_preset(o->scene, o->p);
+          if (ob->count()) o->p.buildings = o->buildings;
+          if (ot->count()) o->p.trees = o->trees;
           tpkit::check_params(o->p);
           if (o->threads < 0 || o->threads > tpkit::kMaxThreads)
             throw tpkit::UsageError("--threads must be between 0 and " + std::to_string(tpkit::kMaxThreads));
@@ -73,6 +82,8 @@ int main(int argc, char** argv) {
           line << "wrote " << o->out << ": " << scene.views() << " views " << o->p.size << "x" << o->p.size << " (" << o->p.camera
                << "), scene square " << scene.scene_size() << " m, relief " << o->p.relief << " m, " << o->p.points
                << " truth tracks";
+          if (scene.has_structures())
+            line << ", " << scene.structures().buildings() << " buildings, " << scene.structures().trees() << " trees";
           tpkit::summary(line.str());
           return 0;
         };

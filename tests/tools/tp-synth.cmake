@@ -170,3 +170,21 @@ tpkit_tool_test(tp-synth.sensor-pixels-follow-the-truth
   COMMAND "tp-synth --out s --size 512 --seed 3 --relief 15 --resolution-ratio 2 --rotation 30 --threads 2 >/dev/null 2>&1 && tp-match s/view1.tif s/view2.tif --threads 2 -q -o m.matches && bench_match_accuracy --synth s --score m.matches 1 2"
   STDOUT_MATCH "correct \\(< 1 px\\) ([5-9][0-9][0-9]|[0-9][0-9][0-9][0-9]+), correct median 0\\.0[0-9]* " TIMEOUT 120)
 endif()
+
+# --scene buildings: the truth goes through buildings and trees. Every seen position is the projection of its
+# ground point through truth.cameras; a block's truth marks points hidden by walls and crowns (nan although
+# the point projects inside the image: none without structures, as tp-synth.block-truth's scene); ground
+# points reach roofs above the 10 m relief; scene.params records the structures, and the run says how many.
+tpkit_tool_test(tp-synth.buildings-truth
+  COMMAND "tp-synth --out b --scene buildings --views 6 --dates 2 --size 160 --relief 10 --points 200 --supersample 1 --threads 2 && grep -c '^buildings = 0.45$\\|^trees = 0.35$' b/scene.params && awk -v size=160 -f $SRC/tests/tools/synth_truth_check.awk b/truth.cameras b/truth.tracks && tp-synth --out a --views 6 --dates 2 --size 160 --relief 10 --points 200 --supersample 1 --threads 2 2>/dev/null && awk -v size=160 -f $SRC/tests/tools/synth_truth_check.awk a/truth.cameras a/truth.tracks"
+  STDERR_MATCH "[0-9]+ buildings, [0-9]+ trees"
+  STDOUT_MATCH "^2\nseen [0-9]+ max error ok hidden [1-9][0-9]* high 1\nseen [0-9]+ max error ok hidden 0 high 0\n$")
+tpkit_tool_test(tp-synth.buildings-triplet
+  COMMAND "tp-synth --out t --scene buildings --buildings 0.7 --size 192 --relief 10 --points 150 --supersample 1 --threads 2 2>/dev/null && grep -c '^buildings = 0.7$\\|^trees = 0.35$' t/scene.params && awk -v size=192 -f $SRC/tests/tools/synth_truth_check.awk t/truth.cameras t/truth.tracks"
+  STDOUT_MATCH "^2\nseen 450 max error ok hidden 0 high 1\n$")
+tpkit_tool_test(tp-synth.bad-scene
+  COMMAND "tp-synth --out out --scene castle"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --scene must be default or buildings, got 'castle'" NO_FILE out)
+tpkit_tool_test(tp-synth.bad-buildings
+  COMMAND "tp-synth --out out --buildings 2"
+  EXPECT_FAIL STDERR_MATCH "^tp-synth: --buildings must be a fraction between 0 and 1" NO_FILE out)

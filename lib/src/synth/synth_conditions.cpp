@@ -30,6 +30,8 @@ const Eigen::Vector3d& second_sun() {
 }
 }  // namespace
 
+const Eigen::Vector3d& synth_second_sun() { return second_sun(); }
+
 bool synth_has_conditions(const SynthParams& p) { return p.date2 != 0 || p.clouds != 0 || p.water != 0 || p.nodata != 0; }
 
 double synth_condition_radiance(const SynthScene& scene, int view, double X, double Y, const Eigen::Vector2d& g) {

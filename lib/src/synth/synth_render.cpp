@@ -66,6 +66,7 @@
 #include "tpkit/synth/synth_noise.hpp"
 #include "tpkit/synth/synth_render.hpp"
 #include "tpkit/synth/synth_scene.hpp"
+#include "tpkit/synth/synth_structures.hpp"
 #include "tpkit/synth/synth_terrain.hpp"
 
 namespace tpkit {
@@ -141,6 +142,15 @@ SynthNodeFilter synth_node_filter(int n) {
   return f;
 }
 
+SynthNodeFilter synth_box_node_filter(int n) {
+  SynthNodeFilter f;
+  f.m = n;
+  f.r = n - 1;
+  f.w.assign(static_cast<size_t>(2 * f.r + 1), 0.0);
+  for (int k = 0; k < n; ++k) f.w[static_cast<size_t>(f.r + k)] = 1.0 / n;
+  return f;
+}
+
 double synth_finish_dn(const SynthScene& scene, int view, long x, long y, double radiance) {
   return DnFinish(scene, view)(x, y, radiance);
 }
@@ -149,11 +159,17 @@ void synth_reference_rows(const SynthScene& scene, int view, long y0, long rows,
   const long W = scene.params().size;
   const int ns = static_cast<int>(scene.params().supersample);
   const bool conditions = synth_has_conditions(scene.params());
+  const bool structured = scene.has_structures();
   for (long j = 0; j < rows; ++j)
     for (long x = 0; x < W; ++x) {
       double sum = 0;
       for (int b = 0; b < ns; ++b)
         for (int a = 0; a < ns; ++a) {
+          if (structured) {
+            const auto s = scene.surface(view, x - 0.5 + (a + 0.5) / ns, y0 + j - 0.5 + (b + 0.5) / ns);
+            if (s) sum += scene.surface_radiance(view, *s);
+            continue;
+          }
           const auto X = scene.ground_point(view, x - 0.5 + (a + 0.5) / ns, y0 + j - 0.5 + (b + 0.5) / ns);
           if (!X) continue;  // cannot happen inside the terrain grid: counts as black
           const Eigen::Vector2d g = scene.height_gradient(X->x(), X->y());
@@ -165,8 +181,14 @@ void synth_reference_rows(const SynthScene& scene, int view, long y0, long rows,
 
 TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* out) const {
   const long W = params().size;
-  const SynthNodeFilter flt = synth_node_filter(static_cast<int>(params().supersample));
+  // Scenes with buildings and trees: walls, roof and crown edges and cast shadows are discontinuities that
+  // the Catmull-Rom interpolation of nodes rings at; there the nodes are the samples themselves (the box
+  // filter of synth_box_node_filter, node I at (I + 0.5) / n - 0.5 px), each on its exact surface.
+  const bool structured = has_structures();
+  const SynthNodeFilter flt = structured ? synth_box_node_filter(static_cast<int>(params().supersample))
+                                         : synth_node_filter(static_cast<int>(params().supersample));
   const long m = flt.m, r = flt.r;
+  const double shift = structured ? 0.5 / m - 0.5 : 0.0;  // node position I / m + shift (px)
   const double nan = std::numeric_limits<double>::quiet_NaN();
   // Nodes I in [I0, I1], J in [J0, J1] (image position (I / m, J / m)); coarse casts at multiples of kCoarse.
   const long kCoarse = kCoarsePx * m;  // in nodes
@@ -182,7 +204,10 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
   std::vector<double> tc(static_cast<size_t>((R1 - R0 + 1) * NC));
   for (long R = R0; R <= R1; ++R)
     for (long C = C0; C <= C1; ++C) {
-      cam.ray(static_cast<double>(C * kCoarse) / m, static_cast<double>(R * kCoarse) / m, z_top, o, d);
+      if (structured)
+        cam.ray(static_cast<double>(C * kCoarse) / m + shift, static_cast<double>(R * kCoarse) / m + shift, z_top, o, d);
+      else
+        cam.ray(static_cast<double>(C * kCoarse) / m, static_cast<double>(R * kCoarse) / m, z_top, o, d);
       const auto t = terrain_().intersect(o, d, 1e-3);
       tc[static_cast<size_t>((R - R0) * NC + (C - C0))] = t ? *t : nan;
     }
@@ -211,6 +236,10 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
   // The group's ground points and terrain gradients, row k at k * NI; hx = nan: the ray missed.
   const size_t nh = static_cast<size_t>(kRowGroup * NI);
   const std::unique_ptr<double[]> hx(new double[nh]), hy(new double[nh]), hgx(new double[nh]), hgy(new double[nh]);
+  // Scenes with buildings and trees: each node's surface is the nearer of the terrain point above and the
+  // first structure the ray enters before it (exact: closed-form, synth_structures.hpp), shaded with the
+  // view's sun and its cast shadows (surface_radiance).
+  std::vector<SynthSurface> surf(structured ? nh : 0);
   for (long Jg = J0; Jg <= J1; Jg += kRowGroup) {
     const long nk = std::min(kRowGroup, J1 - Jg + 1);
     Row rw[kRowGroup];
@@ -244,7 +273,10 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
       const double fx = static_cast<double>(I - C * kCoarse) / kCoarse;
       for (long k = 0; k < nk; ++k) {
         Row& w = rw[k];
-        cam.ray(static_cast<double>(I) / m, static_cast<double>(Jg + k) / m, z_top, o[k], d[k]);
+        if (structured)
+          cam.ray(static_cast<double>(I) / m + shift, static_cast<double>(Jg + k) / m + shift, z_top, o[k], d[k]);
+        else
+          cam.ray(static_cast<double>(I) / m, static_cast<double>(Jg + k) / m, z_top, o[k], d[k]);
         t[k] = bil[k] = nan;
         if (cell_smooth[k]) {
           const double t00 = corner[k][0], t10 = corner[k][1], t01 = corner[k][2], t11 = corner[k][3];
@@ -267,6 +299,37 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
         }
         // ... else an exact cast.
         const size_t h = static_cast<size_t>(k * NI + (I - I0));
+        if (structured) {
+          double tt = t[k];
+          if (std::isnan(tt)) {
+            const auto te = terrain_().intersect(o[k], d[k]);
+            tt = te ? *te : std::numeric_limits<double>::infinity();
+            if (te) {
+              const Eigen::Vector3d X = o[k] + tt * d[k];
+              terrain_().height(X.x(), X.y(), &grad[k]);
+            }
+          }
+          SynthStructureHit sh;
+          SynthSurface& sf = surf[h];
+          if (structures().intersect(o[k], d[k], 0, tt, &sh)) {
+            sf.X = o[k] + sh.t * d[k];
+            sf.normal = sh.normal;
+            sf.kind = sh.kind;
+            sf.id = sh.id;
+          } else if (std::isinf(tt)) {
+            hx[h] = nan;
+            missed = true;
+            continue;
+          } else {
+            sf.X = o[k] + tt * d[k];
+            sf.normal = Eigen::Vector3d(-grad[k].x(), -grad[k].y(), 1).normalized();
+            sf.kind = SynthStructures::kTerrain;
+            sf.id = -1;
+          }
+          hx[h] = sf.X.x();
+          hy[h] = sf.X.y();
+          continue;
+        }
         if (std::isnan(t[k])) {
           const auto te = terrain_().intersect(o[k], d[k]);
           if (!te) {
@@ -286,6 +349,11 @@ TPKIT_HOT void SynthScene::render_rows(int view, long y0, long rows, uint16_t* o
       }
     }
     double* out = &node[static_cast<size_t>((Jg - J0) * NI)];
+    if (structured) {
+      for (long i = 0; i < nk * NI; ++i)
+        out[i] = std::isnan(hx[static_cast<size_t>(i)]) ? 0 : surface_radiance(view, surf[static_cast<size_t>(i)]);
+      continue;
+    }
     if (!conditions && !missed) {
       radiance_n(nk * NI, hx.get(), hy.get(), hgx.get(), hgy.get(), out);
       continue;
@@ -414,6 +482,12 @@ void write_synth_scene(const SynthScene& scene, const std::string& dir, const Sy
     meta_set(meta, "conditions", "second_date " + format_number(p.date2) + " clouds " + format_number(p.clouds) + " water " +
                                      format_number(p.water) + " nodata_band " + format_number(p.nodata) +
                                      " (view 1 the reference date; DN 0 = nodata)");
+  if (scene.has_structures())  // geometric (synth_structures.hpp): the truth goes through them
+    meta_set(meta, "structures", "buildings " + format_number(p.buildings) + " trees " + format_number(p.trees) + ": " +
+                                     std::to_string(scene.structures().buildings()) + " buildings, " +
+                                     std::to_string(scene.structures().trees()) +
+                                     " trees; truth points on the surface (ground, roofs, crowns), hidden where a wall "
+                                     "or crown stands between them and a view; truth.dem.tif is the surface model");
   if (!p.cross_track.empty()) {  // given by --cross-track (else seeded, and no line, as before)
     std::string ct;
     for (double c : p.cross_track) ct += (ct.empty() ? "" : ",") + format_number(c);

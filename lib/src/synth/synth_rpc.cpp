@@ -3,6 +3,7 @@
 #include <GeographicLib/LocalCartesian.hpp>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <vector>
@@ -10,6 +11,7 @@
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/synth/synth_scene.hpp"
+#include "tpkit/synth/synth_structures.hpp"
 
 namespace tpkit {
 
@@ -50,7 +52,9 @@ Eigen::Vector3d SynthGeoFrame::from_llh(const Eigen::Vector3d& llh) const {
 }
 
 RpcFit synth_view_rpc(const SynthScene& scene, const SynthGeoFrame& geo, int view, const ImageBias& bias) {
-  const double S = scene.scene_size(), r = 0.5 * scene.params().relief + 10;
+  // heights: the relief, and the roofs and crowns of a scene with structures, with 10 m to spare
+  const double S = scene.scene_size(),
+               r = std::max(0.5 * scene.params().relief, scene.has_structures() ? scene.structures().zmax() : 0.0) + 10;
   RpcFitVolume v;
   v.lon0 = v.lat0 = INFINITY;
   v.lon1 = v.lat1 = -INFINITY;

@@ -21,7 +21,9 @@
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/version.hpp"
 #include "tpkit/synth/synth_camera.hpp"
+#include "tpkit/synth/synth_conditions.hpp"
 #include "tpkit/synth/synth_noise.hpp"
+#include "tpkit/synth/synth_structures.hpp"
 #include "tpkit/synth/synth_terrain.hpp"
 #include "tpkit/synth/synth_texture.hpp"
 
@@ -46,6 +48,8 @@ struct SynthScene::Impl {
   std::vector<double> gain, offset;
   std::vector<Eigen::Vector3d> angles;  // along, cross, roll (deg) per view
   Eigen::Vector3d sun = Eigen::Vector3d::UnitZ();
+  SynthStructures structures;            // buildings and trees (empty by default)
+  std::vector<Eigen::Vector3d> date_sun;  // per date (scenes with structures)
   std::unique_ptr<SynthScene> sharp;    // SynthParams::blur > 0: the scene seen by ideal sensors
 };
 
@@ -69,6 +73,8 @@ void check_params(const SynthParams& p) {
     throw UsageError("--resolution-ratio must be between 1 and 4, got " + format_number(p.resolution_ratio));
   if (!(p.rotation >= -180 && p.rotation <= 180))
     throw UsageError("--rotation must be between -180 and 180 degrees, got " + format_number(p.rotation));
+  if (!(p.buildings >= 0 && p.buildings <= 1)) throw UsageError("--buildings must be a fraction between 0 and 1, got " + format_number(p.buildings));
+  if (!(p.trees >= 0 && p.trees <= 1)) throw UsageError("--trees must be a fraction between 0 and 1, got " + format_number(p.trees));
   if (p.views < 2 || p.views > kMaxSynthViews)
     throw UsageError("--views must be between 2 and " + std::to_string(kMaxSynthViews) + ", got " + std::to_string(p.views));
   if (p.dates < 0 || p.dates > p.views)
@@ -90,6 +96,15 @@ void check_params(const SynthParams& p) {
   for (double c : p.cross_track)
     if (!(std::fabs(c) <= kMaxCrossTrack))
       throw UsageError("--cross-track angles must be between -30 and 30 degrees, got " + format_number(c));
+}
+
+void apply_scene_preset(const std::string& name, SynthParams& p) {
+  if (name == "buildings") {
+    p.buildings = 0.45;
+    p.trees = 0.35;
+  } else if (name != "default") {
+    throw UsageError("--scene must be default or buildings, got '" + name + "'");
+  }
 }
 
 std::vector<double> parse_cross_track(const std::string& s) {
@@ -146,6 +161,9 @@ void save_params(const std::string& path, const SynthParams& p) {
   if (p.blur != 0) os << "blur = " << format_number(p.blur) << "\n";
   if (p.resolution_ratio != 1) os << "resolution_ratio = " << format_number(p.resolution_ratio) << "\n";
   if (p.rotation != 0) os << "rotation = " << format_number(p.rotation) << "\n";
+  // structures: keys only when set
+  if (p.buildings != 0) os << "buildings = " << format_number(p.buildings) << "\n";
+  if (p.trees != 0) os << "trees = " << format_number(p.trees) << "\n";
   os << "model = " << kSynthModel << "\n";
   write_file_atomic(path, os.str());
 }
@@ -238,6 +256,10 @@ SynthParams load_params(const std::string& path) {
       num(p.resolution_ratio);
     } else if (key == "rotation") {
       num(p.rotation);
+    } else if (key == "buildings") {
+      num(p.buildings);
+    } else if (key == "trees") {
+      num(p.trees);
     } else if (key == "model") {
       integer(i);
       if (i != kSynthModel)
@@ -437,6 +459,20 @@ SynthScene::SynthScene(const SynthParams& params) : impl_(std::make_unique<Impl>
   const double sun_az = (200 + 40 * u(60)) * kDeg, sun_el = 55 * kDeg;
   m.sun = Eigen::Vector3d(std::cos(sun_el) * std::cos(sun_az), std::cos(sun_el) * std::sin(sun_az), std::sin(sun_el));
   m.texture = SynthTexture(params.seed, params.gsd, sun_az, sun_el);
+  if (params.buildings > 0 || params.trees > 0) {
+    // Structures over the area of the terrain grid (what any view sees); ray origins above the highest.
+    m.structures = SynthStructures(params.seed, params.buildings, params.trees, x0, y0, x1, y1, m.terrain);
+    if (!m.structures.empty()) m.z_top = std::max(m.z_top, m.structures.zmax() + 1.0);
+    // The sun of each date: date 1 the scene's; each later date its own stream (seeded), azimuth 25..60 deg
+    // either side of the first, elevation 35..65 deg: the shadows move between dates.
+    const uint64_t ss = synth::hash(params.seed, 0x5a7);
+    m.date_sun.push_back(m.sun);
+    for (int d = 1; d < m.p.dates; ++d) {
+      const double side = synth::uniform(ss, d, 0) < 0.5 ? -1 : 1;
+      const double az = sun_az + side * (25 + 35 * synth::uniform(ss, d, 1)) * kDeg, el = (35 + 30 * synth::uniform(ss, d, 2)) * kDeg;
+      m.date_sun.emplace_back(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+    }
+  }
   if (params.blur > 0) {  // the same geometry and ground, seen by ideal sensors (sensor_rows blurs its rendering)
     SynthParams q = params;
     q.blur = 0;
@@ -452,11 +488,42 @@ const SynthCamera& SynthScene::camera_(int view) const { return impl_->cam[stati
 double SynthScene::z_top_() const { return impl_->z_top; }
 const SynthParams& SynthScene::params() const { return impl_->p; }
 double SynthScene::scene_size() const { return impl_->S; }
-double SynthScene::height(double X, double Y) const { return impl_->terrain.height(X, Y); }
+double SynthScene::height(double X, double Y) const {
+  const double z = impl_->terrain.height(X, Y);
+  return impl_->structures.empty() ? z : std::max(z, impl_->structures.top(X, Y));
+}
 Eigen::Vector2d SynthScene::height_gradient(double X, double Y) const {
   Eigen::Vector2d g;
-  impl_->terrain.height(X, Y, &g);
+  const double z = impl_->terrain.height(X, Y, &g);
+  if (!impl_->structures.empty()) {
+    Eigen::Vector2d gs;
+    if (impl_->structures.top(X, Y, &gs) > z) g = gs;
+  }
   return g;
+}
+const SynthStructures& SynthScene::structures() const { return impl_->structures; }
+bool SynthScene::has_structures() const { return !impl_->structures.empty(); }
+Eigen::Vector3d SynthScene::sun(int view) const {
+  const Impl& m = *impl_;
+  if (m.p.date2 > 0 && view > 0) return synth_second_sun();
+  const int d = date_of(view);
+  return d < static_cast<int>(m.date_sun.size()) ? m.date_sun[static_cast<size_t>(d)] : m.sun;
+}
+bool SynthScene::in_shadow(int view, const Eigen::Vector3d& X, const Eigen::Vector3d& n) const {
+  // from just off the surface (1 mm along its normal) towards the sun
+  return impl_->structures.intersect(X + 1e-3 * n, sun(view), 0, std::numeric_limits<double>::infinity(), nullptr);
+}
+double SynthScene::surface_radiance(int view, const SynthSurface& s) const {
+  const Eigen::Vector3d sn = sun(view);
+  const double c = std::max(0.0, s.normal.dot(sn));
+  const bool lit = c > 0 && !in_shadow(view, s.X, s.normal);
+  const double shade = 0.3 + 0.7 * (lit ? c : 0.0);
+  if (s.kind != SynthStructures::kTerrain) return impl_->structures.albedo(s.kind, s.id, s.X, impl_->p.gsd) * shade;
+  if (!synth_has_conditions(impl_->p)) return impl_->texture.albedo(s.X.x(), s.X.y()) * shade;
+  // the conditions' ground (their own shading), its direct part taken away in a cast shadow
+  const Eigen::Vector2d g(-s.normal.x() / s.normal.z(), -s.normal.y() / s.normal.z());
+  const double r = synth_condition_radiance(*this, view, s.X.x(), s.X.y(), g);
+  return lit ? r : r * 0.3 / (0.3 + 0.7 * c);
 }
 double SynthScene::albedo(double X, double Y) const { return impl_->texture.albedo(X, Y); }
 double SynthScene::radiance(double X, double Y) const {
@@ -524,11 +591,37 @@ void SynthScene::ray(int view, double x, double y, Eigen::Vector3d& o, Eigen::Ve
 }
 
 std::optional<Eigen::Vector3d> SynthScene::ground_point(int view, double x, double y) const {
+  if (!impl_->structures.empty()) {
+    const auto s = surface(view, x, y);
+    if (!s) return std::nullopt;
+    return s->X;
+  }
   Eigen::Vector3d o, d;
   ray(view, x, y, o, d);
   const auto t = impl_->terrain.intersect(o, d);
   if (!t) return std::nullopt;
   return Eigen::Vector3d(o + *t * d);
+}
+
+std::optional<SynthSurface> SynthScene::surface(int view, double x, double y) const {
+  Eigen::Vector3d o, d;
+  ray(view, x, y, o, d);
+  const auto t = impl_->terrain.intersect(o, d);
+  SynthStructureHit h;
+  SynthSurface s;
+  if (impl_->structures.intersect(o, d, 0, t ? *t : std::numeric_limits<double>::infinity(), &h)) {
+    s.X = o + h.t * d;
+    s.normal = h.normal;
+    s.kind = h.kind;
+    s.id = h.id;
+    return s;
+  }
+  if (!t) return std::nullopt;
+  s.X = o + *t * d;
+  Eigen::Vector2d g;
+  impl_->terrain.height(s.X.x(), s.X.y(), &g);
+  s.normal = Eigen::Vector3d(-g.x(), -g.y(), 1).normalized();
+  return s;
 }
 
 bool SynthScene::visible(int view, const Eigen::Vector3d& X) const {
@@ -538,10 +631,12 @@ bool SynthScene::visible(int view, const Eigen::Vector3d& X) const {
   Eigen::Vector3d o, d;
   ray(view, x.x(), x.y(), o, d);
   const auto t = impl_->terrain.intersect(o, d);
-  // X lies on this ray at tX; hidden when the terrain is met clearly before it.
+  // X lies on this ray at tX; hidden when the terrain (or a structure) is met clearly before it.
   const double tX = (X - o).dot(d);
+  const double tol = 1e-6 * (1 + impl_->p.gsd);
+  if (!impl_->structures.empty() && impl_->structures.intersect(o, d, 0, tX - tol, nullptr)) return false;
   if (!t) return true;
-  return *t >= tX - 1e-6 * (1 + impl_->p.gsd);
+  return *t >= tX - tol;
 }
 
 SynthTruth synth_truth_points(const SynthScene& scene, long points) {

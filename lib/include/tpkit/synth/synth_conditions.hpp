@@ -23,6 +23,9 @@
 
 namespace tpkit {
 
+// Unit vector towards the second date's sun (azimuth 120 deg, elevation 35 deg; ground frame).
+const Eigen::Vector3d& synth_second_sun();
+
 // True when p sets any condition (the default scene: false, and render_rows is as before).
 bool synth_has_conditions(const SynthParams& p);
 

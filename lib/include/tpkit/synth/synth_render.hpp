@@ -22,6 +22,10 @@ struct SynthNodeFilter {
   std::vector<double> w;  // 2 r + 1 weights, summing to 1
 };
 SynthNodeFilter synth_node_filter(int supersample);
+// The filter of scenes with structures (SynthScene::has_structures): m = n nodes a pixel, node I at image
+// position (I + 0.5) / n - 0.5 (the samples themselves), pixel x the mean of nodes n x .. n x + n - 1
+// (weights 0 for the taps -r..-1 of r = n - 1): the box response, no interpolation across discontinuities.
+SynthNodeFilter synth_box_node_filter(int supersample);
 
 // The 12-bit DN of pixel (x, y) of `view` whose mean radiance is `radiance`: gain, offset, the seeded noise
 // of that pixel, the conditions' tone curve and nodata band (synth_conditions.hpp), rounded and clamped.

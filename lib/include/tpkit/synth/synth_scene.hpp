@@ -67,7 +67,16 @@ struct SynthParams {
   double blur = 0;              // Gaussian PSF sigma, pixels of the view (0: none; up to 5)
   double resolution_ratio = 1;  // focal length divided by R: R times the ground sampling distance (1..4)
   double rotation = 0;          // rotated about the optical axis, degrees (-180..180)
+  // Structures (synth_structures.hpp): fractions 0..1 of the 30 m lots that hold a building, resp. (of the
+  // others) trees. Geometric: the surface, and so the truth (tracks, visibility, truth.dem.tif), includes them;
+  // each date's sun casts their shadows. 0 (the default) leaves the scene as it was, byte for byte, and
+  // scene.params names them only when set. tp-synth --scene buildings: 0.45 and 0.35.
+  double buildings = 0;
+  double trees = 0;
 };
+// tp-synth --scene NAME: "default" (changes nothing) or "buildings" (buildings 0.45, trees 0.35); UsageError
+// for another name. The tool applies it before the options that set these fields one by one.
+void apply_scene_preset(const std::string& name, SynthParams& p);
 constexpr int kMaxSynthViews = 96;
 constexpr int kMaxSynthViewsPerDate = 5;
 
@@ -89,6 +98,16 @@ SynthParams load_params(const std::string& path);                 // rejects unk
 class SynthTerrain;   // synth_terrain.hpp
 class SynthTexture;   // synth_texture.hpp
 struct SynthCamera;   // synth_camera.hpp
+class SynthStructures; // synth_structures.hpp
+
+// What a viewing ray meets first: the point X (ground frame, m), the unit outward normal, the kind
+// (SynthStructures::Kind: 0 terrain, 1 roof, 2 wall, 3 tree crown) and the building or lobe index (-1: terrain).
+struct SynthSurface {
+  Eigen::Vector3d X = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  int kind = 0;
+  int id = -1;
+};
 
 class SynthScene {
  public:
@@ -109,11 +128,16 @@ class SynthScene {
   // Where view's image lies on the ground plane Z: the ground points of its image corners (-0.5, -0.5),
   // (n - 0.5, -0.5), (n - 0.5, n - 0.5), (-0.5, n - 0.5) (m, counter-clockwise or clockwise in order).
   std::array<Eigen::Vector2d, 4> footprint(int view, double Z = 0) const;
-  double height(double X, double Y) const;                          // terrain height Z (m) at ground X, Y (m)
+  // Surface height Z (m) at ground X, Y (m): the terrain, or the roof or crown above it (a digital surface
+  // model; the terrain alone without structures).
+  double height(double X, double Y) const;
   Eigen::Vector2d project(int view, const Eigen::Vector3d& X) const;// ground (m) -> pixel (x col, y row)
-  // First intersection of the viewing ray through pixel (x, y) of `view` with the terrain; nothing if it misses.
+  // First intersection of the viewing ray through pixel (x, y) of `view` with the surface (terrain, roofs,
+  // walls, crowns); nothing if it misses.
   std::optional<Eigen::Vector3d> ground_point(int view, double x, double y) const;
-  // True when X projects inside `view` and is not hidden by terrain along that view's ray.
+  // The same with what the ray meets there (normal, kind).
+  std::optional<SynthSurface> surface(int view, double x, double y) const;
+  // True when X projects inside `view` and is not hidden by the terrain or a structure along that view's ray.
   bool visible(int view, const Eigen::Vector3d& X) const;
   // 3x4 projection matrix with x ~ P [X Y Z 1]^T in pixels; exact for both camera kinds (affine: last row
   // (0,0,0,1)); truth.cameras holds these.
@@ -123,7 +147,7 @@ class SynthScene {
   // Side S of the scene square [0, S]^2 (m): chosen so that the scene at every height of the relief
   // projects inside all three views with a margin.
   double scene_size() const;
-  // Terrain gradient (dZ/dX, dZ/dY) at ground X, Y (m).
+  // Gradient (dZ/dX, dZ/dY) of height() at ground X, Y (m).
   Eigen::Vector2d height_gradient(double X, double Y) const;
   // Ground albedo in [0, 1] at X, Y (m): band-limited, continuous.
   double albedo(double X, double Y) const;
@@ -136,6 +160,19 @@ class SynthScene {
   // Viewing ray of pixel (x, y) of `view`: a point on it above the terrain and the unit direction
   // towards the ground (ground frame, m).
   void ray(int view, double x, double y, Eigen::Vector3d& origin, Eigen::Vector3d& dir) const;
+  // Buildings and trees (empty without SynthParams::buildings, trees).
+  const SynthStructures& structures() const;
+  bool has_structures() const;
+  // Unit vector towards the sun of `view`'s date (ground frame): the scene's sun for date 1; the second
+  // date's (synth_conditions.hpp) for views 2..N with --second-date; a seeded sun per later date of a block.
+  // Scenes with structures shade and cast shadows with it; the others keep the scene's sun (as before).
+  Eigen::Vector3d sun(int view) const;
+  // True when a structure stands between X (with outward normal n) and `view`'s sun: X in a cast shadow.
+  bool in_shadow(int view, const Eigen::Vector3d& X, const Eigen::Vector3d& n) const;
+  // Radiance of a surface point seen in `view` (scenes with structures): albedo (the ground's texture and
+  // conditions, or the structure's) times ambient 0.3 + 0.7 cos(sun, normal), the direct part 0 in a
+  // cast shadow.
+  double surface_radiance(int view, const SynthSurface&) const;
   // Per-view radiometry: DN = gain * radiance + offset + noise, clamped to [0, 4095].
   double gain(int view) const;
   double offset(int view) const;
