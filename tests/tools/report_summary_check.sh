@@ -9,8 +9,10 @@ fail() { echo "report_summary_check: $*" >&2; exit 1; }
 [ -s "$page" ] || fail "$page: no page"
 # the text of the box's cell with this id
 cell() { grep -o "id=\"$1\">[^<]*" "$page" | head -1 | cut -d'>' -f2; }
-# a summary line's value, as written ("# key: value")
+# a summary line's value, as written ("# key: value"), and as the box rounds a statistic: 3 significant
+# digits, whole units from 1000 on
 line() { sed -n "s/^# $1: //p" "$2" | head -1; }
+stat() { awk -v v="$(line "$1" "$2")" 'BEGIN { x = v + 0; printf((x >= 1000 || x <= -1000) ? "%.0f" : "%.3g", x) }'; }
 same() {  # KEY EXPECTED
   local got; got=$(cell "$1")
   [ "$got" = "$2" ] || fail "$1: the page says '$got', the files '$2'"
@@ -61,11 +63,11 @@ if [ -n "$tracks" ]; then
 fi
 if [ -n "$residuals" ]; then
   n=$(grep -vc '^#' "$residuals")
-  same s-adjustment-1 "rms $(line rms_before_px "$residuals") px before, $(line rms_after_px "$residuals") px after ($(line rms_after_unflagged_px "$residuals") px without the flagged tracks), $n observations"
+  same s-adjustment-1 "rms $(stat rms_before_px "$residuals") px before, $(stat rms_after_px "$residuals") px after ($(stat rms_after_unflagged_px "$residuals") px without the flagged tracks), $n observations"
   f=$(line flagged_tracks "$residuals"); t=$(line tracks "$residuals")
   same s-flagged-1 "$f of $t tracks ($(awk -v f="$f" -v t="$t" 'BEGIN { printf "%.1f%%", 100 * f / t }'))"
 fi
 if [ -n "$accuracy" ]; then
-  a() { line "check_$1" "$accuracy"; }
-  same s-check-1 "$(a after_n) check points: horizontal rmse $(a before_rmse_h_m) m before, $(a after_rmse_h_m) m after; vertical $(a before_rmse_v_m) m before, $(a after_rmse_v_m) m after"
+  a() { stat "check_$1" "$accuracy"; }
+  same s-check-1 "$(line check_after_n "$accuracy") check points: horizontal rmse $(a before_rmse_h_m) m before, $(a after_rmse_h_m) m after; vertical $(a before_rmse_v_m) m before, $(a after_rmse_v_m) m after"
 fi

@@ -21,10 +21,22 @@ std::string share(long part, long whole) {
   return b;
 }
 
-// A header figure as written ("?" when the line is missing: the page shows what the file says, no more).
-std::string figure(const TextTable& t, const std::string& key) {
+// A header line's value as written ("?" when the line is missing: the page shows what the file says, no more).
+std::string written(const TextTable& t, const std::string& key) {
   const std::string v = meta_get(t.meta, key);
   return v.empty() ? "?" : v;
+}
+
+// A statistic of a header line for the eye: 3 significant digits ("%.3g"), whole units from 1000 on ("%.0f");
+// a value that is not a number as written.
+std::string figure(const TextTable& t, const std::string& key) {
+  const std::string v = written(t, key);
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (end == v.c_str() || *end) return v;
+  char b[48];
+  std::snprintf(b, sizeof b, std::fabs(x) >= 1000 ? "%.0f" : "%.3g", x);
+  return b;
 }
 
 // Views k = 1.. whose x{k} columns exist; a view is seen when its x is a number.
@@ -85,7 +97,7 @@ std::vector<SummaryLine> run_summary(const std::vector<const TextTable*>& tables
       if (!meta_get(t->meta, "rms_after_unflagged_px").empty()) s += " (" + figure(*t, "rms_after_unflagged_px") + " px without the flagged tracks)";
       s += ", " + std::to_string(t->rows.size()) + " observations";
       if (!meta_get(t->meta, "check_rms_px").empty())
-        s += "; check tracks " + figure(*t, "check_rms_px") + " px over " + figure(*t, "check_observations") + " observations";
+        s += "; check tracks " + figure(*t, "check_rms_px") + " px over " + written(*t, "check_observations") + " observations";
       add("adjustment", "adjustment", *t, s);
     }
   // the adjustment's flagged tracks; a ground file's flagged points only when no adjustment says it (rpc-adjust
@@ -114,15 +126,15 @@ std::vector<SummaryLine> run_summary(const std::vector<const TextTable*>& tables
         if (meta_get(t->meta, set + "_after_n").empty()) continue;
         const std::string b = set + "_before_", a = set + "_after_";
         add(set + " points", set, *t,
-            figure(*t, a + "n") + " " + set + " points: horizontal rmse " + figure(*t, b + "rmse_h_m") + " m before, " +
+            written(*t, a + "n") + " " + set + " points: horizontal rmse " + figure(*t, b + "rmse_h_m") + " m before, " +
                 figure(*t, a + "rmse_h_m") + " m after; vertical " + figure(*t, b + "rmse_v_m") + " m before, " +
                 figure(*t, a + "rmse_v_m") + " m after");
       }
   for (const TextTable* t : tables)
     if (t->kind == "residuals" && !meta_get(t->meta, "rmse_px").empty()) {
-      std::string s = "rmse " + figure(*t, "rmse_px") + " px over " + figure(*t, "n") + " tracks";
+      std::string s = "rmse " + figure(*t, "rmse_px") + " px over " + written(*t, "n") + " tracks";
       if (!meta_get(t->meta, "check_rmse_px").empty())
-        s += "; held-out check " + figure(*t, "check_rmse_px") + " px over " + figure(*t, "check_n") + " tracks";
+        s += "; held-out check " + figure(*t, "check_rmse_px") + " px over " + written(*t, "check_n") + " tracks";
       add("trifocal fit", "fit", *t, s);
     }
   return out;

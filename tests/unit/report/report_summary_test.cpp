@@ -50,9 +50,9 @@ TEST(RunSummary, TracksByViewsSeen) {
 
 TEST(RunSummary, AdjustmentFlaggedAndCheckPointsFromTheHeaders) {
   auto r = table("rpc-residuals", "adj/rpc.residuals", {"track", "image", "x", "y"}, {{1, 1, 0, 0}, {1, 2, 0, 0}, {2, 1, 0, 0}});
-  r.meta = {{"tracks", "40"}, {"rms_before_px", "3.21"}, {"rms_after_px", "0.42"}, {"rms_after_unflagged_px", "0.3"}, {"flagged_tracks", "3"}};
+  r.meta = {{"tracks", "40"}, {"rms_before_px", "3.2149"}, {"rms_after_px", "0.42"}, {"rms_after_unflagged_px", "0.30004"}, {"flagged_tracks", "3"}};
   auto acc = table("accuracy", "adj/accuracy", {"id"}, {});
-  acc.meta = {{"check_before_n", "20"}, {"check_before_rmse_h_m", "4.5"}, {"check_before_rmse_v_m", "6"},
+  acc.meta = {{"check_before_n", "20"}, {"check_before_rmse_h_m", "1234.56"}, {"check_before_rmse_v_m", "6"},
               {"check_after_n", "20"},  {"check_after_rmse_h_m", "0.5"},  {"check_after_rmse_v_m", "0.9"}};
   auto g = table("ground", "adj/ground.points", {"track", "lon", "lat", "h", "flagged"}, {{1, 0, 0, 0, 0}, {2, 0, 0, 0, 1}, {3, 0, 0, 0, 0}, {4, 0, 0, 0, 0}});
   const auto lines = run_summary({&r, &acc, &g});
@@ -65,7 +65,7 @@ TEST(RunSummary, AdjustmentFlaggedAndCheckPointsFromTheHeaders) {
   ASSERT_NE(find(alone, "s-flagged-1"), nullptr);
   EXPECT_EQ(find(alone, "s-flagged-1")->text, "1 of 4 ground points (25.0%)");
   ASSERT_NE(find(lines, "s-check-1"), nullptr);
-  EXPECT_EQ(find(lines, "s-check-1")->text, "20 check points: horizontal rmse 4.5 m before, 0.5 m after; vertical 6 m before, 0.9 m after");
+  EXPECT_EQ(find(lines, "s-check-1")->text, "20 check points: horizontal rmse 1235 m before, 0.5 m after; vertical 6 m before, 0.9 m after");
   EXPECT_EQ(find(lines, "s-control-1"), nullptr);  // no control set in the file
 }
 

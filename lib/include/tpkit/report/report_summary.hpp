@@ -10,7 +10,8 @@
 //                  flagged column: its records with flagged = 1
 //   check points   per accuracy file: check points' rmse_h_m and rmse_v_m before -> after
 //   trifocal fit   per residuals file: rmse_px of the fit tracks and check_rmse_px of the held-out ones
-// Shares are printed with one decimal ("%.1f" of the percentage).
+// Shares are printed with one decimal ("%.1f" of the percentage); statistics of the header lines with 3
+// significant digits ("%.3g"; "%.0f" from 1000 on), counts as written.
 #pragma once
 #include <string>
 #include <vector>
