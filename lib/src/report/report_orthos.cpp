@@ -87,7 +87,8 @@ struct Frame {
 const cv::Vec3b kNodata(215, 215, 215);
 
 // The region [x0, x0 + w) x [y0, y0 + h) of the ortho reduced f times: block means of the valid pixels, read a
-// band of rows at a time (memory: the band, not the ortho), stretched 2-98%.
+// band of rows at a time (memory: the band, at most 64 MiB, and the frame's sums, not the ortho), stretched
+// 2-98%.
 Frame render(const Ortho& o, long x0, long y0, long w, long h, int f) {
   Frame fr;
   fr.x0 = x0, fr.y0 = y0, fr.f = f;
@@ -98,7 +99,10 @@ Frame render(const Ortho& o, long x0, long y0, long w, long h, int f) {
   std::vector<int> count(cells, 0);
   const bool has_nodata = o.info.nodata.has_value();
   const float nodata = has_nodata ? static_cast<float>(*o.info.nodata) : 0.0f;
-  const long chunk = f * std::max(1L, 64L / f);
+  // rows read at once: a multiple of f, 256 rows (a tile's height: each tile decoded once) unless the band of
+  // rows would take over 64 MiB as float, then fewer
+  const long fit = static_cast<long>((64L << 20) / (static_cast<long>(sizeof(float)) * static_cast<long>(nb) * std::max(1L, w)));
+  const long chunk = f * std::max(1L, std::min(256L, fit) / f);
   for (long r0 = 0; r0 < h; r0 += chunk) {
     const long rows = std::min(chunk, h - r0);
     const std::vector<Raster> rs = read_region_bands(o.path, bands, x0, y0 + r0, w, rows);
