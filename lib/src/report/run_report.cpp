@@ -308,9 +308,17 @@ std::string run_report_html(const std::vector<std::string>& files, const ReportO
     tracks |= r.error.empty() && r.table.kind == "tracks";
     if (!r.error.empty() || r.table.kind != "matches") continue;  // an unreadable file is listed with its error in its own section
     const TextTable& t = r.table;
-    if (pair_count++ == 0) pairs << "<h2>Matches per pair</h2>\n<table><tr><th>file</th><th>image 1</th><th>image 2</th><th>matches</th></tr>\n";
+    if (pair_count++ == 0)
+      pairs << "<h2>Matches per pair</h2>\n<table><tr><th>file</th><th>image 1</th><th>image 2</th><th>matches</th><th>refined</th></tr>\n";
+    // the share of least-squares positions (refined 1), where the file has the column
+    std::string refined = "-";
+    if (const int rc = col(t, "refined"); rc >= 0 && !t.rows.empty()) {
+      long n = 0;
+      for (const auto& row : t.rows) n += rc < static_cast<int>(row.size()) && row[rc] == 1;
+      refined = format_figure(100.0 * static_cast<double>(n) / static_cast<double>(t.rows.size()), 3) + "%";
+    }
     pairs << "<tr><td>" << esc(r.path) << "</td><td>" << esc(image_name(t, 0)) << "</td><td>" << esc(image_name(t, 1))
-          << "</td><td>" << t.rows.size() << "</td></tr>\n";
+          << "</td><td>" << t.rows.size() << "</td><td>" << refined << "</td></tr>\n";
   }
   if (pair_count) pairs << "</table>\n";
   // the run at a glance, then the orthos, before the files one by one
