@@ -176,7 +176,7 @@ std::string flicker_svg(const std::string& id, const std::string& title, const s
   return o.str();
 }
 
-// Squares of `cell` frame pixels taken in turn from a and b (same size).
+// `cells` squares along the longer side, taken in turn from a and b (frames of one size).
 cv::Mat checkerboard(const Frame& a, const Frame& b, int cells) {
   const int side = std::max(1, std::max(a.bgr.cols, a.bgr.rows) / std::max(1, cells));
   cv::Mat out = a.bgr.clone();
