@@ -49,3 +49,6 @@ if(NOT TARGET tpkit_geotiff)
   set_target_properties(tpkit_geotiff PROPERTIES
     IMPORTED_LOCATION ${GEOTIFF_LIBRARY} INTERFACE_INCLUDE_DIRECTORIES ${GEOTIFF_INCLUDE_DIR})
 endif()
+# JPEG pictures inline in tp-report's page (libjpeg-dev, libjpeg-turbo): OpenCV's imgcodecs would bring
+# GDAL and some 140 libraries into the tool.
+find_package(JPEG REQUIRED)

@@ -13,6 +13,7 @@ packages=(
   libcli11-dev libceres-dev libnanoflann-dev libsqlite3-dev
   libopenjp2-7-dev  # NITF images compressed with JPEG 2000 (IC=C8/M8) are decoded and written with OpenJPEG
   libproj-dev proj-data libgeotiff-dev  # reference DEMs and GCPs in any CRS and vertical datum (PROJ; EGM96 grid in proj-data; GeoTIFF keys)
+  libjpeg-dev  # tp-report's inline pictures of orthos, encoded in memory (OpenCV's imgcodecs would link GDAL)
   nlohmann-json3-dev  # tp-convert reads OpenMVG's sfm_data.json with a JSON parser (a regex scan crashed on long objects)
   libgtest-dev libgmock-dev libbenchmark-dev
   dpkg-dev file  # dpkg-shlibdeps and file (CPack calls it to find the binaries): the Debian package's runtime dependencies (scripts/package.sh)
@@ -28,6 +29,8 @@ if [ "${1:-}" = "--test" ]; then
   # pictures checked as users see them: SVG figures rendered by librsvg, report pages opened in a
   # headless Chromium
   packages+=(librsvg2-bin chromium)
+  # GDAL's programs, a test and benchmark peer only (never linked): gdalwarp -rpc makes the orthos tp-report's tests show
+  packages+=(gdal-bin)
 fi
 missing=()
 for p in "${packages[@]}"; do

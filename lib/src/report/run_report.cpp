@@ -15,6 +15,7 @@
 #include "tpkit/core/svg_plot.hpp"
 #include "tpkit/core/text_table.hpp"
 #include "tpkit/core/version.hpp"
+#include "tpkit/report/report_summary.hpp"
 
 namespace tpkit {
 
@@ -307,20 +308,41 @@ std::string run_report_html(const std::vector<std::string>& files, const ReportO
     tracks |= r.error.empty() && r.table.kind == "tracks";
     if (!r.error.empty() || r.table.kind != "matches") continue;  // an unreadable file is listed with its error in its own section
     const TextTable& t = r.table;
-    if (pair_count++ == 0) pairs << "<h2>Matches per pair</h2>\n<table><tr><th>file</th><th>image 1</th><th>image 2</th><th>matches</th></tr>\n";
+    if (pair_count++ == 0)
+      pairs << "<h2>Matches per pair</h2>\n<table><tr><th>file</th><th>image 1</th><th>image 2</th><th>matches</th><th>refined</th></tr>\n";
+    // the share of least-squares positions (refined 1), where the file has the column
+    std::string refined = "-";
+    if (const int rc = col(t, "refined"); rc >= 0 && !t.rows.empty()) {
+      long n = 0;
+      for (const auto& row : t.rows) n += rc < static_cast<int>(row.size()) && row[rc] == 1;
+      refined = format_figure(100.0 * static_cast<double>(n) / static_cast<double>(t.rows.size()), 3) + "%";
+    }
     pairs << "<tr><td>" << esc(r.path) << "</td><td>" << esc(image_name(t, 0)) << "</td><td>" << esc(image_name(t, 1))
-          << "</td><td>" << t.rows.size() << "</td></tr>\n";
+          << "</td><td>" << t.rows.size() << "</td><td>" << refined << "</td></tr>\n";
   }
   if (pair_count) pairs << "</table>\n";
-  std::string body = pairs.str();
+  // the run at a glance, then the orthos, before the files one by one
+  std::vector<const TextTable*> read;
+  for (const auto& r : run)
+    if (r.error.empty()) read.push_back(&r.table);
+  OrthoOptions oo = opt.orthos;
+  for (const TextTable* t : read)
+    for (const auto& im : t->images) oo.images.push_back(im.path);
+  const std::string glance = run_summary_html(run_summary(read));
+  std::string body = orthos_html(opt.orthos_before, opt.orthos_after, oo) + pairs.str();
   for (const auto& r : run) body += file_section(r, opt, !tracks, contents);
   std::ostringstream o;
   o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" << esc(opt.title) << "</title>\n"
     << "<style>body{font-family:sans-serif;margin:1.5em;color:#222}h2{border-bottom:1px solid #aaa;margin-top:2em}"
        "h2 small{color:#777;font-weight:normal}pre.summary{background:#f6f6f6;padding:.6em;overflow-x:auto;font-size:12px}"
        "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}"
-       ".error{color:#b00}svg{max-width:100%;height:auto;display:block;margin:.5em 0}</style></head>\n<body>\n"
-    << "<h1>" << esc(opt.title) << "</h1>\n<p>written by " << esc(written_by()) << "; " << files.size() << " files</p>\n<ul>\n";
+       ".error{color:#b00}svg{max-width:100%;height:auto;display:block;margin:.5em 0}"
+       ".glance{background:#eaf1fa;border:2px solid #4c78a8;border-radius:6px;padding:.2em 1em .8em;margin:1em 0}"
+       ".glance h2{border:none;margin:.4em 0}.glance table{font-size:14px}.glance th{text-align:left;background:#d5e3f3}"
+       ".glance td{text-align:left;background:#fff}.glance td.src{color:#666;font-size:12px}"
+       ".row{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start}figure.ortho{margin:0}"
+       "figure.ortho figcaption{font-size:12px;color:#444}svg.flicker{margin:0}</style></head>\n<body>\n"
+    << "<h1>" << esc(opt.title) << "</h1>\n<p>written by " << esc(written_by()) << "; " << files.size() << " files</p>\n" << glance << "<ul>\n";
   for (const auto& c : contents) o << c << '\n';
   o << "</ul>\n" << body << "</body></html>\n";
   return o.str();
