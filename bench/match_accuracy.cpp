@@ -112,7 +112,7 @@ void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpk
   std::vector<double> brms;
   const auto bias = tpkit::estimate_track_biases(t, mp, tpkit::BiasModel::affine, 0, 4, &brms);
   std::vector<tpkit::MultiLsmImage> images(3);
-  for (int k = 0; k < 3; ++k) images[k] = {&rasters[k], &models[k], bias[k]};
+  for (int k = 0; k < 3; ++k) images[k] = {&rasters[k], &models[k], bias[k], brms[k] / std::sqrt(2.0)};
   tpkit::MultiLsmOptions o;
   if (template1) o.template_image = 0;
   if (model_sigma >= 0) o.model_sigma = model_sigma;
@@ -121,10 +121,10 @@ void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpk
   tpkit::MultiLsmStats st;
   const tpkit::Tracks r = tpkit::refine_tracks(t, images, o, threads, &st);
   const double dt = secs(t0);
-  std::printf("multi-image LSM (model sigma %.3g px, %s, template %s): %ld triplets -> %ld tracks (%ld dropped), views dropped %ld, %.2f s\n",
+  std::printf("multi-image LSM (model sigma %.3g px (negative: each view's bias fit), %s, template %s): %ld triplets -> %ld tracks (%ld dropped), views dropped %ld, %.2f s\n",
               o.model_sigma, o.curvature ? "curvature" : "planar", template1 ? "view 1" : "chosen", st.tracks, st.tracks_written,
               st.tracks_dropped, st.views_dropped, dt);
-  std::printf("  bias fit residual RMS: view 2 %.4f, view 3 %.4f px; templates per view %ld %ld %ld; dropped:", brms[1], brms[2],
+  std::printf("  bias fit residual RMS: view 1 (offsets) %.4f, view 2 %.4f, view 3 %.4f px; templates per view %ld %ld %ld; dropped:", brms[0], brms[1], brms[2],
               st.template_count[0], st.template_count[1], st.template_count[2]);
   for (int i = 0; i < tpkit::kMultiLsmStatusCount; ++i)
     if (st.by_status[i]) std::printf(" %s %ld", tpkit::to_string(static_cast<tpkit::MultiLsmViewStatus>(i)), st.by_status[i]);

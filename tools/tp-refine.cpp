@@ -1,5 +1,7 @@
 // tp-refine: every view of every track refined together, constrained by the images' RPC models
 // (multi-image least-squares matching, man/tp-refine.1).
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -12,6 +14,7 @@
 #include "tpkit/core/tool_support.hpp"
 #include "tpkit/match/image_tiles.hpp"
 #include "tpkit/match/multi_image_lsm.hpp"
+#include "tpkit/match/radiometric_highpass.hpp"
 #include "tpkit/rpc/rpc_io.hpp"
 
 extern const char* const tpkit_man_page;
@@ -21,8 +24,9 @@ using namespace tpkit;
 
 struct Opts {
   std::vector<std::string> images, rpc;
-  std::string tracks, out = "-", bias = "affine", reference;
+  std::string tracks, out = "-", bias = "affine", reference, model_sigma = "auto";
   int threads = 1;
+  double highpass = 0;
   bool quiet = false, no_curvature = false;
   MultiLsmOptions lsm;
 };
@@ -59,19 +63,26 @@ int run(const Opts& o) {
     // the grey level tp-match reads (a band, or the luminance of RGB), invalid pixels NaN; whole images
     const ImageSource src = open_image_source(paths[k], std::nullopt, std::nullopt, "");
     rasters[k] = read_valid_region(src, 0, 0, src.info.width, src.info.height);
+    highpass_raster(rasters[k], o.highpass);  // images of other dates: the local mean out (tp-match's --highpass)
   }
   std::vector<const RpcModel*> mp;
   for (const auto& m : models) mp.push_back(&m);
   std::vector<double> bias_rms;
   const std::vector<ImageBias> bias = estimate_track_biases(t, mp, bias_model, reference, 4, &bias_rms);
   std::vector<MultiLsmImage> images(K);
-  for (int k = 0; k < K; ++k) images[k] = {&rasters[k], &models[k], bias[k]};
+  for (int k = 0; k < K; ++k) images[k] = {&rasters[k], &models[k], bias[k], bias_rms[k] / std::sqrt(2.0)};
   MultiLsmOptions lo = o.lsm;
+  if (o.model_sigma != "auto") {
+    char* end = nullptr;
+    lo.model_sigma = std::strtod(o.model_sigma.c_str(), &end);
+    if (o.model_sigma.empty() || *end != '\0' || !(lo.model_sigma >= 0) || !std::isfinite(lo.model_sigma))
+      throw UsageError("--model-sigma: 'auto' or a number of pixels >= 0, got '" + o.model_sigma + "'");
+  }
   lo.curvature = !o.no_curvature;
   MultiLsmStats st;
   Tracks out = refine_tracks(t, images, lo, o.threads, &st);
   if (out.size() == 0) throw InputError(o.tracks, 0, "no track kept a second view after the refinement");
-  out.meta.push_back({"refined", "tp-refine multi-image LSM (bias " + o.bias + ", model sigma " + std::to_string(lo.model_sigma) + " px)"});
+  out.meta.push_back({"refined", "tp-refine multi-image LSM (bias " + o.bias + ", model sigma " + o.model_sigma + ")"});
   AtomicOutput f(o.out);
   write_tracks(f.stream(), out);
   f.commit();
@@ -85,8 +96,8 @@ int run(const Opts& o) {
     if (sep == ", ") s << ")";
     s << "; template per image:";
     for (long n : st.template_count) s << " " << n;
-    s << "; bias fit residual RMS per image (px):";
-    for (int k = 0; k < K; ++k) s << " " << (k == reference ? std::string("ref") : std::isnan(bias_rms[k]) ? std::string("-") : std::to_string(bias_rms[k]).substr(0, 5));
+    s << "; bias fit residual RMS per image (px, the first the reference's offsets):";
+    for (int k = 0; k < K; ++k) s << " " << (std::isnan(bias_rms[k]) ? std::string("-") : std::to_string(bias_rms[k]).substr(0, 5));
     summary(s.str());
   }
   return 0;
@@ -105,12 +116,13 @@ int main(int argc, char** argv) {
         app.add_option("--reference", o->reference, "image whose bias is zero (default: the tracks' first)");
         app.add_option("--window", o->lsm.window, "template block, pixels (odd)");
         app.add_option("--taper", o->lsm.taper, "Gaussian weight of the window's pixels, pixels")->check(tpkit::Positive);
-        app.add_option("--model-sigma", o->lsm.model_sigma, "prior deviation of a view from the models, pixels (0: hard constraint)")
-            ->check(tpkit::NonNegative);
+        app.add_option("--model-sigma", o->model_sigma, "prior deviation of a view from the models, pixels (0: hard constraint; auto: each image's bias fit residual)");
         app.add_flag("--no-curvature", o->no_curvature, "a planar surface under each window (3 unknowns, not 6)");
         app.add_option("--max-shift", o->lsm.max_shift, "drop a view moved farther than this from its input, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->lsm.max_sigma, "drop a view whose sigma is larger, pixels")->check(tpkit::Positive);
         app.add_option("--min-corr", o->lsm.min_corr, "drop a view whose correlation with the template is lower");
+        app.add_option("--highpass", o->highpass, "subtract each image's local mean (Gaussian of this sigma, pixels) first; 0 = none")
+            ->check(tpkit::NonNegative);
         app.add_option("--threads", o->threads, "threads");
         app.add_option("-o,--output", o->out, "refined tracks file (- = stdout)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");

@@ -149,7 +149,7 @@ class TrackSolver {
     Eigen::VectorXd b(P);
     double sigma0_2 = 0;
     std::vector<double> corr(m, 0);
-    int total_it = 0;
+    int total_it = 0, unsettled = -1;
     for (int lin = 0; lin < std::max(1, o_.relinearise); ++lin) {
       // the geometry at the current height; the surface's offset moves into h
       try {
@@ -182,9 +182,10 @@ class TrackSolver {
         }
         sigma0_2 = ssr / std::max<long>(1, n - P);
         // prior of the shifts (header): lambda = sigma0^2 / model_sigma^2 per coordinate
-        const double lambda = o_.model_sigma > 0 ? sigma0_2 / (o_.model_sigma * o_.model_sigma) : 1e12 * std::max(sigma0_2, 1e-12);
         for (int j = 0; j < m; ++j)
           for (int c = 0; c < 2; ++c) {
+            const double ms = model_sigma(active[j]);
+            const double lambda = ms > 0 ? sigma0_2 / (ms * ms) : 1e12 * std::max(sigma0_2, 1e-12);
             const int i = G_ + 4 * j + 2 + c;
             N(i, i) += lambda;
             b(i) -= lambda * x(i);
@@ -202,7 +203,7 @@ class TrackSolver {
         double far_by = 0;
         for (int j = 0; j < m; ++j) {
           const Vec2 dq = geo[j].e / eref * d(0) + d.segment<2>(G_ + 4 * j + 2);
-          step = std::max(step, dq.norm());
+          if (dq.norm() > step) step = dq.norm(), unsettled = j;
           const double moved = (position(geo[j], eref, x, j) - views_[active[j]].xy).norm();
           if (moved > o_.max_shift + 1 && moved > far_by) far = j, far_by = moved;
         }
@@ -218,9 +219,9 @@ class TrackSolver {
         }
       }
       if (!converged) {
-        // the view whose position moves the most is the one that does not settle
+        // with several views, the one whose position moved the most in the last iteration leaves
         out.why = MultiLsmViewStatus::NotConverged;
-        out.failed = -1;
+        out.failed = m > 1 ? unsettled : -1;
         return out;
       }
       // a surface offset of under 0.05 px of parallax leaves the linearisation as it was (its error is of
@@ -255,6 +256,12 @@ class TrackSolver {
   }
 
  private:
+  double model_sigma(int view) const {
+    if (o_.model_sigma >= 0) return o_.model_sigma;
+    const double s = im_[views_[view].image].model_sigma;
+    return std::isfinite(s) ? s : 0.05;
+  }
+
   Vec2 position(const ViewGeometry& g, double eref, const Eigen::VectorXd& x, int j) const {
     return g.q0 + g.e / eref * x(0) + x.segment<2>(G_ + 4 * j + 2);
   }
@@ -521,6 +528,17 @@ std::vector<ImageBias> estimate_track_biases(const Tracks& t, const std::vector<
       }
     }
     for (int k = 0; k < K; ++k) {
+      if (k == reference && !at[k].empty()) {
+        // the datum: no fit, the RMS of its offsets within 3 robust deviations
+        std::vector<double> len;
+        for (const auto& d : off[k]) len.push_back(d.norm());
+        const double thr = std::max(0.05, 3 * 1.4826 * median(len));
+        double s2 = 0;
+        long nk = 0;
+        for (double l : len)
+          if (l <= thr) s2 += l * l, ++nk;
+        rms[k] = nk ? std::sqrt(s2 / nk) : NAN;
+      }
       if (k == reference || at[k].size() < 3) continue;
       const size_t n = at[k].size();
       // columns of the design: 1, x, y (centred and scaled for the conditioning), the terms the model uses

@@ -31,11 +31,13 @@
 // Precision: covariance sigma0^2 N^-1 (N with the prior), sigma0^2 = sum(w r^2) / (n - P); a view's
 // sigma = sqrt((var x + var y) / 2) of q_k(0). The template view's position is the track's definition: its
 // sigma is written as the smallest of the other views' (its error relative to them is no larger).
-// Acceptance per view: converged, correlation >= min_corr, moved at most max_shift from its input, sigma
+// Acceptance per view: converged (a solve that does not converge loses the view whose position moved the
+// most in its last iteration), correlation >= min_corr, moved at most max_shift from its input, sigma
 // <= max_sigma; the worst failing view is dropped and the track solved again, until all pass (a track left
 // with fewer than 2 views is dropped).
 #pragma once
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -51,9 +53,11 @@ struct MultiLsmOptions {
   double taper = 3;           // Gaussian weight of the pixels, pixels
   double support = 3;         // only pixels within support x taper of the centre pixel
   bool curvature = true;      // the surface's second-order terms (3 more unknowns)
-  double model_sigma = 0.05;  // pixels: prior deviation of each view from the models (0: hard constraint)
+  // pixels: prior deviation of each view from the models (0: hard constraint); negative: each image's own
+  // (MultiLsmImage::model_sigma, what the bias fit left: estimate_track_biases' residual RMS / sqrt 2)
+  double model_sigma = -1;
   int max_iterations = 30;
-  double tolerance = 1e-3;    // pixels, on the update of every view's position
+  double tolerance = 2e-3;    // pixels, on the update of every view's position
   double max_shift = 1.5;     // pixels from the view's input position
   double max_sigma = 0.15;    // pixels
   double min_corr = 0.5;
@@ -66,6 +70,7 @@ struct MultiLsmImage {
   const Raster* raster = nullptr;
   const RpcModel* model = nullptr;
   ImageBias bias;
+  double model_sigma = NAN;  // pixels, per coordinate, for MultiLsmOptions::model_sigma < 0 (NaN: 0.05)
 };
 
 enum class MultiLsmViewStatus { Ok, Template, OutOfImage, Diverged, NotConverged, Drifted, LowCorrelation, Imprecise, Geometry };
@@ -104,6 +109,7 @@ MultiLsmResult refine_track_views(const std::vector<MultiLsmImage>& images, std:
 // alternately, each track's ground point by intersection (rpc_ground.hpp) with the current biases, then
 // per image the bias model fitted to the offsets observed - projected by least squares, views farther than
 // 3 robust deviations (1.4826 MAD of the offsets' residual lengths) from the fit left out; `rounds` rounds.
+// residual_rms: per image the RMS length of the residuals kept (the reference's: of its offsets), pixels.
 std::vector<ImageBias> estimate_track_biases(const Tracks& t, const std::vector<const RpcModel*>& models, BiasModel m,
                                              int reference = 0, int rounds = 4, std::vector<double>* residual_rms = nullptr);
 
