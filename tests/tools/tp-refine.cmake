@@ -13,3 +13,6 @@ tpkit_tool_test(tp-refine.image-not-given
 tpkit_tool_test(tp-refine.no-tracks
   COMMAND "${_scene} && tp-refine s/view1.tif s/view2.tif -o r.tracks"
   EXPECT_FAIL STDERR_MATCH "tp-refine: --tracks: a tracks file is needed" NO_FILE r.tracks)
+tpkit_tool_test(tp-refine.bad-model-sigma
+  COMMAND "${_scene} && tp-refine s/view1.tif s/view2.tif s/view3.tif --tracks s/truth.tracks --model-sigma loose -o r.tracks"
+  EXPECT_FAIL STDERR_MATCH "tp-refine: --model-sigma: 'auto' or a number of pixels >= 0, got 'loose'" NO_FILE r.tracks)
