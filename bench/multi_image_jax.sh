@@ -5,12 +5,12 @@
 # options) rpc-adjust --model affine (004 fixed, 400 iterations, as plan.mk runs it) and tp-ground --compare
 # the lidar DSM: tracks, points and NMAD of dz on DEM slopes under 5 degrees and on all slopes.
 #   bash bench/multi_image_jax.sh [OUT]       (default OUT: a new folder under /tmp)
-#   BIN (build/bin), JOBS (2), VARIANTS ("--highpass 1|--highpass 1 --model-sigma 0.05")
+#   BIN (build/bin), JOBS (2), VARIANTS ("--highpass 1|--highpass 1 --model-sigma 0.1"; '|' between variants)
 set -euo pipefail
 src=$(cd "$(dirname "$0")/.." && pwd)
 out=${1:-$(mktemp -d /tmp/tpkit-mpgc-jax.XXXXXX)}
 BIN=${BIN:-$src/build/bin}; JOBS=${JOBS:-2}
-VARIANTS=${VARIANTS:-"--highpass 1|--highpass 1 --model-sigma 0.05"}
+VARIANTS=${VARIANTS:-"--highpass 1|--highpass 1 --model-sigma 0.1"}
 export PATH=$(cd "$BIN" && pwd):$PATH
 J=$src/../shared/data/wv3-jacksonville
 imgs=("$J"/JAX_068_*_RGB.tif)

@@ -259,7 +259,7 @@ class TrackSolver {
   double model_sigma(int view) const {
     if (o_.model_sigma >= 0) return o_.model_sigma;
     const double s = im_[views_[view].image].model_sigma;
-    return std::isfinite(s) ? s : 0.05;
+    return std::isfinite(s) ? std::min(s, o_.model_sigma_max) : o_.model_sigma_max;
   }
 
   Vec2 position(const ViewGeometry& g, double eref, const Eigen::VectorXd& x, int j) const {

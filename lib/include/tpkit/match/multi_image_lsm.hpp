@@ -54,8 +54,15 @@ struct MultiLsmOptions {
   double support = 3;         // only pixels within support x taper of the centre pixel
   bool curvature = true;      // the surface's second-order terms (3 more unknowns)
   // pixels: prior deviation of each view from the models (0: hard constraint); negative: each image's own
-  // (MultiLsmImage::model_sigma, what the bias fit left: estimate_track_biases' residual RMS / sqrt 2)
+  // (MultiLsmImage::model_sigma, what the bias fit left: estimate_track_biases' residual RMS / sqrt 2), at
+  // most model_sigma_max. That residual holds the pairwise matching's errors as well, so it bounds the
+  // models' own from above: tp-synth's exact models leave 0.013-0.016 px and bind the views closely
+  // (default scene: views 2+3 median / p90 0.022 / 0.058 px after, 0.026 / 0.076 at 0.05 px); the delivered
+  // WorldView-3 models of Jacksonville leave 0.15-0.23 px, where 0.05-0.1 px gives the best ground points
+  // against the lidar (NMAD on flat ground 0.326 m at 0.05, 0.337 at 0.1, 0.379 at the residual, 0.383
+  // at 0.02; docs/blocks.md).
   double model_sigma = -1;
+  double model_sigma_max = 0.05;
   int max_iterations = 30;
   double tolerance = 2e-3;    // pixels, on the update of every view's position
   double max_shift = 1.5;     // pixels from the view's input position
@@ -70,7 +77,7 @@ struct MultiLsmImage {
   const Raster* raster = nullptr;
   const RpcModel* model = nullptr;
   ImageBias bias;
-  double model_sigma = NAN;  // pixels, per coordinate, for MultiLsmOptions::model_sigma < 0 (NaN: 0.05)
+  double model_sigma = NAN;  // pixels, per coordinate, for MultiLsmOptions::model_sigma < 0 (NaN: model_sigma_max)
 };
 
 enum class MultiLsmViewStatus { Ok, Template, OutOfImage, Diverged, NotConverged, Drifted, LowCorrelation, Imprecise, Geometry };
