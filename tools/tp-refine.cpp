@@ -93,7 +93,7 @@ int run(const Opts& o) {
     std::string sep = " (";
     for (int i = 0; i < kMultiLsmStatusCount; ++i)
       if (st.by_status[i] > 0) s << sep << to_string(static_cast<MultiLsmViewStatus>(i)) << " " << st.by_status[i], sep = ", ";
-    if (sep == ", ") s << ")";
+    if (sep == ", ") s << ", the others the templates of dropped tracks)";
     s << "; template per image:";
     for (long n : st.template_count) s << " " << n;
     s << "; bias fit residual RMS per image (px, the first the reference's offsets):";

@@ -190,7 +190,7 @@ class TrackSolver {
             N(i, i) += lambda;
             b(i) -= lambda * x(i);
           }
-        cov_ = N;
+        normal_ = N;
         const Eigen::VectorXd d = N.ldlt().solve(b);
         if (!d.allFinite()) {
           out.why = MultiLsmViewStatus::Diverged;
@@ -237,7 +237,7 @@ class TrackSolver {
     if (!out.converged) return out;
     h += x(0) / eref;
     // precision: sigma0^2 N^-1 (the last iteration's N, its model within the tolerance of the solution)
-    const Eigen::MatrixXd C = sigma0_2 * cov_.inverse();
+    const Eigen::MatrixXd C = sigma0_2 * normal_.inverse();
     out.q.resize(m);
     out.sigma.resize(m);
     out.corr = corr;
@@ -350,7 +350,7 @@ class TrackSolver {
   const MultiLsmOptions& o_;
   const std::vector<TemplatePixel>& tpl_;
   int G_;
-  Eigen::MatrixXd cov_;
+  Eigen::MatrixXd normal_;
 };
 
 double median(std::vector<double> v) {
