@@ -16,6 +16,11 @@
 //       invalid pixels (tp-synth --nodata-band writes 0).
 //       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
 //       the true local map's Jacobian and Hessians (central differences, 1 px) for error analysis.
+//       --multi: then the triplets refined by multi-image LSM (tp-refine's library: multi_image_lsm.hpp,
+//       RPCs from DIR, biases estimated from the triplets) and their error against the truth before ->
+//       after: views 2+3 with the truth under view 1's position, and every non-template view with the
+//       truth under the template's position (the refinement keeps the template fixed), sigma ratio.
+//       --multi-template1: view 1 is always the template; --model-sigma PX, --no-curvature as tp-refine's.
 //   bench_match_accuracy --tracks FILE [--check-rmse R]
 //       Affine maximum-likelihood fit of the tracks (Tomasi-Kanade: rank-3 factorization of the
 //       centred 2K x n measurement matrix) and its reprojection RMSE, sqrt(mean squared 2-D residual)
@@ -49,6 +54,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <string>
 #include <thread>
@@ -57,6 +63,8 @@
 #include "tpkit/core/formats.hpp"
 #include "tpkit/match/image_tiles.hpp"
 #include "tpkit/match/match_pair.hpp"
+#include "tpkit/match/multi_image_lsm.hpp"
+#include "tpkit/rpc/rpc_io.hpp"
 #include "tpkit/synth/synth_scene.hpp"
 #include "tpkit/synth/synth_structures.hpp"
 #include "tpkit/match/tracks_chain.hpp"
@@ -149,6 +157,77 @@ void print_scene(const tpkit::SynthScene& s) {
 double secs(std::chrono::steady_clock::time_point a) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
 }
+
+// The triplets refined by multi-image LSM, their errors against the truth before and after (the same
+// tracks: those the refinement kept).
+void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpkit::ImageSource* src, const tpkit::Tracks& t,
+                 int threads, bool template1, double model_sigma, bool no_curvature) {
+  std::vector<tpkit::RpcModel> models(3);
+  std::vector<tpkit::Raster> rasters(3);
+  std::vector<const tpkit::RpcModel*> mp;
+  for (int k = 0; k < 3; ++k) {
+    models[k] = tpkit::load_image_rpc(v[k]).model;
+    rasters[k] = tpkit::read_valid_region(src[k], 0, 0, src[k].info.width, src[k].info.height);
+    mp.push_back(&models[k]);
+  }
+  std::vector<double> brms;
+  const auto bias = tpkit::estimate_track_biases(t, mp, tpkit::BiasModel::affine, 0, 4, &brms);
+  std::vector<tpkit::MultiLsmImage> images(3);
+  for (int k = 0; k < 3; ++k) images[k] = {&rasters[k], &models[k], bias[k], brms[k] / std::sqrt(2.0)};
+  tpkit::MultiLsmOptions o;
+  if (template1) o.template_image = 0;
+  if (model_sigma >= 0) o.model_sigma = model_sigma;
+  o.curvature = !no_curvature;
+  auto t0 = std::chrono::steady_clock::now();
+  tpkit::MultiLsmStats st;
+  const tpkit::Tracks r = tpkit::refine_tracks(t, images, o, threads, &st);
+  const double dt = secs(t0);
+  std::printf("multi-image LSM (model sigma %.3g px (negative: each view's bias fit), %s, template %s): %ld triplets -> %ld tracks (%ld dropped), views dropped %ld, %.2f s\n",
+              o.model_sigma, o.curvature ? "curvature" : "planar", template1 ? "view 1" : "chosen", st.tracks, st.tracks_written,
+              st.tracks_dropped, st.views_dropped, dt);
+  std::printf("  bias fit residual RMS: view 1 (offsets) %.4f, view 2 %.4f, view 3 %.4f px; templates per view %ld %ld %ld; dropped:", brms[0], brms[1], brms[2],
+              st.template_count[0], st.template_count[1], st.template_count[2]);
+  for (int i = 0; i < tpkit::kMultiLsmStatusCount; ++i)
+    if (st.by_status[i]) std::printf(" %s %ld", tpkit::to_string(static_cast<tpkit::MultiLsmViewStatus>(i)), st.by_status[i]);
+  std::printf("\n");
+  std::map<long long, size_t> row_of;
+  for (size_t i = 0; i < t.size(); ++i) row_of[t.id[i]] = i;
+  const int ct = r.extra.find("template");
+  std::vector<double> b23, a23, bnt, ant, sig, err2;
+  for (size_t i = 0; i < r.size(); ++i) {
+    const size_t j = row_of.at(r.id[i]);
+    const int tv = static_cast<int>(r.extra.values(i, ct)) - 1;
+    // truth under view 1 (its position is the same before and after only when it is the template)
+    if (auto X = ground_of(scene, 0, r.xy(i, 0), r.xy(i, 1)))
+      for (int k = 1; k < 3; ++k)
+        if (r.seen(i, k) && scene.visible(k, *X)) {
+          const Eigen::Vector2d tr = scene.project(k, *X);
+          a23.push_back((r.point(i, k) - tr).norm());
+        }
+    if (auto X = ground_of(scene, 0, t.xy(j, 0), t.xy(j, 1)))
+      for (int k = 1; k < 3; ++k)
+        if (r.seen(i, k) && scene.visible(k, *X)) b23.push_back((t.point(j, k) - scene.project(k, *X)).norm());
+    // truth under the template
+    if (auto X = ground_of(scene, tv, r.xy(i, 2 * tv), r.xy(i, 2 * tv + 1)))
+      for (int k = 0; k < 3; ++k) {
+        if (k == tv || !r.seen(i, k) || !scene.visible(k, *X)) continue;
+        const Eigen::Vector2d tr = scene.project(k, *X);
+        ant.push_back((r.point(i, k) - tr).norm());
+        bnt.push_back((t.point(j, k) - tr).norm());
+        const double s = r.extra.values(i, r.extra.find("sigma" + std::to_string(k + 1)));
+        if (ant.back() < 1) sig.push_back(s * s), err2.push_back(ant.back() * ant.back() / 2);
+      }
+  }
+  print("before, views 2+3", dist(b23));
+  print("after, views 2+3", dist(a23));
+  print("before, non-template views", dist(bnt));
+  print("after, non-template views", dist(ant));
+  double ss = 0, se = 0;
+  for (size_t i = 0; i < sig.size(); ++i) ss += sig[i], se += err2[i];
+  if (!sig.empty())
+    std::printf("  RMS error per coordinate / RMS sigma (errors < 1 px) %.3f (RMS sigma %.4f px)\n", std::sqrt(se / ss),
+                std::sqrt(ss / sig.size()));
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -166,9 +245,11 @@ int main(int argc, char** argv) {
     double stol = -1, min_corr = -2, max_sigma = -1, contrast = -1;
     std::optional<double> nodata;
     std::string score;
+    bool multi = false, multi_t1 = false, no_curv = false;
+    double model_sigma = -1;
     int score_a = 1, score_b = 2;
     const char* usage =
-        "usage: bench_match_accuracy --synth DIR [--check MED P90] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
+        "usage: bench_match_accuracy --synth DIR [--check MED P90] [--multi | --multi-template1 [--model-sigma PX] [--no-curvature]] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       auto need = [&](int k) {
@@ -212,6 +293,10 @@ int main(int argc, char** argv) {
       else if (a == "--max-sigma") need(1), max_sigma = num();
       else if (a == "--contrast") need(1), contrast = num();
       else if (a == "--nodata") need(1), nodata = num();
+      else if (a == "--multi") multi = true;
+      else if (a == "--multi-template1") multi = multi_t1 = true;
+      else if (a == "--model-sigma") need(1), model_sigma = num();
+      else if (a == "--no-curvature") no_curv = true;
       else if (a == "--score") need(3), score = argv[++i], score_a = whole(), score_b = whole();
       else {
         std::fputs(usage, a == "--help" || a == "-h" ? stdout : stderr);
@@ -431,6 +516,7 @@ int main(int argc, char** argv) {
         }
         print("consistency, views 2+3", dist(c23));
       }
+      if (multi) multi_image(scene, v, src, t, threads, multi_t1, model_sigma, no_curv);
       if (cmed > 0 && !(da.n > 0 && da.med <= cmed && da.p90 <= cp90)) {
         std::printf("FAIL: triplet median %.4f / p90 %.4f above %.4f / %.4f\n", da.med, da.p90, cmed, cp90);
         fail = true;
