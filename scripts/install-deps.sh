@@ -28,6 +28,9 @@ if [ "${1:-}" = "--test" ]; then
   # pictures checked as users see them: SVG figures rendered by librsvg, report pages opened in a
   # headless Chromium
   packages+=(librsvg2-bin chromium)
+  # GDAL as a peer only, never linked: gdalinfo reads tp-ortho's GeoTIFF keys back, gdalwarp -rpc is
+  # the reference its orthos are compared with (tests/tools/tp-ortho.cmake, bench/ortho_gdalwarp.sh)
+  packages+=(gdal-bin)
 fi
 missing=()
 for p in "${packages[@]}"; do
