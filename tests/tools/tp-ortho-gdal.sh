@@ -3,7 +3,8 @@
 # a skip):
 #   tp-ortho-gdal.sh info ORTHO.tif          prints "EPSG:N W H X0 Y0 GSD" as gdalinfo reads them
 #   tp-ortho-gdal.sh agree ORTHO.tif IMAGE GDALWARP_OPTION...
-#       runs gdalwarp -rpc -r bilinear -et 0 on ORTHO's grid (gdalinfo) with the options given (-to RPC_DEM=...)
+#       runs gdalwarp -rpc -r bilinear -et 0 -wo XSCALE=1 -wo YSCALE=1 (the plain bilinear kernel: see
+#       bench/ortho_gdalwarp.sh) on ORTHO's grid (gdalinfo) with the options given (-to RPC_DEM=...)
 #       and prints "PCT% within 1 of N" (pixels valid in both, every band within 1 grey level)
 set -euo pipefail
 # the system Python, which has GDAL's bindings and numpy (python3-gdal, brought by gdal-bin), before another on PATH
@@ -26,7 +27,7 @@ case $1 in
     read -r crs w h x0 y0 g < <(info "$ortho")
     te=$(echo "$x0 $y0 $w $h $g" | awk '{ printf "%.6f %.6f %.6f %.6f", $1, $2 - $4 * $5, $1 + $3 * $5, $2 }')
     # shellcheck disable=SC2086
-    gdalwarp -q -overwrite -rpc -et 0 -r bilinear -t_srs "$crs" -te $te -tr "$g" "$g" -dstnodata 0 "$@" "$image" gdalwarp.tif
+    gdalwarp -q -overwrite -rpc -et 0 -wo XSCALE=1 -wo YSCALE=1 -r bilinear -t_srs "$crs" -te $te -tr "$g" "$g" -dstnodata 0 "$@" "$image" gdalwarp.tif
     $PY - "$ortho" gdalwarp.tif <<'PY'
 import sys
 import numpy as np

@@ -162,7 +162,8 @@ void OrthoTiffWriter::write_tile(long tx, long ty, std::vector<unsigned char>& s
   }
   // compressed here, by the calling thread; only the write is serialized
   uLongf size = compressBound(static_cast<uLong>(samples.size()));
-  std::vector<unsigned char> packed(size);
+  thread_local std::vector<unsigned char> packed;  // kept from tile to tile (fresh pages cost faults)
+  packed.resize(size);
   if (compress2(packed.data(), &size, samples.data(), static_cast<uLong>(samples.size()), Z_BEST_SPEED) != Z_OK)
     throw std::runtime_error(d.path + ": deflate failed");
   std::lock_guard<std::mutex> lock(d.mutex);

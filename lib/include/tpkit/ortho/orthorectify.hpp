@@ -14,8 +14,10 @@
 // output's nodata value is moved one step off it (integer samples), as GDAL's warper does.
 // Work: tiles of 256 x 256 output pixels on `threads` workers; a tile's ground points are exact on a lattice
 // every 16 pixels (PROJ) and bilinear between (the map projection is smooth: below 1e-6 m over 16 pixels),
-// its heights and projections exact at every pixel; it reads only the image window its pixels see, so memory
-// is bounded by the tile, not the scene.
+// its heights exact at every pixel, its projections too with a DEM; at a flat height the projection is
+// exact at the lattice's nodes and bilinear between them in each lattice cell where that is within 0.001 px
+// of the exact value at the cell's centre (every cell, on the crops tried), exact elsewhere. A tile reads
+// only the image window its pixels see, so memory is bounded by the tile, not the scene.
 #pragma once
 #include <string>
 
