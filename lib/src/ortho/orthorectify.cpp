@@ -271,7 +271,8 @@ OrthoStats orthorectify(const std::string& image, const RpcModel& model, const O
   layout.type = sample_type_of(info.format, image);
   layout.rgb = info.rgb;
   const bool is_float = layout.type == SampleType::f32 || layout.type == SampleType::f64;
-  layout.nodata = info.nodata ? *info.nodata : is_float ? NAN : 0.0;
+  // (an image's nodata outside its sample type's range, "-9999" on uint16, say: the nearest value it holds)
+  layout.nodata = info.nodata ? (is_float ? *info.nodata : to_sample(layout.type, *info.nodata)) : is_float ? NAN : 0.0;
   layout.description = options.description;
   Job j{image, model, grid, crs, surface, options.resampling, info.width, info.height, info.bands, info.nodata.has_value(),
         info.nodata.value_or(0), layout.type, layout.nodata};
