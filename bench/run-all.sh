@@ -24,6 +24,8 @@ benches=(
   "trifocal_real_table|sh bench/trifocal_real_table.sh build \$work"
   "gcp_accuracy|bash bench/gcp_accuracy.sh \$work"
   "dem_align|bash bench/dem_align.sh \$work"
+  "ortho_gdalwarp|bash bench/ortho_gdalwarp.sh \$work"
+  "ortho_alignment|bash bench/ortho_alignment.sh \$work"
   "block_adjust|bash bench/block_adjust.sh \$work"
   "match_speed_colmap|bash bench/match_speed_colmap.sh build ../shared/data/pleiades-marseille \$work"
   "dates_conditions|bash bench/dates_conditions.sh build \$work"

@@ -9,7 +9,7 @@ if(NOT CLI11_FOUND AND NOT TARGET CLI11::CLI11)
   set_target_properties(CLI11::CLI11 PROPERTIES INTERFACE_INCLUDE_DIRECTORIES ${CLI11_INCLUDE_DIR})
 endif()
 find_package(TIFF REQUIRED)
-find_package(OpenCV REQUIRED COMPONENTS core imgproc features2d flann calib3d)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc features2d flann calib3d video)
 find_package(Ceres REQUIRED)
 find_package(nanoflann CONFIG QUIET)
 if(NOT nanoflann_FOUND AND NOT TARGET nanoflann::nanoflann)
@@ -52,3 +52,6 @@ endif()
 # JPEG pictures inline in tp-report's page (libjpeg-dev, libjpeg-turbo): OpenCV's imgcodecs would bring
 # GDAL and some 140 libraries into the tool.
 find_package(JPEG REQUIRED)
+# zlib (zlib1g-dev, libtiff's own): orthos' GeoTIFF tiles are deflated by the thread that made them (ortho
+# component), only their writing serialized. OpenCV's video module above: the ECC alignment of orthos.
+find_package(ZLIB REQUIRED)

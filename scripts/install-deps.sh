@@ -29,7 +29,9 @@ if [ "${1:-}" = "--test" ]; then
   # pictures checked as users see them: SVG figures rendered by librsvg, report pages opened in a
   # headless Chromium
   packages+=(librsvg2-bin chromium)
-  # GDAL's programs, a test and benchmark peer only (never linked): gdalwarp -rpc makes the orthos tp-report's tests show
+  # GDAL as a peer only, never linked: gdalinfo reads tp-ortho's GeoTIFF keys back, gdalwarp -rpc is the
+  # reference its orthos are compared with (tests/tools/tp-ortho.cmake, bench/ortho_gdalwarp.sh) and
+  # makes the orthos tp-report's tests show
   packages+=(gdal-bin)
 fi
 missing=()

@@ -16,7 +16,7 @@ extern const char* const tpkit_man_page;
 namespace {
 struct Opts {
   std::vector<std::string> images;
-  std::string list, match_options, adjust_options, ground_options, adjust_model;
+  std::string list, match_options, adjust_options, ground_options, ortho_options, adjust_model;
   std::vector<std::string> fixed;
   tpkit::PlanOptions p;
   bool quiet = false, adjust = false, no_adjust = false;
@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
             ->allow_extra_args(false);  // one image each: `--fixed A B C` leaves B and C to IMAGES
         app.add_option("--adjust-options", o->adjust_options, "more rpc-adjust options, space separated");
         app.add_option("--ground-options", o->ground_options, "more tp-ground options, space separated");
+        app.add_option("--ortho-options", o->ortho_options, "end with the orthos through the adjusted models (tp-ortho with these options: --dem FILE or --height H, ...)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {
           std::vector<std::string> paths = o->images;
@@ -62,14 +63,15 @@ int main(int argc, char** argv) {
           }
           // any option of the adjustment asks for it: refused, not dropped, when it cannot be made
           const bool asked = o->adjust || !o->adjust_model.empty() || !o->fixed.empty() || !o->adjust_options.empty() ||
-                             !o->ground_options.empty();
+                             !o->ground_options.empty() || !o->ortho_options.empty();
           if (o->no_adjust && asked)
-            throw tpkit::UsageError("--no-adjust excludes --adjust, --adjust-model, --fixed, --adjust-options and --ground-options");
+            throw tpkit::UsageError("--no-adjust excludes --adjust, --adjust-model, --fixed, --adjust-options, --ground-options and --ortho-options");
           o->p.adjust = o->no_adjust ? tpkit::PlanOptions::Adjust::off : asked ? tpkit::PlanOptions::Adjust::on : tpkit::PlanOptions::Adjust::automatic;
           if (!o->adjust_model.empty()) o->p.adjust_model = o->adjust_model;
           for (const auto& f : o->fixed) o->p.fixed.push_back(std::filesystem::absolute(f).lexically_normal().string());
           o->p.adjust_args = tpkit::plan_tool_args(o->adjust_options, "rpc-adjust", "--adjust-options");
           o->p.ground_args = tpkit::plan_tool_args(o->ground_options, "tp-ground", "--ground-options");
+          o->p.ortho_args = tpkit::plan_tool_args(o->ortho_options, "tp-ortho", "--ortho-options");
           o->p.work = std::filesystem::absolute(o->p.work).lexically_normal().string();
           if (!o->p.bin.empty()) o->p.bin = std::filesystem::absolute(o->p.bin).lexically_normal().string();
           tpkit::shell_quote(o->p.work);
@@ -82,7 +84,7 @@ int main(int argc, char** argv) {
                                                            tpkit::format_figure(o->p.min_overlap) + " left out)" : std::string()) + ", " +
                            std::to_string(plan.detect.size()) + " detection jobs, " + std::to_string(plan.tiles.size()) +
                            " region jobs, " + (plan.adjust.empty() ? "ending with the chain" : "ending with the adjustment (" + o->p.adjust_model + ")") +
-                           " in " + tpkit::plan_result(plan) + "; make -C " + tpkit::shell_quote(o->p.work) + " -f plan.mk -j N, or bash " +
+                           " in " + tpkit::plan_result(plan) + (plan.ortho.empty() ? std::string() : " and the orthos in orthos/") + "; make -C " + tpkit::shell_quote(o->p.work) + " -f plan.mk -j N, or bash " +
                            tpkit::shell_quote(o->p.work + "/run-parallel.sh") + " -j N, or bash " +
                            tpkit::shell_quote(o->p.work + "/submit-slurm.sh"));
           return 0;

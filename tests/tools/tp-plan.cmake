@@ -100,3 +100,12 @@ tpkit_tool_test(tp-plan.adjust-model-unknown
 tpkit_tool_test(tp-plan.adjusted-without-plan
   COMMAND "${_imgs} && mkdir -p w/adjusted && touch w/adjusted/rpc.bias && tp-plan -q -o w s/view1.tif s/view2.tif"
   EXPECT_FAIL STDERR_MATCH "w: holds outputs of a plan \\(adjusted\\) but no plan.mk" NO_FILE w/plan.mk)
+# --ortho-options: the ortho stage after the adjustment, one tp-ortho job through the adjusted models
+# (the DEM's name made absolute), among make's final targets; run for real by make, its orthos on one
+# grid; --ortho-options without the heights is refused.
+tpkit_tool_test(tp-plan.ortho-stage
+  COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 >/dev/null && tp-plan -q -o w --fixed s/view1.tif --ortho-options '--dem s/truth.dem.tif --gsd 2' s/view1.tif s/view2.tif && cat w/jobs/ortho.jobs && grep '^tpkit-all' w/plan.mk && grep '^for s' w/run-parallel.sh && make -s -C w -f plan.mk -j2 >/dev/null 2>&1 && ls w/orthos && tp-ortho -q --compare w/orthos/view1.ortho.tif w/orthos/view2.ortho.tif | grep -vc '^#'"
+  STDOUT_MATCH "^tp-ortho -q '[^']*/s/view1.tif' '[^']*/s/view2.tif' --rpc '[^']*/s/view1.tif=[^']*/w/adjusted/view1_rpc.txt' --rpc '[^']*/s/view2.tif=[^']*/w/adjusted/view2_rpc.txt' --threads 1 '--dem' '/[^']*/s/truth.dem.tif' '--gsd' '2' -o '[^']*/w/orthos'\ntpkit-all: ground.points orthos/view1.ortho.tif\nfor s in geometry detect tiles merge chain adjust ground ortho@SEMI@ do\nview1.ortho.tif\nview2.ortho.tif\n1\n$")
+tpkit_tool_test(tp-plan.ortho-options-need-heights
+  COMMAND "tp-synth --out s --size 300 --seed 2 --threads 2 --supersample 1 >/dev/null && tp-plan -o w --ortho-options '--gsd 2' s/view1.tif s/view2.tif"
+  EXPECT_FAIL STDERR_MATCH "\ntp-plan: --ortho-options: give the orthos' heights, --dem FILE or --height H\n$" NO_FILE w)

@@ -474,6 +474,25 @@ bool ReferenceDem::height(double lon, double lat, double& h, double* grad) const
   return std::isfinite(h);
 }
 
+void ReferenceDem::heights(std::size_t n, const double* lon, const double* lat, double* h) const {
+  Impl& d = *impl_;
+  std::vector<double> x(lon, lon + n), y(lat, lat + n);
+  {
+    std::lock_guard<std::mutex> lock(d.mutex);
+    proj_errno_reset(d.to_dem.pj);
+    proj_trans_generic(d.to_dem.pj, PJ_FWD, x.data(), sizeof(double), n, y.data(), sizeof(double), n, nullptr, 0, 0, nullptr, 0, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      double z = 0;
+      const bool known = std::isfinite(x[i]) && std::isfinite(y[i]) && x[i] != HUGE_VAL &&
+                         d.bilinear(d.inv[0] + d.inv[1] * x[i] + d.inv[2] * y[i], d.inv[3] + d.inv[4] * x[i] + d.inv[5] * y[i], z, nullptr, nullptr);
+      h[i] = known ? z * d.z_unit : NAN;
+    }
+  }
+  if (d.datum->is_ellipsoid()) return;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::isfinite(h[i])) h[i] += d.datum->undulation(lon[i], lat[i]);  // NaN where the grid has none
+}
+
 bool ReferenceDem::slope_aspect(double lon, double lat, double& slope_deg, double& aspect_deg) const {
   double h, g[2];
   if (!height(lon, lat, h, g)) return false;

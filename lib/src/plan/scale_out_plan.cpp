@@ -260,6 +260,16 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
   for (const auto& a : o.ground_args) ground.command += " " + shell_quote(a);
   ground.command += " -o " + in_work(o, "ground.points");
   p.ground.push_back(ground);
+  if (o.ortho_args.empty()) return;
+  // the orthos of every image through its adjusted model, on one grid (one tp-ortho run)
+  PlanJob ortho{"orthos/" + fs::path(images[chained[0]].path).stem().string() + ".ortho.tif", {"adjusted/rpc.bias"}, {},
+                tool(o, "tp-ortho") + " -q" + imgs};
+  for (size_t i : chained)
+    ortho.command += " --rpc " + shell_quote(images[i].path + "=" + (fs::path(o.work) / "adjusted" / (fs::path(images[i].path).stem().string() + "_rpc.txt")).string());
+  ortho.command += threads;
+  for (const auto& a : o.ortho_args) ortho.command += " " + shell_quote(a);
+  ortho.command += " -o " + in_work(o, "orthos");
+  p.ortho.push_back(ortho);
 }
 
 }  // namespace
@@ -341,7 +351,7 @@ std::vector<PlanStage> plan_stages(const Plan& p) {
   std::vector<PlanStage> out;
   for (const PlanStage& s : std::initializer_list<PlanStage>{{"geometry", &p.geometry}, {"detect", &p.detect}, {"tiles", &p.tiles},
                                                              {"merge", &p.merge}, {"chain", &p.chain}, {"adjust", &p.adjust},
-                                                             {"ground", &p.ground}})
+                                                             {"ground", &p.ground}, {"ortho", &p.ortho}})
     if (!s.jobs->empty()) out.push_back(s);
   return out;
 }
@@ -349,26 +359,32 @@ std::vector<PlanStage> plan_stages(const Plan& p) {
 std::string plan_result(const Plan& p) { return p.ground.empty() ? "tracks.tracks" : p.ground.back().target; }
 
 std::vector<std::string> plan_tool_args(const std::string& text, const std::string& which, const std::string& option_name) {
-  const bool adjust = which == "rpc-adjust";
+  const bool adjust = which == "rpc-adjust", ortho = which == "tp-ortho";
   std::vector<std::string> refused = {"-o", "--out", "--output", "--tracks", "--threads", "--rpc"};
   if (adjust) refused.insert(refused.end(), {"--model", "--fixed"});
+  if (ortho) refused.insert(refused.end(), {"--compare", "--tile"});
   auto why = [&](const std::string& opt) -> std::string {
     if (opt == "--model") return "it is tp-plan's --adjust-model";
     if (opt == "--fixed") return "it is tp-plan's --fixed";
     if (opt == "--threads") return "it is tp-plan's --threads";
+    if (opt == "--rpc" && ortho) return "the orthos are made through the adjusted models";
+    if (opt == "--compare" || opt == "--tile") return "the ortho stage makes orthos; compare them with tp-ortho --compare";
     if (opt == "--rpc") return "the models are those found beside the images, as for the footprints and tp-match";
     return "tp-plan sets it (the work folder's files)";
   };
   auto absolute = [](const std::string& f) { return f == "-" ? f : fs::absolute(f).lexically_normal().string(); };
   // the options that name files (and folders), read and written by the jobs in the work folder: one file
   // each, or (--check) files until the next option
-  const std::vector<std::string> one_file =
-      adjust ? std::vector<std::string>{"--dem", "--gcp"} : std::vector<std::string>{"--compare", "--align", "--dz", "--models"};
+  const std::vector<std::string> one_file = adjust  ? std::vector<std::string>{"--dem", "--gcp"}
+                                           : ortho ? std::vector<std::string>{"--dem", "--like"}
+                                                   : std::vector<std::string>{"--compare", "--align", "--dz", "--models"};
   const std::string many_files = adjust ? "--check" : "";
   std::vector<std::string> out;
   std::istringstream in(text);
   std::string file_option;  // the option whose file names follow
+  bool heights = false;
   for (std::string a; in >> a;) {
+    heights = heights || a.rfind("--dem", 0) == 0 || a.rfind("--height", 0) == 0;
     const bool is_option = a.size() > 1 && a[0] == '-' && !(std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '.');
     if (is_option) {
       file_option.clear();
@@ -392,6 +408,7 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
     }
     out.push_back(a);
   }
+  if (ortho && !out.empty() && !heights) throw UsageError(option_name + ": give the orthos' heights, --dem FILE or --height H");
   return out;
 }
 
@@ -401,7 +418,7 @@ std::string plan_makefile(const Plan& p) {
        "# Targets are relative to the work folder; every command line is the job files' own.\n"
        ".PHONY: tpkit-all\n"
        ".DELETE_ON_ERROR:\n"
-       "tpkit-all: " << plan_result(p) << "\n";
+       "tpkit-all: " << plan_result(p) << (p.ortho.empty() ? std::string() : " " + p.ortho.back().target) << "\n";
   auto dollars = [](const std::string& c) {
     std::string r;
     for (char ch : c) r += ch == '$' ? std::string("$$") : std::string(1, ch);
@@ -504,7 +521,7 @@ void check_work_folder(const fs::path& W, const std::string& makefile) {
     throw UsageError(W.string() + ": holds another plan (its plan.mk differs: other images, another order or other "
                                   "options), whose outputs would stand for other pairs: plan into a new folder, or empty this one");
   }
-  for (const char* d : {"geometry", "detect", "tiles", "pairs", "tracks.tracks", "adjusted", "ground.points"}) {
+  for (const char* d : {"geometry", "detect", "tiles", "pairs", "tracks.tracks", "adjusted", "ground.points", "orthos"}) {
     const fs::path sub = W / d;
     bool used = fs::is_regular_file(sub, ec);
     if (fs::is_directory(sub, ec))

@@ -69,6 +69,9 @@ class ReferenceDem {
   // Height above the WGS 84 ellipsoid at (lon, lat) and, when grad is not null, its derivatives in metres per
   // degree of lon and of lat (the geoid's slope neglected: below 1e-4). False where unknown. Thread-safe.
   bool height(double lon, double lat, double& h, double* grad = nullptr) const;
+  // The same for n points at once (one lock, one batch transformation: for rasters, where a call per point
+  // costs more than the sampling): h[i] above the WGS 84 ellipsoid, NaN where unknown. Thread-safe.
+  void heights(std::size_t n, const double* lon, const double* lat, double* h) const;
   // Slope (degrees from horizontal) and aspect (degrees clockwise from north, of the downhill direction) at
   // (lon, lat) from the bilinear surface; false where unknown.
   bool slope_aspect(double lon, double lat, double& slope_deg, double& aspect_deg) const;

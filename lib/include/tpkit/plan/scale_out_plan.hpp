@@ -17,8 +17,11 @@
 //                         --threads T [ADJUST OPTIONS] -o WORK/adjusted   (target WORK/adjusted/rpc.bias)
 //   ground    once:       tp-ground IMG... --tracks WORK/tracks.tracks --rpc IMG=WORK/adjusted/STEM_rpc.txt...
 //                         --threads T [GROUND OPTIONS] -o WORK/ground.points
-// I, J, K count from 1 (I < J, in list order; regions row-major over image 1). IMG... of chain, adjust
-// and ground: the images of the list that are in a pair, in list order; STEM: an image's file name
+//   ortho     once, with ortho_args (tp-plan --ortho-options): tp-ortho -q IMG... --rpc IMG=WORK/adjusted/STEM_rpc.txt...
+//                         --threads T ORTHO OPTIONS -o WORK/orthos   (target WORK/orthos/STEM_1.ortho.tif: the
+//                         orthos of every image through its adjusted model, on one grid)
+// I, J, K count from 1 (I < J, in list order; regions row-major over image 1). IMG... of chain, adjust,
+// ground and ortho: the images of the list that are in a pair, in list order; STEM: an image's file name
 // without its extension, as rpc-adjust names the adjusted model it writes into -o.
 //
 // The adjustment (adjust and ground) needs an RPC model for every image of the chain, distinct stems
@@ -84,6 +87,7 @@ struct PlanOptions {
   std::vector<std::string> fixed;         // rpc-adjust --fixed: absolute paths, each naming an image of the chain (image_index)
   std::vector<std::string> adjust_args;   // more rpc-adjust arguments (relative file names already made absolute)
   std::vector<std::string> ground_args;   // more tp-ground arguments (the same)
+  std::vector<std::string> ortho_args;    // tp-ortho arguments (the same; --dem or --height among them): non-empty adds the ortho stage
 };
 
 struct PlanJob {
@@ -96,12 +100,12 @@ struct PlanJob {
 struct Plan {
   std::vector<std::array<size_t, 2>> pairs;  // 0-based image indices
   long pairs_below_overlap = 0;              // pairs whose footprints meet, by less than min_overlap
-  std::vector<PlanJob> geometry, detect, tiles, merge, chain, adjust, ground;  // adjust, ground: empty without the adjustment
+  std::vector<PlanJob> geometry, detect, tiles, merge, chain, adjust, ground, ortho;  // adjust, ground, ortho: empty without the adjustment
   std::vector<std::vector<std::string>> image_detections;  // per image: the targets of its detection jobs
 };
 
 struct PlanStage {
-  std::string name;                  // geometry, detect, tiles, merge, chain, adjust, ground
+  std::string name;                  // geometry, detect, tiles, merge, chain, adjust, ground, ortho
   const std::vector<PlanJob>* jobs;  // into the plan
 };
 // The stages of the plan that have jobs, in the order they run (adjust and ground only with the adjustment).
@@ -109,7 +113,8 @@ std::vector<PlanStage> plan_stages(const Plan& p);
 // The final target of the plan: ground.points with the adjustment, else tracks.tracks.
 std::string plan_result(const Plan& p);
 
-// More arguments of rpc-adjust (which = "rpc-adjust") or tp-ground (which = "tp-ground") from the text of
+// More arguments of rpc-adjust (which = "rpc-adjust"), tp-ground (which = "tp-ground") or tp-ortho (which =
+// "tp-ortho", whose --dem and --like name files; --compare and --tile are refused too) from the text of
 // --adjust-options / --ground-options, split at white space: the options tp-plan sets itself are
 // refused (UsageError naming option_name: -o, --tracks, --threads, --rpc (the models are those found
 // beside the images, as for the footprints and tp-match), and for rpc-adjust --model and --fixed), and the
