@@ -25,6 +25,7 @@ benches=(
   "gcp_accuracy|bash bench/gcp_accuracy.sh \$work"
   "dem_align|bash bench/dem_align.sh \$work"
   "block_adjust|bash bench/block_adjust.sh \$work"
+  "block_blunders|bash bench/block_blunders.sh \$work"
   "match_speed_colmap|bash bench/match_speed_colmap.sh build ../shared/data/pleiades-marseille \$work"
   "dates_conditions|bash bench/dates_conditions.sh build \$work"
   "scale_out|build/bin/tp-synth --out \$work/s10k --size 10000 --seed 1 --supersample 1 > /dev/null && bash bench/scale_out.sh build/bin \$work/s10k"
