@@ -27,6 +27,7 @@ benches=(
   "ortho_gdalwarp|bash bench/ortho_gdalwarp.sh \$work"
   "ortho_alignment|bash bench/ortho_alignment.sh \$work"
   "block_adjust|bash bench/block_adjust.sh \$work"
+  "block_blunders|bash bench/block_blunders.sh \$work"
   "match_speed_colmap|bash bench/match_speed_colmap.sh build ../shared/data/pleiades-marseille \$work"
   "dates_conditions|bash bench/dates_conditions.sh build \$work"
   "real_multidate|bash bench/real_multidate.sh build \$work"

@@ -240,7 +240,10 @@ int main(int argc, char** argv) {
         app.add_flag("--rpc-guided", o->rpc_guided, "search along the RPC epipolar curves; fail if an image has no model");
         app.add_option("--height-range", o->height_range, "LO HI: heights searched with RPCs, metres above the ellipsoid")
             ->expected(2);
-        app.add_option("--rpc-margin", o->p.rpc_guide.margin, "RPC-guided search: pixels around the epipolar curve")
+        app.add_option("--rpc-margin", o->p.rpc_guide.margin, "RPC-guided search: pixels around the epipolar curve, first try")
+            ->check(tpkit::NonNegative);
+        app.add_option("--rpc-max-margin", o->p.rpc_guide.max_margin,
+                       "RPC-guided search: widest margin tried (4-fold steps) while the models' bias needs it, pixels")
             ->check(tpkit::NonNegative);
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
         return [o]() {

@@ -59,3 +59,16 @@ tpkit_tool_test(tp-chain.coverage
 tpkit_tool_test(tp-chain.coverage-is-an-input
   COMMAND "${_ab} && ${_ac} && tp-chain ab.m ac.m -o t.tracks --coverage ab.m"
   EXPECT_FAIL NO_FILE t.tracks)
+# issue 51: --rpc-check judges every view through the RPC models after each pair's bias. On a tp-synth
+# block (models biased by up to 5 px) with a wrong view in every third track of three views or more, its
+# records all agreeing on the wrong point (the loop closure cannot see it): the check drops every wrong
+# view and no good one, and the views kept sit on the truth (chain_rpc_check.sh)
+tpkit_tool_test(tp-chain.rpc-check-against-truth
+  COMMAND "bash $SRC/tests/tools/chain_rpc_check.sh"
+  STDOUT_MATCH "no check: ([1-9][0-9]+) wrong views, [1-9][0-9]+ kept; good views lost 0; [^\n]*\nrpc check: [1-9][0-9]+ wrong views, 0 kept; good views lost 0; worst kept view 0\\.[0-2][0-9] px from truth\n# rpc_check: [^\n]*15 image pairs, median sigma 0\\.[01][0-9]* px, bias up to [2-9][.0-9]* px")
+tpkit_tool_test(tp-chain.rpc-check-needs-models
+  COMMAND "${_ab} && tp-chain ab.m --rpc-check 1 -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "^tp-chain: A: no RPC model: no tag 50844" NO_FILE t.tracks)
+tpkit_tool_test(tp-chain.rpc-without-rpc-check
+  COMMAND "${_ab} && tp-chain ab.m --rpc A=a_rpc.txt -o t.tracks"
+  EXPECT_FAIL STDERR_MATCH "--rpc goes with --rpc-check" NO_FILE t.tracks)

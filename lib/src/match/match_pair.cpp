@@ -545,7 +545,7 @@ std::string search_description(const PairMatchStats& st, const PairMatchOptions&
                 format_number(std::round(std::max(o.guide.band, 3 * st.rpc.bias_rms) * 100) / 100) + " px";
     else
       search += " (no coarse geometry: " + std::to_string(st.rpc.coarse_inliers) + " inliers)";
-    search += ", mean length " + h(st.rpc.mean_length) + " px, margin " + format_number(o.rpc_guide.margin) +
+    search += ", mean length " + h(st.rpc.mean_length) + " px, margin " + format_number(st.rpc.coarse_margin) +
               " px, ratio region +" + format_number(o.guide.ratio_margin) + " px";
     if (st.rpc.unlocalized > 0) search += ", " + std::to_string(st.rpc.unlocalized) + " keypoints without a curve";
   } else if (st.guided) {
@@ -555,7 +555,7 @@ std::string search_description(const PairMatchStats& st, const PairMatchOptions&
              ".." + format_number(std::round(st.guide.parallax_max * 10) / 10) + " px + margin " +
              format_number(o.guide.parallax_margin) + ", ratio region +" + format_number(o.guide.ratio_margin) + " px";
     if (st.rpc_fallback)
-      search += " (the RPC epipolar curves held no geometry within " + format_number(o.rpc_guide.margin) + " px: " +
+      search += " (the RPC epipolar curves held no geometry within " + format_number(st.rpc.coarse_margin) + " px: " +
                 std::to_string(st.rpc.coarse_inliers) + " of " + std::to_string(st.rpc.coarse_putative) + " coarse matches)";
   } else if (o.guided) {
     search = "global (the guided search found no coarse geometry)";
@@ -699,10 +699,10 @@ std::string no_match_reason(const PairMatchStats& st, const PairMatchOptions& o)
     const std::string heights = format_number(st.rpc.h_lo) + ".." + format_number(st.rpc.h_hi) + " m";
     return "the RPC epipolar curves over the heights " + heights +
            (o.rpc_guide.height_given ? " (--height-range)" : " (the models' range)") + " held no geometry within " +
-           format_number(o.rpc_guide.margin) + " px: " + std::to_string(st.rpc.coarse_inliers) + " of " +
+           format_number(st.rpc.coarse_margin) + " px: " + std::to_string(st.rpc.coarse_inliers) + " of " +
            std::to_string(st.rpc.coarse_putative) + " coarse matches" +
            (o.rpc_only ? "" : ", and the images' own coarse stage found none either") +
-           "; the models (a bias beyond --rpc-margin), the height range or the overlap may be at fault";
+           "; the models (a bias beyond --rpc-max-margin), the height range or the overlap may be at fault";
   }
   return "do the images overlap?";
 }
@@ -710,8 +710,8 @@ std::string no_match_reason(const PairMatchStats& st, const PairMatchOptions& o)
 std::string rpc_fallback_reason(const PairMatchStats& st, const PairMatchOptions& o) {
   const std::string heights = format_number(st.rpc.h_lo) + ".." + format_number(st.rpc.h_hi) + " m";
   return "over the heights " + heights + (o.rpc_guide.height_given ? " (--height-range)" : " (the models' range)") +
-         " held no geometry within --rpc-margin " + format_number(o.rpc_guide.margin) +
-         " px; the images' own coarse stage found one: " +
+         " held no geometry within " + format_number(st.rpc.coarse_margin) + " px (--rpc-max-margin)"
+         "; the images' own coarse stage found one: " +
          (o.rpc_guide.height_given ? "the height range misses the terrain, or the models disagree with the images by more than the margin"
                                    : "the models disagree with the images by more than that") +
          " (rpc-adjust corrects models)";

@@ -120,6 +120,73 @@ std::vector<SearchRegion> rpc_search_regions(const RpcModel& a, const RpcModel& 
   return out;
 }
 
+namespace {
+
+// Step 1 within one margin: the strongest keypoints of image 1 matched in their curves' regions widened
+// by `margin` pixels on every side (along and across), an affine F fitted to them; its inliers' heights
+// (where along its chord each falls) and their offsets across the curves (the models' relative bias there).
+struct Coarse {
+  double margin = 0;
+  long putative = 0, inliers = 0;
+  bool ok = false;                       // enough inliers for a geometry
+  std::vector<Eigen::Vector3d> heights;  // x1, y1, height (metres) of each inlier
+  Eigen::Vector3d bias{0, 0, 0};         // across-curve offset, a plane in (x1, y1), pixels
+  double bias_min = 0, bias_max = 0, bias_rms = 0;
+  double metres_per_px = 0;              // along the curves (their mean chord length over the range)
+};
+
+Coarse coarse_geometry(const Keypoints& C1, const Keypoints& K2, const RpcModel& a, const RpcModel& b, double lo, double hi,
+                       double margin, const DescriptorMatchOptions& desc, const GuidedMatchOptions& g,
+                       const RpcGuideOptions& r, const AffineFundamentalRansac& ransac, int min_inliers, int threads) {
+  Coarse c;
+  c.margin = margin;
+  const std::vector<double> clo(C1.kp.size(), lo), chi(C1.kp.size(), hi);
+  RpcGuidedStats cs;
+  const std::vector<SearchRegion> cr = rpc_search_regions(a, b, C1.kp, clo, chi, margin, margin, r.samples, threads, &cs);
+  const RegionMatchResult coarse = match_in_regions(C1, K2, cr, desc, g.ratio_margin, threads);
+  c.putative = static_cast<long>(coarse.matches.size());
+  if (c.putative < std::max(min_inliers, AffineFundamental::MINIMUM_SAMPLES)) return c;
+  Eigen::MatrixX4d xy(coarse.matches.size(), 4);
+  for (size_t k = 0; k < coarse.matches.size(); ++k) {
+    const auto &p = C1.kp[static_cast<size_t>(coarse.matches[k].i1)].pt, &q = K2.kp[static_cast<size_t>(coarse.matches[k].i2)].pt;
+    xy.row(static_cast<Eigen::Index>(k)) << p.x, p.y, q.x, q.y;
+  }
+  const AffineFundamentalResult rr = ransac_affine_fundamental(xy, ransac);
+  c.inliers = rr.ok ? rr.inliers : 0;
+  if (!rr.ok || rr.inliers < min_inliers || !(cs.mean_length > 0)) return c;
+  // the height of an inlier: where along its chord (linear in h) its image-2 position falls; its offset
+  // across the chord: the models' bias there
+  std::vector<Eigen::Index> in;
+  std::vector<double> across;
+  for (size_t k = 0; k < coarse.matches.size(); ++k) {
+    const auto row = static_cast<Eigen::Index>(k);
+    if (!rr.inlier[row]) continue;
+    const SearchRegion& R = cr[static_cast<size_t>(coarse.matches[k].i1)];
+    const Eigen::Vector2d v = xy.row(row).tail<2>().transpose() - R.a;
+    const double len = R.length - 2 * margin;
+    const double t = len > 1e-9 ? (R.u.dot(v) - margin) / len : 0.5;
+    c.heights.emplace_back(xy(row, 0), xy(row, 1), lo + t * (hi - lo));
+    in.push_back(row);
+    across.push_back(R.u.y() * v.x() - R.u.x() * v.y());
+  }
+  // the bias across the curves, a plane in x1 (shift and drift of the models)
+  Eigen::MatrixX3d A(in.size(), 3);
+  Eigen::VectorXd d(in.size());
+  for (size_t q = 0; q < in.size(); ++q) {
+    A.row(static_cast<Eigen::Index>(q)) << xy(in[q], 0), xy(in[q], 1), 1.0;
+    d(static_cast<Eigen::Index>(q)) = across[q];
+  }
+  c.bias = A.colPivHouseholderQr().solve(d);
+  const Eigen::VectorXd res = d - A * c.bias;
+  c.bias_rms = std::sqrt(res.squaredNorm() / static_cast<double>(res.size()));
+  c.bias_min = d.minCoeff(), c.bias_max = d.maxCoeff();
+  c.metres_per_px = (hi - lo) / cs.mean_length;
+  c.ok = true;
+  return c;
+}
+
+}  // namespace
+
 std::vector<DescriptorMatch> rpc_guided_match(const Keypoints& K1, const Keypoints& K2, long w1, long h1, const RpcModel& a,
                                               const RpcModel& b, const DescriptorMatchOptions& desc,
                                               const GuidedMatchOptions& g, const RpcGuideOptions& r,
@@ -132,68 +199,47 @@ std::vector<DescriptorMatch> rpc_guided_match(const Keypoints& K1, const Keypoin
   const size_t n1 = K1.kp.size();
   std::vector<double> cell_lo(n1, lo), cell_hi(n1, hi);
   Eigen::Vector3d bias(0, 0, 0);  // across-curve bias plane of step 1, pixels
-  // 1. coarse: the strongest keypoints over the whole range, their heights from the F inliers
+  // 1. coarse: the strongest keypoints over the whole range, their heights from the F inliers. The
+  // margin follows the bias the data show: from r.margin, four times wider while the F finds no geometry
+  // or step 2's band around its inliers' offsets across the curves does not lie within the margin (a
+  // margin that cuts into the offsets would bias the plane fitted to them), up to r.max_margin; the first
+  // geometry that fits, else the one of most inliers (a wide margin over repeated texture may find none).
+  st.coarse_margin = r.margin;
   if (!K1.kp.empty() && !K2.kp.empty()) {
     const std::vector<int> c1 = strongest_spread(K1.kp, g.coarse_keypoints, g.coarse_grid);
     const Keypoints C1 = subset(K1, c1);
-    const std::vector<double> clo(c1.size(), lo), chi(c1.size(), hi);
-    RpcGuidedStats cs;
-    const std::vector<SearchRegion> cr = rpc_search_regions(a, b, C1.kp, clo, chi, r.margin, r.margin, r.samples, threads, &cs);
-    const RegionMatchResult coarse = match_in_regions(C1, K2, cr, desc, g.ratio_margin, threads);
-    st.coarse_putative = static_cast<long>(coarse.matches.size());
-    if (st.coarse_putative >= std::max(min_inliers, AffineFundamental::MINIMUM_SAMPLES)) {
-      Eigen::MatrixX4d xy(coarse.matches.size(), 4);
-      for (size_t k = 0; k < coarse.matches.size(); ++k) {
-        const auto &p = C1.kp[static_cast<size_t>(coarse.matches[k].i1)].pt, &q = K2.kp[static_cast<size_t>(coarse.matches[k].i2)].pt;
-        xy.row(static_cast<Eigen::Index>(k)) << p.x, p.y, q.x, q.y;
-      }
-      const AffineFundamentalResult rr = ransac_affine_fundamental(xy, ransac);
-      st.coarse_inliers = rr.ok ? rr.inliers : 0;
-      if (rr.ok && rr.inliers >= min_inliers && cs.mean_length > 0) {
-        // the height of an inlier: where along its chord (linear in h) its image-2 position falls;
-        // its offset across the chord: the models' bias there
-        std::vector<Eigen::Vector3d> heights;
-        std::vector<Eigen::Index> in;
-        std::vector<double> across;
-        for (size_t k = 0; k < coarse.matches.size(); ++k) {
-          const auto row = static_cast<Eigen::Index>(k);
-          if (!rr.inlier[row]) continue;
-          const SearchRegion& R = cr[static_cast<size_t>(coarse.matches[k].i1)];
-          const Eigen::Vector2d v = xy.row(row).tail<2>().transpose() - R.a;
-          const double len = R.length - 2 * r.margin;
-          const double t = len > 1e-9 ? (R.u.dot(v) - r.margin) / len : 0.5;
-          heights.emplace_back(xy(row, 0), xy(row, 1), lo + t * (hi - lo));
-          in.push_back(row);
-          across.push_back(R.u.y() * v.x() - R.u.x() * v.y());
-        }
-        // the bias across the curves, a plane in x1 (shift and drift of the models)
-        Eigen::MatrixX3d A(in.size(), 3);
-        Eigen::VectorXd d(in.size());
-        for (size_t q = 0; q < in.size(); ++q) {
-          A.row(static_cast<Eigen::Index>(q)) << xy(in[q], 0), xy(in[q], 1), 1.0;
-          d(static_cast<Eigen::Index>(q)) = across[q];
-        }
-        bias = A.colPivHouseholderQr().solve(d);
-        const Eigen::VectorXd res = d - A * bias;
-        st.bias_rms = std::sqrt(res.squaredNorm() / static_cast<double>(res.size()));
-        st.bias_min = d.minCoeff(), st.bias_max = d.maxCoeff();
-        const double metres_per_px = (hi - lo) / cs.mean_length;
-        const CellRanges ranges = cell_ranges(heights, w1, h1, g.coarse_grid, g.min_cell_samples, g.parallax_margin * metres_per_px);
-        st.narrowed = true;
-        st.cell_h_lo = 1e300, st.cell_h_hi = -1e300;
-        for (size_t c = 0; c < ranges.lo.size(); ++c)
-          st.cell_h_lo = std::min(st.cell_h_lo, ranges.lo[c]), st.cell_h_hi = std::max(st.cell_h_hi, ranges.hi[c]);
-        for (size_t i = 0; i < n1; ++i) {
-          const size_t c = ranges.cell(K1.kp[i].pt.x, K1.kp[i].pt.y);
-          cell_lo[i] = ranges.lo[c], cell_hi[i] = ranges.hi[c];
-        }
+    Coarse best, last;
+    for (double m = r.margin;; m = std::min(4 * m, r.max_margin)) {
+      last = coarse_geometry(C1, K2, a, b, lo, hi, m, desc, g, r, ransac, min_inliers, threads);
+      const bool fits = last.ok && std::max(std::abs(last.bias_min), std::abs(last.bias_max)) + std::max(g.band, 3 * last.bias_rms) <= m;
+      if (last.ok && (fits || !best.ok || last.inliers > best.inliers)) best = last;
+      if (fits || !(m < r.max_margin) || !(m > 0)) break;
+    }
+    const Coarse& used = best.ok ? best : last;  // without a geometry: the widest margin tried
+    st.coarse_margin = used.margin;
+    st.coarse_putative = used.putative;
+    st.coarse_inliers = used.inliers;
+    if (best.ok) {
+      bias = best.bias;
+      st.bias_rms = best.bias_rms;
+      st.bias_min = best.bias_min, st.bias_max = best.bias_max;
+      const CellRanges ranges =
+          cell_ranges(best.heights, w1, h1, g.coarse_grid, g.min_cell_samples, g.parallax_margin * best.metres_per_px);
+      st.narrowed = true;
+      st.cell_h_lo = 1e300, st.cell_h_hi = -1e300;
+      for (size_t c = 0; c < ranges.lo.size(); ++c)
+        st.cell_h_lo = std::min(st.cell_h_lo, ranges.lo[c]), st.cell_h_hi = std::max(st.cell_h_hi, ranges.hi[c]);
+      for (size_t i = 0; i < n1; ++i) {
+        const size_t c = ranges.cell(K1.kp[i].pt.x, K1.kp[i].pt.y);
+        cell_lo[i] = ranges.lo[c], cell_hi[i] = ranges.hi[c];
       }
     }
   }
   // 2. every keypoint in the region of its cell's heights
   // (narrowed: no margin along the curves beyond the cells' ranges, the measured bias removed across
-  // them, and the affine guided search's band, or 3 x the RMS the bias plane leaves if that is wider)
-  const double along = st.narrowed ? 0.0 : r.margin, across = st.narrowed ? std::max(g.band, 3 * st.bias_rms) : r.margin;
+  // them, and the affine guided search's band, or 3 x the RMS the bias plane leaves if that is wider;
+  // else the widest margin step 1 tried)
+  const double along = st.narrowed ? 0.0 : st.coarse_margin, across = st.narrowed ? std::max(g.band, 3 * st.bias_rms) : st.coarse_margin;
   std::vector<SearchRegion> regions = rpc_search_regions(a, b, K1.kp, cell_lo, cell_hi, along, across, r.samples, threads, &st);
   if (st.narrowed)
     for (size_t i = 0; i < n1; ++i)

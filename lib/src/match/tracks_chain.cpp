@@ -1,8 +1,9 @@
 #include "tpkit/match/tracks_chain.hpp"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -132,10 +133,11 @@ struct TrackChainer::Impl {
   // `conflicts`, when not null, counts the conflicts (the first walk).
   template <class F>
   void walk(F&& f, ChainStats* conflicts) const;
-  void check_closure(Index nb, Index ne, int ref, const std::vector<Index>& q, const std::vector<Eigen::Vector2d>& pos,
-                     const std::vector<double>& pvar, const std::vector<char>& reached, std::vector<char>& have,
-                     ChainStats* counts) const;
-  mutable std::vector<Index> closure_order;  // scratch of check_closure
+  // Loop closure over every cycle of a track's links (see the header): the views and links to leave out.
+  // `q`: the nodes reached by the first breadth-first walk, in its order; `usable[im]`: image im holds
+  // one point of the track (no conflict). Returns whether anything is left out.
+  bool close_loops(const std::vector<Index>& q, const std::vector<char>& usable, std::vector<char>& drop_view,
+                   std::vector<Index>& drop_links, long& views_dropped, long& links_dropped) const;
 };
 
 void TrackChainer::Impl::add(const Matches& m) {
@@ -355,7 +357,8 @@ void TrackChainer::Impl::walk(F&& f, ChainStats* conflicts) const {
     return std::abs(nodes[p].x - nodes[q].x) <= o.same_position && std::abs(nodes[p].y - nodes[q].y) <= o.same_position;
   };
   const size_t nimg = imgs.size();
-  std::vector<char> present(nimg), conflict(nimg), have(nimg);
+  std::vector<char> present(nimg), conflict(nimg), have(nimg), usable(nimg), drop_view(nimg);
+  std::vector<Index> drop_links;
   std::vector<Index> first(nimg);
   std::vector<Eigen::Vector2d> view(nimg);
   std::vector<double> var(nimg);
@@ -389,88 +392,242 @@ void TrackChainer::Impl::walk(F&& f, ChainStats* conflicts) const {
     if (conflicts)
       for (size_t im = 0; im < nimg; ++im)
         if (conflict[im]) ++conflicts->views_dropped_conflicts;
-    // breadth first from the reference keypoint(s)
+    // breadth first from the reference keypoint(s), through no dropped view or link
     const size_t size = ne - nb;
-    pos.resize(size);
-    pvar.assign(size, std::numeric_limits<double>::quiet_NaN());
-    reached.assign(size, 0);
-    q.clear();
-    for (Index c = nb; c < ne && image_of(comp_nodes[c]) == ref; ++c) {
-      const Index n = comp_nodes[c];
-      pos[c - nb] = {nodes[n].x, nodes[n].y};
-      reached[c - nb] = 1;
-      q.push_back(n);
-    }
-    std::fill(have.begin(), have.end(), 0);
-    have[ref] = 1;
-    view[ref] = {nodes[first[ref]].x, nodes[first[ref]].y};
-    var[ref] = std::numeric_limits<double>::quiet_NaN();
-    for (size_t head = 0; head < q.size(); ++head) {
-      const Index n = q[head];
-      const Eigen::Vector2d pn = pos[local[n]];
-      const double vn = pvar[local[n]];
-      for (Index a = adj_at[n]; a < adj_at[n + 1]; ++a) {
-        const Index l = adj[a];
-        const bool forward = lu[l] == n;
-        const Index m = forward ? lv[l] : lu[l];
-        const int im = image_of(m);
-        const double half = 0.5 * static_cast<double>(lsig[l]) * static_cast<double>(lsig[l]);
-        if (std::isnan(var[ref]) && image_of(n) == ref) var[ref] = half;  // the first record leaving the reference
-        if (conflict[im] || reached[local[m]]) continue;
-        Eigen::Vector2d pm;
-        if (forward)  // refined position in image 2, moved by n's offset from its keypoint
-          pm = Eigen::Vector2d(lx2[l], ly2[l]) + (pn - Eigen::Vector2d(nodes[n].x, nodes[n].y));
-        else  // reversed: x2 is n's refined position relative to m's keypoint
-          pm = Eigen::Vector2d(nodes[m].x, nodes[m].y) - (Eigen::Vector2d(lx2[l], ly2[l]) - pn);
-        pos[local[m]] = pm;
-        pvar[local[m]] = (std::isnan(vn) ? 0.0 : vn) + half;
-        reached[local[m]] = 1;
-        q.push_back(m);
-        if (!have[im]) {
-          have[im] = 1;
-          view[im] = pm;
-          var[im] = pvar[local[m]];
+    auto breadth_first = [&](int r) {
+      pos.resize(size);
+      pvar.assign(size, std::numeric_limits<double>::quiet_NaN());
+      reached.assign(size, 0);
+      q.clear();
+      for (Index c = nb; c < ne; ++c) {
+        const Index n = comp_nodes[c];
+        if (image_of(n) != r) continue;
+        pos[c - nb] = {nodes[n].x, nodes[n].y};
+        reached[c - nb] = 1;
+        q.push_back(n);
+      }
+      std::fill(have.begin(), have.end(), 0);
+      have[r] = 1;
+      view[r] = {nodes[first[r]].x, nodes[first[r]].y};
+      var[r] = std::numeric_limits<double>::quiet_NaN();
+      for (size_t head = 0; head < q.size(); ++head) {
+        const Index n = q[head];
+        const Eigen::Vector2d pn = pos[local[n]];
+        const double vn = pvar[local[n]];
+        for (Index a = adj_at[n]; a < adj_at[n + 1]; ++a) {
+          const Index l = adj[a];
+          const bool forward = lu[l] == n;
+          const Index m = forward ? lv[l] : lu[l];
+          const int im = image_of(m);
+          if (!drop_links.empty() && std::binary_search(drop_links.begin(), drop_links.end(), l)) continue;
+          const double half = 0.5 * static_cast<double>(lsig[l]) * static_cast<double>(lsig[l]);
+          if (std::isnan(var[r]) && image_of(n) == r && !drop_view[im]) var[r] = half;  // the first record leaving the reference
+          if (conflict[im] || drop_view[im] || reached[local[m]]) continue;
+          Eigen::Vector2d pm;
+          if (forward)  // refined position in image 2, moved by n's offset from its keypoint
+            pm = Eigen::Vector2d(lx2[l], ly2[l]) + (pn - Eigen::Vector2d(nodes[n].x, nodes[n].y));
+          else  // reversed: x2 is n's refined position relative to m's keypoint
+            pm = Eigen::Vector2d(nodes[m].x, nodes[m].y) - (Eigen::Vector2d(lx2[l], ly2[l]) - pn);
+          pos[local[m]] = pm;
+          pvar[local[m]] = (std::isnan(vn) ? 0.0 : vn) + half;
+          reached[local[m]] = 1;
+          q.push_back(m);
+          if (!have[im]) {
+            have[im] = 1;
+            view[im] = pm;
+            var[im] = pvar[local[m]];
+          }
         }
       }
+    };
+    std::fill(drop_view.begin(), drop_view.end(), 0);
+    drop_links.clear();
+    int r = ref;
+    breadth_first(r);
+    if (o.closure > 0) {
+      for (size_t im = 0; im < nimg; ++im) usable[im] = have[im];
+      long vd = 0, ld = 0;
+      if (close_loops(q, usable, drop_view, drop_links, vd, ld)) {
+        // the reference itself may have gone: the track then refers to its next image's keypoint
+        if (drop_view[r]) {
+          r = 0;
+          while (r < static_cast<int>(nimg) && !(usable[r] && !drop_view[r])) ++r;
+        }
+        breadth_first(r);
+        for (size_t im = 0; im < nimg; ++im)
+          if (usable[im] && !have[im] && !drop_view[im]) ++vd;  // cut off from the reference by the drops
+        if (conflicts) conflicts->views_dropped_closure += vd, conflicts->links_dropped_closure += ld;
+      }
     }
-    if (o.closure > 0) check_closure(nb, ne, ref, q, pos, pvar, reached, have, conflicts);
-    if (ref < K) f(ref, nodes[first[ref]].id, have, view, var);
+    if (r < K) f(r, nodes[first[r]].id, have, view, var);
   }
 }
 
-// Every link of the component whose two ends were reached: the position it gives its image-2 end from
-// its image-1 end's position must be the breadth-first one (exactly so for the links of the search tree).
-// Variance of the disagreement: the records of the cycle, 2 pvar(u) + 2 pvar(v) + sigma_l^2 (pvar holds
-// half of each record's variance along the path).
-void TrackChainer::Impl::check_closure(Index nb, Index ne, int ref, const std::vector<Index>& q,
-                                       const std::vector<Eigen::Vector2d>& pos, const std::vector<double>& pvar,
-                                       const std::vector<char>& reached, std::vector<char>& have,
-                                       ChainStats* counts) const {
-  std::vector<Index>& order = closure_order;
-  order.assign(ne - nb, 0);
-  for (size_t k = 0; k < q.size(); ++k) order[local[q[k]]] = static_cast<Index>(k);
-  for (Index c = nb; c < ne; ++c) {
-    const Index u = comp_nodes[c];
-    if (!reached[local[u]]) continue;
-    for (Index a = adj_at[u]; a < adj_at[u + 1]; ++a) {
-      const Index l = adj[a];
-      if (lu[l] != u) continue;  // each link once, from its image-1 end
-      const Index v = lv[l];
-      if (!reached[local[v]]) continue;
-      const Eigen::Vector2d pv = Eigen::Vector2d(lx2[l], ly2[l]) + (pos[local[u]] - Eigen::Vector2d(nodes[u].x, nodes[u].y));
-      const double d = (pv - pos[local[v]]).norm();
-      const double zu = std::isnan(pvar[local[u]]) ? 0.0 : pvar[local[u]], zv = std::isnan(pvar[local[v]]) ? 0.0 : pvar[local[v]];
-      const double sl = std::isnan(lsig[l]) ? 0.0 : static_cast<double>(lsig[l]);
-      const double cycle_var = 2 * zu + 2 * zv + sl * sl;
-      if (!(d > std::max(o.closure, 5 * std::sqrt(cycle_var)))) continue;
-      const Index later = order[local[u]] > order[local[v]] ? u : v;
-      const int im = image_of(later) == ref ? image_of(later == u ? v : u) : image_of(later);
-      if (have[im]) {
-        have[im] = 0;
-        if (counts) ++counts->views_dropped_closure;
-      }
+// Loop closure. Unknowns: each view's offset o(im) = position - keypoint position (pixels, x and y
+// apart; the reference's is 0). A link (record) between keypoint u of image a (its image 1) and
+// keypoint v of image b says o(b) - o(a) = d = (x2, y2) - kp(v), weight 1 / (sigma^2 + 0.02^2). The
+// links of a track over-determine the offsets wherever they close a cycle; each link is compared with
+// what all the others say (least squares without it: the residual r / (1 - h), h its leverage, of
+// variance sigma^2 + that of the prediction), which covers every cycle of the track at once, not only
+// the triplets. Tolerance: max(closure, 5 sigma of that difference). While a link fails, the worst
+// (largest failure over its tolerance) is left out and the fit redone (data snooping); where the worst
+// ties with others (one cycle, whose links all say the same: the error cannot be placed), the view most
+// of them share goes, the one reached later on a tie. Then a view most of whose links went, the view
+// inconsistent with the most others, loses its place (a wrong view's records go one by one until its
+// last, which nothing contradicts any more); two good views joined by one bad record keep theirs.
+bool TrackChainer::Impl::close_loops(const std::vector<Index>& q, const std::vector<char>& usable,
+                                     std::vector<char>& drop_view, std::vector<Index>& drop_links, long& views_dropped,
+                                     long& links_dropped) const {
+  // the views (images) of the track in the order the walk reached them; the reference first
+  std::vector<int> slot(imgs.size(), -1), image_at;
+  for (Index n : q) {
+    const int im = image_of(n);
+    if (usable[im] && slot[im] < 0) {
+      slot[im] = static_cast<int>(image_at.size());
+      image_at.push_back(im);
     }
   }
+  const int V = static_cast<int>(image_at.size());
+  if (V < 3) return false;  // two views close no cycle
+  struct Link {
+    Index id;
+    int a, b;  // view slots, o(b) - o(a) = d
+    Eigen::Vector2d d;
+    double s2, w;
+  };
+  std::vector<Link> links;
+  for (Index u : q) {
+    if (slot[image_of(u)] < 0) continue;
+    for (Index k = adj_at[u]; k < adj_at[u + 1]; ++k) {
+      const Index l = adj[k];
+      if (lu[l] != u) continue;  // each link once, from its image-1 end
+      const Index v = lv[l];
+      const int sb = slot[image_of(v)];
+      if (sb < 0) continue;
+      const double sg = std::isnan(lsig[l]) ? 0.0 : static_cast<double>(lsig[l]);
+      links.push_back({l, slot[image_of(u)], sb, Eigen::Vector2d(lx2[l] - nodes[v].x, ly2[l] - nodes[v].y), sg * sg,
+                       1.0 / (sg * sg + 0.02 * 0.02)});
+    }
+  }
+  if (static_cast<int>(links.size()) < V) return false;  // a tree: nothing to compare
+  std::vector<char> view_out(static_cast<size_t>(V), 0), link_out(links.size(), 0);
+  bool changed = false;
+  int root = 0;  // the slot whose offset is held at 0
+  std::vector<int> unk(static_cast<size_t>(V));
+  std::vector<int> fails(static_cast<size_t>(V)), count(static_cast<size_t>(V));
+  std::vector<double> excess(links.size());
+  for (;;) {
+    // the views still linked to the root (a drop may cut some off: they go with it)
+    std::vector<char> seen(static_cast<size_t>(V), 0);
+    seen[static_cast<size_t>(root)] = 1;
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (size_t k = 0; k < links.size(); ++k)
+        if (!link_out[k] && seen[static_cast<size_t>(links[k].a)] != seen[static_cast<size_t>(links[k].b)]) {
+          seen[static_cast<size_t>(links[k].a)] = seen[static_cast<size_t>(links[k].b)] = 1;
+          grew = true;
+        }
+    }
+    int m = 0;
+    for (int v = 0; v < V; ++v) unk[static_cast<size_t>(v)] = (seen[static_cast<size_t>(v)] && v != root) ? m++ : -1;
+    long alive = 0;
+    for (size_t k = 0; k < links.size(); ++k) alive += !link_out[k] && seen[static_cast<size_t>(links[k].a)];
+    if (alive <= m) break;  // no cycle left
+    Eigen::MatrixXd N = Eigen::MatrixXd::Zero(m, m);
+    Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(m, 2);
+    for (size_t k = 0; k < links.size(); ++k) {
+      const Link& L = links[k];
+      if (link_out[k] || !seen[static_cast<size_t>(L.a)]) continue;
+      const int ia = unk[static_cast<size_t>(L.a)], ib = unk[static_cast<size_t>(L.b)];
+      if (ia >= 0) N(ia, ia) += L.w, rhs.row(ia) -= L.w * L.d.transpose();
+      if (ib >= 0) N(ib, ib) += L.w, rhs.row(ib) += L.w * L.d.transpose();
+      if (ia >= 0 && ib >= 0) N(ia, ib) -= L.w, N(ib, ia) -= L.w;
+    }
+    const Eigen::MatrixXd C = N.ldlt().solve(Eigen::MatrixXd::Identity(m, m));  // covariance of the offsets
+    const Eigen::MatrixX2d off = C * rhs;
+    auto offset = [&](int v) -> Eigen::Vector2d {
+      const int i = unk[static_cast<size_t>(v)];
+      return i < 0 ? Eigen::Vector2d(0, 0) : Eigen::Vector2d(off.row(i).transpose());
+    };
+    auto cov = [&](int i, int j) { return i < 0 || j < 0 ? 0.0 : C(i, j); };
+    bool any = false;
+    for (size_t k = 0; k < links.size(); ++k) {
+      excess[k] = 0;
+      const Link& L = links[k];
+      if (link_out[k] || !seen[static_cast<size_t>(L.a)]) continue;
+      const int ia = unk[static_cast<size_t>(L.a)], ib = unk[static_cast<size_t>(L.b)];
+      const double qv = cov(ib, ib) + cov(ia, ia) - 2 * cov(ia, ib);  // variance of o(b) - o(a) from all links
+      const double h = L.w * qv;                                       // the link's leverage
+      if (h > 1 - 1e-9) continue;                                     // on no cycle: nothing to compare with
+      const double e = (L.d - (offset(L.b) - offset(L.a))).norm() / (1 - h);
+      const double tol = std::max(o.closure, 5 * std::sqrt(L.s2 + qv / (1 - h)));
+      if (!(e > tol)) continue;
+      excess[k] = e / tol;
+      any = true;
+    }
+    if (!any) break;
+    changed = true;
+    // the worst link goes; where it ties with others (a single cycle: every link of it says the same,
+    // the error cannot be placed), the view most of the tied links share goes, the one reached later
+    // on a tie (a triplet's third view)
+    size_t worst = 0;
+    for (size_t k = 1; k < links.size(); ++k)
+      if (excess[k] > excess[worst]) worst = k;
+    std::fill(fails.begin(), fails.end(), 0);
+    int tied = 0;
+    for (size_t k = 0; k < links.size(); ++k)
+      if (excess[k] > 0 && excess[k] >= excess[worst] * (1 - 1e-6)) {
+        ++tied;
+        ++fails[static_cast<size_t>(links[k].a)], ++fails[static_cast<size_t>(links[k].b)];
+      }
+    if (tied == 1) {
+      link_out[worst] = 1;
+      continue;
+    }
+    int w = 0;
+    for (int v = 1; v < V; ++v)
+      if (fails[static_cast<size_t>(v)] >= fails[static_cast<size_t>(w)]) w = v;
+    view_out[static_cast<size_t>(w)] = 1;
+    for (size_t k = 0; k < links.size(); ++k)
+      if (links[k].a == w || links[k].b == w) link_out[k] = 1;
+    if (w == root) {  // the next view reached holds the offsets
+      root = 0;
+      while (view_out[static_cast<size_t>(root)]) ++root;
+    }
+  }
+  if (!changed) return false;
+  // a view most of whose links (to the views kept) went is not placed by the track: it goes too, the
+  // worst first (a wrong view keeps one link, the last of a cycle, which nothing contradicts)
+  for (;;) {
+    std::fill(fails.begin(), fails.end(), 0);
+    std::fill(count.begin(), count.end(), 0);
+    for (size_t k = 0; k < links.size(); ++k) {
+      const Link& L = links[k];
+      if (view_out[static_cast<size_t>(L.a)] || view_out[static_cast<size_t>(L.b)]) continue;
+      ++count[static_cast<size_t>(L.a)], ++count[static_cast<size_t>(L.b)];
+      if (link_out[k]) ++fails[static_cast<size_t>(L.a)], ++fails[static_cast<size_t>(L.b)];
+    }
+    int w = -1;
+    for (int v = 0; v < V; ++v) {
+      const size_t z = static_cast<size_t>(v);
+      if (view_out[z] || !(2 * fails[z] > count[z])) continue;
+      if (w < 0 || fails[z] * count[static_cast<size_t>(w)] >= fails[static_cast<size_t>(w)] * count[z]) w = v;
+    }
+    if (w < 0) break;
+    view_out[static_cast<size_t>(w)] = 1;
+  }
+  for (int v = 0; v < V; ++v)
+    if (view_out[static_cast<size_t>(v)]) {
+      drop_view[static_cast<size_t>(image_at[static_cast<size_t>(v)])] = 1;
+      ++views_dropped;
+    }
+  for (size_t k = 0; k < links.size(); ++k)
+    if (link_out[k] && !view_out[static_cast<size_t>(links[k].a)] && !view_out[static_cast<size_t>(links[k].b)]) {
+      drop_links.push_back(links[k].id);
+      ++links_dropped;
+    }
+  std::sort(drop_links.begin(), drop_links.end());
+  return true;
 }
 
 TrackChainer::TrackChainer(const ChainOptions& o) : impl_(std::make_unique<Impl>()) {
@@ -502,8 +659,10 @@ Tracks TrackChainer::header() const {
   meta_set(T.meta, "positions", "refer to the reference keypoint: image number ref, its id kp in that image's matches files");
   meta_set(T.meta, "min_views", std::to_string(I.o.min_views));
   if (I.o.closure > 0)
-    meta_set(T.meta, "closure", "redundant links agree within max(" + format_number(I.o.closure) + " px, 5 sigma of the cycle); " +
-                                    std::to_string(I.st.views_dropped_closure) + " views dropped where they did not");
+    meta_set(T.meta, "closure", "every link agrees with what the track's other links say within max(" + format_number(I.o.closure) +
+                                    " px, 5 sigma of the difference); " + std::to_string(I.st.views_dropped_closure) +
+                                    " views dropped where most of their links did not, " + std::to_string(I.st.links_dropped_closure) +
+                                    " single links left out");
   else
     meta_set(T.meta, "closure", "not checked");
   std::string counts;
@@ -565,6 +724,12 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
   TrackChainer c(o);
   for (const auto& m : files) c.add(m);
   const ChainStats st = c.join();
+  Tracks T = chained_tracks(c, st);
+  if (stats) *stats = st;
+  return T;
+}
+
+Tracks chained_tracks(const TrackChainer& c, const ChainStats& st) {
   Tracks T = c.header();
   const Eigen::Index n = st.written, nx = T.xy.cols(), ne = static_cast<Eigen::Index>(T.extra.names.size());
   T.xy.resize(n, nx);
@@ -576,7 +741,6 @@ Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, Ch
     for (Eigen::Index k = 0; k < nx; ++k) T.xy(r, k) = xy[k];
     for (Eigen::Index k = 0; k < ne; ++k) T.extra.values(r, k) = extra[k];
   });
-  if (stats) *stats = st;
   return T;
 }
 

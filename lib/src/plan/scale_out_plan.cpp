@@ -337,7 +337,13 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
       p.image_detections[i].push_back(out);
     }
   }
-  PlanJob chain{"tracks.tracks", pair_files, {}, tool(o, "tp-chain") + quiet + " --images"};
+  // where every chained image has a model, the views the models contradict by more than 1 px after
+  // each pair's bias are dropped (tp-chain --rpc-check): rpc-adjust would flag their whole tracks
+  bool all_models = true;
+  for (size_t i = 0; i < images.size(); ++i)
+    if (paired[i] && !images[i].rpc) all_models = false;
+  PlanJob chain{"tracks.tracks", pair_files, {},
+                tool(o, "tp-chain") + quiet + (all_models ? " --rpc-check 1 --threads " + std::to_string(o.threads) : "") + " --images"};
   for (size_t i = 0; i < images.size(); ++i)
     if (paired[i]) chain.command += " " + shell_quote(images[i].path);
   chain.command += " -o " + in_work(o, "tracks.tracks");

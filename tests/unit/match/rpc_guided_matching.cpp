@@ -176,3 +176,44 @@ TEST(RpcGuidedMatching, ModelsThatDoNotShareHeightsAreRefused) {
   r.h_lo = 30;
   EXPECT_THROW(rpc_height_range(a, b, r, lo, hi), UsageError);
 }
+
+// Issue 51: a delivered model tens of pixels off must not defeat the guided search. Image 2's model is
+// shifted by 35 px across the curves (rows; the curves run along x here) and 4 px along them: the first
+// margin (10 px) holds no geometry, the wider ones measure the bias; the search then finds as many true
+// matches as with the exact models, and the bias it reports is the shift (the 200-px period of the
+// texture keeps any margin of 100 px or more from finding a geometry at all: the widening stops at the
+// margin that fits, or keeps the one of most inliers).
+TEST(RpcGuidedMatching, ModelTensOfPixelsOffStillGuides) {
+  const Scene& s = scene();
+  const ImageSource a = open_image_source(s.img[0], 0, std::nullopt, ""), b = open_image_source(s.img[1], 0, std::nullopt, "");
+  RpcModel shifted = s.rpc[1];
+  shifted.line_off += 35;
+  shifted.samp_off += 4;
+  PairMatchOptions o = options(true);
+  o.rpc_only = true;  // no fallback to the images' coarse stage (which the repeated texture misleads)
+  PairMatchStats exact, biased;
+  const Matches m0 = match_pair(a, b, o, &exact);
+  o.rpc2 = &shifted;
+  const Matches m1 = match_pair(a, b, o, &biased);
+  auto right = [](const Matches& m) {
+    long n = 0;
+    for (Eigen::Index r = 0; r < m.xy.rows(); ++r)
+      if ((truth2(m.xy(r, 0), m.xy(r, 1)) - Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3))).norm() < 2.5) ++n;
+    return n;
+  };
+  ASSERT_TRUE(exact.rpc.narrowed);
+  EXPECT_EQ(exact.rpc.coarse_margin, 10);  // exact models: the first margin fits
+  ASSERT_TRUE(biased.rpc_guided);
+  ASSERT_TRUE(biased.rpc.narrowed) << biased.rpc.coarse_inliers << " of " << biased.rpc.coarse_putative << " at "
+                                   << biased.rpc.coarse_margin << " px";
+  EXPECT_GT(biased.rpc.coarse_margin, 10);
+  const long r0 = right(m0), r1 = right(m1);
+  EXPECT_GT(r0, 500);
+  EXPECT_GE(r1, 0.97 * static_cast<double>(r0)) << r1 << " true matches against " << r0 << " with the exact models";
+  EXPECT_GE(r1, 0.97 * static_cast<double>(m1.xy.rows()));  // and they are true ones
+  // the bias across the curves is the 35-px shift (its sign follows the chord's direction)
+  EXPECT_NEAR(std::abs(biased.rpc.bias_min), 35, 1.0);
+  EXPECT_NEAR(std::abs(biased.rpc.bias_max), 35, 1.0);
+  // the narrowed band stays as narrow as with the exact models
+  EXPECT_LT(biased.rpc.bias_rms, 0.5);
+}

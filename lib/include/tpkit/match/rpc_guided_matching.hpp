@@ -10,15 +10,20 @@
 // 1. Coarse: the strongest keypoints of image 1 (GuidedMatchOptions coarse_keypoints over coarse_grid^2
 //    cells) are matched in their regions over the whole height range, and an affine F is fitted to
 //    those matches by RANSAC; each inlier gives the height at which its curve passes its image-2
-//    position. Each coarse cell of image 1 gets the height range of the inliers in it and its eight
-//    neighbours (or of all of them when fewer than min_cell_samples), widened by parallax_margin pixels
-//    converted to metres along the curves. Their offsets across the curves measure the models' bias
-//    (relative between the two images): a plane in x1 (shift and drift) is fitted to them.
+//    position. The margin follows the bias the data show: tried at `margin` first, then 4 times wider
+//    (up to `max_margin`) while the F finds no geometry or its inliers' offsets across the curves,
+//    widened by step 2's band, reach beyond the margin (a delivered model tens of pixels off); the
+//    first geometry within its margin is used, else the one of most inliers. Each coarse cell of image 1
+//    gets the height range of the inliers in it and its eight neighbours (or of all of them when fewer
+//    than min_cell_samples), widened by parallax_margin pixels converted to metres along the curves.
+//    Their offsets across the curves measure the models' bias (relative between the two images): a
+//    plane in x1 (shift and drift) is fitted to them.
 // 2. Every keypoint is matched in the region of its cell's height range (match_in_regions), moved
 //    across by the bias plane and as wide as the affine guided search's band (or 3 x the RMS the plane
 //    leaves, if wider) plus the curve's bend, not lengthened beyond the cell's heights. When step 1
-//    finds no geometry (fewer than min_inliers), the whole range is used: the search still holds,
-//    because it does not depend on the images' content (repetitive texture, small overlaps).
+//    finds no geometry (fewer than min_inliers), the whole range is used with the widest margin it
+//    tried: the search still holds, because it does not depend on the images' content (repetitive
+//    texture, small overlaps).
 // Pixels: tpkit's convention in both images (x = column, y = row, (0, 0) the centre of the top-left
 // pixel); the models use the same convention (rpc_io.hpp converts DIMAP's where it is read).
 #pragma once
@@ -36,12 +41,14 @@ struct RpcGuideOptions {
   // valid for (height offset -/+ scale of each, intersected).
   bool height_given = false;
   double h_lo = 0, h_hi = 0;
-  double margin = 10;  // pixels around the chord of the epipolar curve
+  double margin = 10;       // pixels around the chord of the epipolar curve (step 1's first try)
+  double max_margin = 160;  // step 1 widens its margin 4-fold up to this while the bias needs it
   int samples = 5;     // heights along a curve (>= 2) that bound its distance from the chord
 };
 
 struct RpcGuidedStats {
   double h_lo = 0, h_hi = 0;              // the heights searched (step 1)
+  double coarse_margin = 0;               // step 1's margin whose geometry was used (or the widest tried)
   long coarse_putative = 0, coarse_inliers = 0;
   bool narrowed = false;                  // step 2 used per-cell height ranges
   double cell_h_lo = 0, cell_h_hi = 0;    // their extremes, metres

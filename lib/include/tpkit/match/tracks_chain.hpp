@@ -12,9 +12,12 @@
 //    exactly; other links are followed breadth first from the reference, moving the position by the
 //    refined offset: through a record (image1 = u, image2 = v), v = x2 + (pos(u) - kp(u)); through a
 //    reversed record, u = kp(u) - (x2 - pos(v)). Shortest paths first, then file and record order.
-//  - loop closure: every other record between two reached keypoints must give the same position within
-//    max(ChainOptions::closure, 5 sigma of the cycle); where it does not, the view of the end reached
-//    later in the breadth-first order is dropped (the track keeps its other views).
+//  - loop closure over every cycle of the track's links (close_loops in the source): each record is
+//    compared with what all the others say (the least-squares offsets of the views without it) within
+//    max(ChainOptions::closure, 5 sigma of the difference); while one disagrees, the worst is left out
+//    (one cycle whose records all disagree alike: its view reached later goes); a view most of whose
+//    records went (the view inconsistent with the most others) loses its place; then the positions are
+//    walked again without them. A track whose reference view goes refers to its next image's keypoint.
 //  - keypoint positions: image 1's is (x1, y1); image 2's is (kx2, ky2) when the file has these
 //    columns, else (x2, y2).
 //  - sigmas (when every file has a `sigma` column: the standard deviation of the record's (x2, y2)
@@ -22,8 +25,8 @@
 //    reached over several records adds half the variance of each record on its path, and the reference
 //    takes half that of the first record leaving it. Written as sigma1 ... sigmaK (nan: not seen).
 // The output holds every track with at least `min_views` views among the images of `images` (a view
-// it is not seen in: nan nan), sorted by reference image then reference keypoint id; track ids count
-// from 0. Deterministic.
+// it is not seen in: nan nan), sorted by reference image then reference keypoint id (a track whose
+// reference view the closure dropped keeps that place); track ids count from 0. Deterministic.
 //
 // Memory: the files are added one at a time and not kept; per match about 28 bytes of links and 24
 // per distinct keypoint, then 4-byte indices for the union-find, the adjacency and the components
@@ -48,10 +51,10 @@ struct ChainOptions {
   // Records marked refined 0 (tp-match kept a verified match whose refinement was rejected at its keypoint
   // position, with a larger sigma): chained only when set; else left out and counted (ChainStats, header).
   bool unrefined = false;
-  // Loop closure: a link between two views of a track that the breadth-first positions do not reproduce
-  // (a redundant record, e.g. pair 2-3 of a triplet chained through 1-2 and 1-3) within
-  // max(closure, 5 sigma of the cycle) pixels shows a wrong link: the view reached later loses its place
-  // (counted). 0: no check.
+  // Loop closure: a record between two views of a track that the track's other records contradict
+  // (over every cycle: pair 2-3 of a triplet chained through 1-2 and 1-3, or any loop of a block's
+  // pairs) by more than max(closure, 5 sigma of the difference) pixels is wrong: the view inconsistent
+  // with most of its partners loses its place, a lone bad record is left out (counted). 0: no check.
   double closure = 0.5;
 };
 
@@ -62,6 +65,7 @@ struct ChainStats {
   long dropped_reference_conflicts = 0;
   long views_dropped_conflicts = 0;
   long views_dropped_closure = 0;   // views whose redundant links disagreed (ChainOptions::closure)
+  long links_dropped_closure = 0;   // single records left out of a track whose views they both keep
   long merged_duplicates = 0;
   long written = 0;
   long unrefined_left_out = 0;      // records marked refined 0, not chained (ChainOptions::unrefined false)
@@ -95,5 +99,7 @@ class TrackChainer {
 
 // The tracks of files held in memory (tests, benchmarks).
 Tracks chain_tracks(const std::vector<Matches>& files, const ChainOptions& o, ChainStats* stats = nullptr);
+// The tracks of a joined chainer in memory (header() and every track); `st`: its join()'s statistics.
+Tracks chained_tracks(const TrackChainer& c, const ChainStats& st);
 
 }  // namespace tpkit
