@@ -144,3 +144,28 @@ tpkit_tool_test(rpc-adjust.gcp-malformed-asp
 tpkit_tool_test(rpc-adjust.figure-renders
   COMMAND "${synth_biased} && ${adjust} --model affine -o adj && bash $SRC/tests/tools/figure_check.sh adj/residuals.svg --field --rmse adj/rpc.residuals image1_rms_before_px image2_rms_before_px image3_rms_before_px image1_rms_after_px image2_rms_after_px image3_rms_after_px && grep -c 'stroke=\"#e4002b\"' adj/residuals.svg"
   STDOUT_MATCH "exaggeration: vectors ×[0-9.e+]+\nrmse: [^\n]+\nfigure ok: [0-9]+x[0-9]+\n[1-9][0-9]*\n")
+# Per-view blunders (issue 51): a 6-view block (views 2-6 biased) whose every 4th track of 3 or more views
+# has one view moved 12 px (tests/tools/blunder_views.awk, which writes which): exactly those views are
+# dropped (column dropped of rpc.residuals), every track is kept (none flagged), and the adjusted models
+# put the truth ground points at the truth heights (tp-ground on the clean truth tracks).
+set(synth_block "tp-synth -o blk --views 6 --size 512 --random-bias 5 --seed 3 > /dev/null")
+set(block_views "blk/view1.tif blk/view2.tif blk/view3.tif blk/view4.tif blk/view5.tif blk/view6.tif")
+set(block_rpc "--rpc blk/view2.tif=adj/view2_rpc.txt --rpc blk/view3.tif=adj/view3_rpc.txt --rpc blk/view4.tif=adj/view4_rpc.txt --rpc blk/view5.tif=adj/view5_rpc.txt --rpc blk/view6.tif=adj/view6_rpc.txt")
+set(dropped_views "awk '/^# columns:/ { for (i = 3@SEMI@ i <= NF@SEMI@ i++) c[$i] = i - 2 } /^#/ { next } $c[\"dropped\"] == 1 { print $c[\"track\"], $c[\"image\"] }' adj/rpc.residuals | sort > got.txt && sort blunders.txt > want.txt && test -s want.txt && cmp got.txt want.txt && echo \"dropped $(wc -l < got.txt) of $(wc -l < want.txt): the moved views\"")
+set(block_heights "awk 'NR == FNR { if (!/^#/) h[$1] = $19 @SEMI@ next } !/^#/ { d = $4 - h[$1] @SEMI@ s += d * d @SEMI@ n++ } END { r = sqrt(s / n) @SEMI@ print (r < 0.25 ? \"heights ok\" : \"heights off\"), n, r }' blk/truth.tracks g.points")
+tpkit_tool_test(rpc-adjust.blunder-views-dropped
+  COMMAND "${synth_block} && awk -f $SRC/tests/tools/blunder_views.awk blk/truth.tracks > bad.tracks && rpc-adjust ${block_views} --tracks bad.tracks --fixed blk/view1.tif --dem blk/truth.dem.tif -o adj && ${dropped_views} && tp-ground ${block_views} --tracks blk/truth.tracks ${block_rpc} -o g.points && ${block_heights}"
+  STDOUT_MATCH "^dropped 166 of 166: the moved views\nheights ok 2000 "
+  STDERR_MATCH "rpc-adjust: 166 views dropped as blunders from 166 tracks of 3 or more views \\(166 of them kept"
+  CHECK_FILE adj/rpc.residuals
+  FILE_MATCH "# columns: track image x y dx_before dy_before dx_after dy_after flagged sigma dropped\n.*# flagged_tracks: 0\n# dropped_views: 166\n# tracks_with_dropped_views: 166\n")
+# Height priors at the default --dem-sigma (issue 51): its sigma is estimated from the data and said; a
+# DEM 2 m noisy and 3 m off (bench_dem_reference) agrees with the tie points (--strict), a DEM 200 m off
+# contradicts them (the biases it forces, 250 px, are no delivered model's; --strict refuses it).
+if(TPKIT_BENCH)
+tpkit_tool_test(rpc-adjust.dem-sigma-estimated
+  COMMAND "${synth_biased} && bench_dem_reference syn/truth.dem.tif ref3.tif 2 2 ellipsoid 1 0 0 3 && bench_dem_reference syn/truth.dem.tif ref200.tif 2 2 ellipsoid 1 0 0 200 && ${adjust} --dem ref3.tif --strict -o adj && (${adjust} --dem ref200.tif -o adj2 2> log @SEMI@ cat log >&2) && ${adjust} --dem ref200.tif --strict -o adj3"
+  EXPECT_FAIL
+  STDERR_MATCH "--dem ref3.tif: sigma [0-9.]+ m estimated from the data \\(prior minus free height over [0-9]+ tracks: median -?[0-9.]+ m, NMAD [0-9.]+ m.*--dem ref3.tif agrees with the tie points: .*warning: --dem ref200.tif contradicts the tie points: rms after [^\n]* median 19[0-9.]+ m \\(3 NMAD [0-9.]+ m@SEMI@ the biases it forces: [0-9.]+ px [^\n]*\n.*rpc-adjust: --dem ref200.tif contradicts the tie points \\(--strict\\)"
+  NO_FILE adj3)
+endif()
