@@ -391,6 +391,9 @@ int run(const Opts& o) {
     // a prior that contradicts the tie points degrades the fit silently: compared with the fit without it
     const HeightPriorCheck pc = check_height_prior(images, tracks, ao, r, free_fit.get());
     const std::string& what = prior_name;
+    if (pc.impossible)
+      throw NumericalError(what + " contradicts the tie points: " + pc.figures + "; the biases it forces are beyond any delivered model's (" +
+                           format_figure(pc.forced_bias_px) + " px on image" + std::to_string(pc.forced_image + 1) + "): a wrong height or vertical datum?");
     if (pc.contradicts && !trust.ok())
       throw NumericalError(what + " contradicts the tie points: " + pc.figures + "; the fit with it fails: " + trust.figures);
     if (pc.contradicts && o.strict)

@@ -355,7 +355,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
       if (o.height.at) {
         double h;
         if (o.height.at(r.ground[t][0], r.ground[t][1], h, nullptr)) {
-          // robust (HeightPrior::loss sigmas): a tree top or a roof edge pulls with a bounded force
+          // robust (Huber, HeightPrior::loss sigmas): a tree top or a roof edge pulls with a bounded force
           problem.AddResidualBlock(new HeightPriorCost(&o.height, h),
                                    o.height.loss > 0 ? new ceres::HuberLoss(o.height.loss * std::max(o.height.tie_sigma0, kMinTieSigma0)) : nullptr, g);
           ++with_height;
@@ -707,8 +707,8 @@ HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, cons
   }
   // The RMS may grow by what a prior of the tie points' own precision would cost: a quarter of their
   // reference sigma (not a fixed 0.02 px: a 2 m DEM against noise-free tracks costs 0.05-0.09 px).
-  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with_prior.reference_sigma_px ||
-                  (c.covered > 0 && std::fabs(c.median_dh) > c.level_limit && c.forced_bias_px > c.bias_bound_px) ||
+  c.impossible = c.covered > 0 && std::fabs(c.median_dh) > c.level_limit && c.forced_bias_px > c.bias_bound_px;
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with_prior.reference_sigma_px || c.impossible ||
                   more_flagged > std::max<long>(10, static_cast<long>(free_fit.flagged.size() / 100));
   c.figures = "rms after " + format_figure(c.rms_with) + " px with it, " + format_figure(c.rms_without) + " px without (over the " +
               std::to_string(c.common_tracks) + " tracks neither flags); flagged tracks " +

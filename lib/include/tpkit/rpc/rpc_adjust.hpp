@@ -92,7 +92,7 @@ struct AdjustTrack {
 constexpr double kMinObservationSigma = 0.02;
 
 // The Huber scale of a height prior, in its sigmas (HeightPrior::loss).
-constexpr double kHeightPriorLossSigmas = 2;
+constexpr double kHeightPriorLossSigmas = 1;
 
 // A ground control point in the adjustment (gcp_file.hpp Gcp, its images matched: gcps_to_adjust).
 struct AdjustControl {
@@ -113,7 +113,9 @@ struct HeightPrior {
   double sigma = 0;  // m
   // Huber scale of the prior's residual (h - H) / sigma, in sigmas (0: none, a plain Gaussian prior). A
   // surface model disagrees with some tie points by far more than its sigma (a tree top over the ground,
-  // a roof edge, a DSM flown on another date): past loss sigmas each pulls with a bounded force.
+  // a roof edge, a DSM flown on another date): past loss sigmas each pulls with a bounded force. (A
+  // redescending loss, Cauchy's, lets a prior whose every point is far off pull nothing: a DEM 200 m
+  // off then moved no point and passed for agreeing.)
   double loss = kHeightPriorLossSigmas;
   // The tie points' a posteriori sigma0 in their weighted units (AdjustResult::sigma0_weighted of the fit
   // without the prior; 1: as nominal). The prior's residual is (h - H) / sigma * tie_sigma0 (floored at
@@ -122,7 +124,7 @@ struct HeightPrior {
   // DEM's noise, while the level and plane they cannot see are still the prior's.
   double tie_sigma0 = 1;
 };
-constexpr double kMinTieSigma0 = 0.01;
+constexpr double kMinTieSigma0 = 0.1;
 
 struct AdjustOptions {
   BiasModel model = BiasModel::affine;
@@ -254,6 +256,7 @@ struct HeightPriorCheck {
   double forced_bias_px = 0;             // the largest change of an image's bias the prior forces (px at its centre)
   int forced_image = -1;                 // that image (0-based)
   double bias_bound_px = 0;              // its delivered_bias_bound_px
+  bool impossible = false;               // the level contradiction: biases no delivered model has (refused)
   double sigma = 0;                      // the prior's sigma, m
   std::string figures;                   // one line: the figures above
 };
