@@ -31,7 +31,7 @@ using namespace tpkit;
 struct Opts {
   std::vector<std::string> images, tracks, check, fixed, rpc, gcp;
   std::string model = "affine", height_prior, dem, dem_datum, crs = "geographic", out;
-  double dem_sigma = 1, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01, default_sigma = NAN;
+  double dem_sigma = NAN, loss = 1, flag = 1, prior_shift = 100, prior_linear = 0.01, default_sigma = NAN;
   int threads = 1, iterations = 100;
   bool write_tiff = false, strict = false, unweighted = false, force_gcp = false;
 };
@@ -77,11 +77,12 @@ void write_points(const fs::path& dir, const Opts& o, const std::vector<AdjustIm
   meta_set(meta, "sigma_h", "standard deviation of h (m) for the a posteriori image noise sigma0 = " + format_number(r.sigma0) + " px");
   meta_set(meta, "rms_px", "RMS over the track's views of the residual after the adjustment (pixels)");
   meta_set(meta, "flagged", "1: rms_px above --flag " + format_number(o.flag) + " px");
+  meta_set(meta, "views", "the views in the fit (less those dropped as blunders: rpc.residuals column dropped)");
   table.columns = {{"sigma_h", false}, {"views", true}, {"rms_px", false}, {"flagged", true}};
   for (size_t t = 0; t < tracks.size(); ++t) {
     if (!r.initial_ok[t]) continue;
     table.points.push_back({tracks[t].id, r.ground[t],
-                            {r.sigma_h[t], static_cast<double>(tracks[t].views.size()), r.rms_after[t],
+                            {r.sigma_h[t], static_cast<double>(tracks[t].views.size() - r.views_dropped[t]), r.rms_after[t],
                              static_cast<double>(r.flagged[t])}});
   }
   for (const char* name : {"ground.points", "ground.geojson", "ground.csv"}) write_ground((dir / name).string(), table, conv);
@@ -96,14 +97,15 @@ void write_residuals(const std::string& path, const std::vector<AdjustImage>& im
                              "the delivered models; after: the adjusted biases and points");
   meta_set(meta, "sigma", "the standard deviation the observation was weighted with (pixels: given, floored at " +
                               format_number(kMinObservationSigma) + ", or the default)");
+  meta_set(meta, "dropped", "1: a blunder view dropped from the fit, its track kept (its residual: to the track's point refitted without it)");
   std::ostringstream os;
   write_header(os, "rpc-residuals", 1, refs, meta,
-               {"track", "image", "x", "y", "dx_before", "dy_before", "dx_after", "dy_after", "flagged", "sigma"});
+               {"track", "image", "x", "y", "dx_before", "dy_before", "dx_after", "dy_after", "flagged", "sigma", "dropped"});
   for (size_t k = 0; k < r.obs_image.size(); ++k) {
     int t = r.obs_track[k];
     write_record(os, {static_cast<double>(tracks[t].id), static_cast<double>(r.obs_image[k] + 1), r.obs_xy[k][0],
                       r.obs_xy[k][1], r.res_before[k][0], r.res_before[k][1], r.res_after[k][0], r.res_after[k][1],
-                      static_cast<double>(r.flagged[t]), r.obs_sigma[k]});
+                      static_cast<double>(r.flagged[t]), r.obs_sigma[k], static_cast<double>(r.obs_dropped[k])});
   }
   long used = std::count(r.initial_ok.begin(), r.initial_ok.end(), 1);
   long flagged = std::count(r.flagged.begin(), r.flagged.end(), 1);
@@ -129,6 +131,8 @@ void write_residuals(const std::string& path, const std::vector<AdjustImage>& im
     os << k << "_rms_after_unflagged_px: " << format_number(per[i].rms_after_unflagged) << '\n';
   }
   os << "# flagged_tracks: " << flagged << '\n';
+  os << "# dropped_views: " << r.dropped_views << '\n';
+  os << "# tracks_with_dropped_views: " << r.tracks_with_dropped << '\n';
   if (check_n > 0) {
     os << "# check_observations: " << check_n << '\n';
     os << "# check_rms_px: " << format_number(check_rms) << '\n';
@@ -296,12 +300,15 @@ int run(const Opts& o) {
   if (!o.height_prior.empty() && !o.dem.empty()) throw UsageError("--height-prior and --dem exclude each other");
   if (!o.dem_datum.empty() && o.dem.empty()) throw UsageError("--dem-datum goes with --dem");
   if (!o.height_prior.empty()) ao.height = parse_height_prior(o.height_prior);
-  if (!o.dem.empty() && o.dem_sigma < kMinHeightSigma)
+  if (!std::isnan(o.dem_sigma) && o.dem.empty()) throw UsageError("--dem-sigma goes with --dem");
+  if (!o.dem.empty() && !std::isnan(o.dem_sigma) && o.dem_sigma < kMinHeightSigma)
     throw UsageError("--dem-sigma " + format_figure(o.dem_sigma) + ": below " + format_figure(kMinHeightSigma) + " m (no DEM is that good; the cost would overflow)");
   std::vector<RpcSource> sources;
   std::vector<AdjustImage> images = load_images(o, sources);
   if (!o.dem.empty()) {
-    ao.height = reference_dem_prior(std::make_shared<const ReferenceDem>(o.dem, ReferenceDemOptions{o.dem_datum}), o.dem_sigma);
+    // without --dem-sigma the sigma is estimated from the data below (a placeholder until then)
+    ao.height = reference_dem_prior(std::make_shared<const ReferenceDem>(o.dem, ReferenceDemOptions{o.dem_datum}),
+                                    std::isnan(o.dem_sigma) ? 1.0 : o.dem_sigma);
   }
   const std::vector<AdjustTrack> tracks = gather_tracks(o.tracks, o.images);
   const std::vector<AdjustTrack> check = gather_tracks(o.check, o.images);
@@ -349,14 +356,44 @@ int run(const Opts& o) {
       std::cerr << "rpc-adjust: " << what << ": on the delivered models: " << mc.figures << "\n";
   }
 
+  // A height prior is judged against the fit without it (check_height_prior), solved first: the DEM's
+  // sigma, where none is given, is its spread about that fit's points (estimated_height_sigma).
+  std::unique_ptr<AdjustResult> free_fit;
+  const std::string prior_name = !o.height_prior.empty() ? "--height-prior " + o.height_prior : "--dem " + o.dem;
+  if (ao.height.at) {
+    AdjustOptions free_options = ao;
+    free_options.height = HeightPrior{};
+    free_options.keep_untrusted = false;  // a free fit that fails: the models or the tracks are wrong
+    free_fit = std::make_unique<AdjustResult>(adjust_rpcs(images, tracks, free_options));
+    // the prior weighs against the tie points' actual precision (HeightPrior::tie_sigma0)
+    ao.height.tie_sigma0 = free_fit->sigma0_weighted;
+    const HeightPriorSpread sp = height_prior_spread(ao.height, *free_fit);
+    const std::string spread = "prior minus free height over " + std::to_string(sp.covered) + " tracks: median " +
+                               format_figure(sp.median_dh) + " m, NMAD " + format_figure(sp.nmad_dh) + " m";
+    std::cerr << "rpc-adjust: " << prior_name << ": weighed against the tie points' a posteriori sigma0 "
+              << format_figure(free_fit->sigma0_weighted) << " (weighted, px at the reference sigma " << format_figure(free_fit->reference_sigma_px)
+              << " px; the fit without it, " << free_fit->iterations << " iterations)\n";
+    if (!o.dem.empty() && std::isnan(o.dem_sigma)) {
+      ao.height.sigma = estimated_height_sigma(sp);
+      std::cerr << "rpc-adjust: --dem " << o.dem << ": sigma " << format_figure(ao.height.sigma) << " m estimated from the data (" << spread
+                << "; floored at " << format_figure(kPriorPrecisionRatio) << " times the points' median height precision " << format_figure(sp.median_sigma_h) << " m and "
+                << format_figure(kMinEstimatedHeightSigma) << " m; --dem-sigma sets it)\n";
+    } else if (std::isfinite(sp.nmad_dh) && sp.nmad_dh > 3 * ao.height.sigma) {
+      warn(prior_name + ": its sigma " + format_figure(ao.height.sigma) + " m is far below its spread about the tie points (" + spread +
+           "): it pulls the points to heights they do not have (leave --dem-sigma out to estimate it)");
+    }
+  }
   // a fit that fails with a height prior or GCPs is held until the checks below have said whether they made it fail
   ao.keep_untrusted = ao.height.at || !ao.control.empty();
   AdjustResult r = adjust_rpcs(images, tracks, ao);
   const FitTrust trust = fit_trust(images, tracks, r, ao.flag_px);
   if (ao.height.at) {
-    // a prior that contradicts the tie points degrades the fit silently: solved again without it, compared
-    const HeightPriorCheck pc = check_height_prior(images, tracks, ao, r);
-    const std::string what = !o.height_prior.empty() ? "--height-prior " + o.height_prior : "--dem " + o.dem;
+    // a prior that contradicts the tie points degrades the fit silently: compared with the fit without it
+    const HeightPriorCheck pc = check_height_prior(images, tracks, ao, r, free_fit.get());
+    const std::string& what = prior_name;
+    if (pc.impossible)
+      throw NumericalError(what + " contradicts the tie points: " + pc.figures + "; the biases it forces are beyond any delivered model's (" +
+                           format_figure(pc.forced_bias_px) + " px on image" + std::to_string(pc.forced_image + 1) + "): a wrong height or vertical datum?");
     if (pc.contradicts && !trust.ok())
       throw NumericalError(what + " contradicts the tie points: " + pc.figures + "; the fit with it fails: " + trust.figures);
     if (pc.contradicts && o.strict)
@@ -365,6 +402,10 @@ int run(const Opts& o) {
       warn(what + " contradicts the tie points: " + pc.figures + " (check its value and datum, or drop it; --strict makes this an error)");
     else
       std::cerr << "rpc-adjust: " << what << " agrees with the tie points: " << pc.figures << "\n";
+    if (!pc.contradicts && pc.forced_bias_px > kPriorWarnBiasPx)
+      warn(what + " moves the model of image" + std::to_string(pc.forced_image + 1) + " " + images[static_cast<size_t>(pc.forced_image)].path +
+           " by " + format_figure(pc.forced_bias_px) + " px (its level " + format_figure(pc.median_dh) + " m from the fit without it): more than most delivered models are off (" +
+           format_figure(kPriorWarnBiasPx) + " px); a DEM over another vertical datum does so too: check its datum");
   }
   if (!ao.control.empty()) {
     // GCPs that contradict the tie points (or each other): solved again without them, compared
@@ -426,6 +467,13 @@ int run(const Opts& o) {
   std::cerr << "rpc-adjust: adjusted models refitted to the biased ones within " << format_figure(worst_refit, 3) << " px\n";
   if (used < static_cast<long>(tracks.size()))
     warn(std::to_string(tracks.size() - used) + " tracks could not be intersected with the delivered models (left out)");
+  if (r.dropped_views > 0) {
+    long saved = 0;
+    for (size_t t = 0; t < r.views_dropped.size(); ++t) saved += r.views_dropped[t] > 0 && !r.flagged[t];
+    std::cerr << "rpc-adjust: " << r.dropped_views << " views dropped as blunders from " << r.tracks_with_dropped
+              << " tracks of 3 or more views (" << saved << " of them kept: their other views fit under --flag; "
+              << r.drop_rounds << " refits; column dropped of rpc.residuals)\n";
+  }
   if (flagged > 0)
     warn(std::to_string(flagged) + " tracks keep an RMS residual above --flag " + format_figure(o.flag) +
          " px after the robust fit (flagged in ground.points and rpc.residuals)");
@@ -449,7 +497,7 @@ int main(int argc, char** argv) {
         app.add_option("--height-prior", o->height_prior, "H+-S: height prior of every ground point (m)");
         app.add_option("--dem", o->dem, "GeoTIFF DEM (any CRS; m above --dem-datum): height prior");
         app.add_option("--dem-datum", o->dem_datum, "the DEM's heights: ellipsoid | egm96 | egm2008 | a PROJ vertical grid file (default: the DEM's vertical GeoTIFF keys, ellipsoid without them)");
-        app.add_option("--dem-sigma", o->dem_sigma, "sigma of the DEM heights (m)")->check(Positive);
+        app.add_option("--dem-sigma", o->dem_sigma, "sigma of the DEM heights (m; default: estimated from the data, said on stderr)")->check(Positive);
         app.add_option("--crs", o->crs, "ground.points coordinates: geographic, utm or ecef");
         app.add_option("--loss", o->loss, "Huber loss scale (px)")->check(Positive);
         app.add_flag("--unweighted", o->unweighted, "ignore the observations' sigmas (every one at --default-sigma, else 1 px)");

@@ -159,7 +159,9 @@ int run(const Opts& o) {
   summary(line.str());  // printed once the outputs are committed
   const long failed = static_cast<long>(tracks.size()) - g.intersected;
   if (failed) warn(std::to_string(failed) + " tracks could not be intersected (left out)");
-  if (g.residual_flagged)
+  if (g.biased)
+    warn(g.warning);
+  else if (g.residual_flagged)
     warn(std::to_string(g.residual_flagged) + " tracks have an RMS residual above --flag " + format_number(o.flag) + " px (flagged 1)");
   if (g.outside_box)
     warn(std::to_string(g.outside_box) + " points lie outside the models' validity box (flagged 2): their coordinates are extrapolated");
@@ -177,7 +179,7 @@ int main(int argc, char** argv) {
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--crs", o->crs, "output coordinates: geographic, utm or ecef");
         app.add_option("--threads", o->threads, "threads");
-        app.add_option("--flag", o->flag, "flag tracks whose RMS residual exceeds this (px); most above it: refused")
+        app.add_option("--flag", o->flag, "flag tracks whose RMS residual exceeds this (px); most above it and no bias of the models explains them: refused")
             ->check(Positive);
         app.add_option("--compare", o->compare, "reference DEM (GeoTIFF, any CRS): dz = h - DEM statistics, by slope class");
         app.add_option("--align", o->align, "reference DEM: the 3-D shift of the ground points onto it (Nuth & Kaab); -o writes the points moved");

@@ -37,7 +37,7 @@ tpkit_tool_test(trust-rpc.gcp-file-twice
 # "wrong models, wrong tracks, or a --flag too tight", naming neither the prior nor the DEM).
 tpkit_tool_test(trust-rpc.prior-drags-the-fit
   COMMAND "${tr_synth} && ${tr_adjust} --height-prior 1000+-0.01 -o adj"
-  EXPECT_FAIL STDERR_MATCH "rpc-adjust: --height-prior 1000\\+-0.01 contradicts the tie points: rms after [0-9.e-]+ px with it, [0-9.e-]+ px without .*@SEMI@ the fit with it fails: [0-9]+ of 400 tracks keep an RMS above 1 px after the fit"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: --height-prior 1000\\+-0.01 contradicts the tie points: rms after [0-9.e-]+ px with it, [0-9.e-]+ px without .*@SEMI@ (the fit with it fails: [0-9]+ of 400 tracks keep an RMS above 1 px after the fit|the biases it forces are beyond any delivered model's)"
   NO_FILE adj)
 # Item 10: the same for a control point given 1 km off with a 1 mm sigma: the GCPs are named, with the
 # worst point (a single point moves no median: the check on the delivered models lets it through).
@@ -76,5 +76,5 @@ tpkit_tool_test(trust-rpc.gcp-bom-stdin-ids
 # more of the tracks that view one image are flagged. Nothing is written.
 tpkit_tool_test(trust-rpc.diverging-model
   COMMAND "${tr_synth} && awk '/^#/ { print @SEMI@ next } { n++ } n % 5 < 3 { $4 = $5 = \"nan\" } { print }' syn/truth.tracks | sed 's/^# tpkit tracks 1/# tpkit tracks 2/' > syn/part.tracks && sed 's/^SAMP_NUM_COEFF_12: .*/SAMP_NUM_COEFF_12: 0.3/' syn/view2_rpc.txt > bad_rpc.txt && rpc-adjust syn/view1.tif syn/view2.tif syn/view3.tif --tracks syn/part.tracks --fixed syn/view1.tif --rpc syn/view2.tif=bad_rpc.txt -o adj"
-  EXPECT_FAIL STDERR_MATCH "rpc-adjust: image2 syn/view2.tif: [0-9]+ of the 160 tracks that view it keep an RMS above 1 px after the fit \\(its rms [0-9.]+ px before, [0-9.]+ px after\\): its model does not fit them"
+  EXPECT_FAIL STDERR_MATCH "rpc-adjust: image2 syn/view2.tif: [0-9]+ of the 160 tracks that view it keep an RMS above 1 px after the fit( or lost that view as a blunder \\([0-9]+\\))? \\(its rms [0-9.]+ px before, [0-9.]+ px after\\): its model does not fit them"
   NO_FILE adj)

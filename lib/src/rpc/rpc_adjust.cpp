@@ -73,7 +73,8 @@ struct BiasPriorCost {
   }
 };
 
-// (h - H(lon, lat)) / sigma, H evaluated where the point is now (a DEM's slope moves it with the point).
+// (h - H(lon, lat)) / sigma * tie_sigma0, H evaluated where the point is now (a DEM's slope moves it with
+// the point).
 class HeightPriorCost : public ceres::SizedCostFunction<1, 3> {
  public:
   HeightPriorCost(const HeightPrior* prior, double h_start) : prior_(prior), h_start_(h_start) {}
@@ -81,7 +82,7 @@ class HeightPriorCost : public ceres::SizedCostFunction<1, 3> {
     const double* g = p[0];
     double h = h_start_, grad[2] = {0, 0};
     if (!prior_->at(g[0], g[1], h, grad)) grad[0] = grad[1] = 0, h = h_start_;  // stepped off the DEM: as at the start
-    const double w = 1.0 / prior_->sigma;
+    const double w = std::max(prior_->tie_sigma0, kMinTieSigma0) / prior_->sigma;
     r[0] = (g[2] - h) * w;
     if (J && J[0]) {
       J[0][0] = -grad[0] * w;
@@ -203,6 +204,73 @@ void initial_points(const std::vector<AdjustImage>& images, const std::vector<Ad
 
 }  // namespace
 
+namespace {
+
+// The views of a track that are in the fit: keep[k] per view of tracks[t].
+using ViewMask = std::vector<std::vector<char>>;
+
+std::vector<RpcObservation> kept_observations(const std::vector<AdjustImage>& images, const std::vector<ImageBias>* bias,
+                                              const AdjustTrack& t, const std::vector<char>& keep) {
+  std::vector<RpcObservation> v;
+  for (size_t k = 0; k < t.views.size(); ++k)
+    if (keep[k]) v.push_back({&images[t.views[k].first].model, bias ? &(*bias)[t.views[k].first] : nullptr, t.views[k].second});
+  return v;
+}
+
+// The per-view blunders (see the header), decided afresh on the current biases: each track of 3 or more
+// views whose RMS over all of them, re-intersected on the adjusted models, is above flag_px loses views
+// one at a time (the one whose removal leaves the smallest RMS) while it stays above flag_px, at most
+// (n - 1) / 2 of its n views; the drops are taken only when what remains is under flag_px and the last
+// drop is not ambiguous (no other removal within twice its RMS); every other track keeps all its views (a
+// drop decided on the biases of a fit that still held the blunders may be undone). Returns the number
+// of views whose state changed.
+long drop_blunder_views(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r,
+                        double flag_px, int threads, ViewMask& keep) {
+  const size_t nt = tracks.size();
+  std::vector<std::vector<char>> next(nt);
+  parallel_for(nt, threads, [&](size_t t) {
+    const size_t n = tracks[t].views.size();
+    std::vector<char> k(n, 1);
+    next[t] = k;
+    if (!r.initial_ok[t] || n < 3) return;
+    const RpcIntersection all = intersect_rpc(kept_observations(images, &r.bias, tracks[t], k), r.ground[t][2]);
+    if (all.ok && all.rms_px <= flag_px) return;
+    long dropped = 0;
+    while (true) {
+      if (std::count(k.begin(), k.end(), 1) < 3 || dropped + 1 > static_cast<long>(n - 1) / 2) return;
+      double best = std::numeric_limits<double>::infinity(), second = best;
+      size_t best_view = 0;
+      for (size_t j = 0; j < n; ++j) {
+        if (!k[j]) continue;
+        k[j] = 0;
+        const RpcIntersection x = intersect_rpc(kept_observations(images, &r.bias, tracks[t], k), r.ground[t][2]);
+        k[j] = 1;
+        if (!x.ok) continue;
+        if (x.rms_px < best) second = best, best = x.rms_px, best_view = j;
+        else if (x.rms_px < second) second = x.rms_px;
+      }
+      if (!std::isfinite(best)) return;
+      k[best_view] = 0;
+      ++dropped;
+      // the last drop must name its view: another removal that fits as well (a blunder along the
+      // epipolar line of the pair it leaves) leaves the track flagged
+      if (best <= flag_px) {
+        if (second <= flag_px && second <= 2 * best) return;
+        break;
+      }
+    }
+    next[t] = std::move(k);
+  });
+  long changed = 0;
+  for (size_t t = 0; t < nt; ++t) {
+    for (size_t j = 0; j < next[t].size(); ++j) changed += keep[t][j] != next[t][j];
+    keep[t] = std::move(next[t]);
+  }
+  return changed;
+}
+
+}  // namespace
+
 AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                          const AdjustOptions& o) {
   check_tracks(images, tracks);
@@ -213,10 +281,6 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
 
   const size_t ni = images.size(), nt = tracks.size();
   std::vector<std::array<double, 6>> block(ni, std::array<double, 6>{});
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-  po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
   auto used = bias_terms_used(o.model);
   std::vector<int> constant_terms;
   for (int k = 0; k < 6; ++k)
@@ -252,144 +316,191 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
     r.reference_sigma_px = all[all.size() / 2];
   }
   const double s_ref = r.reference_sigma_px;
-  std::vector<char> image_seen(ni, 0);
-  long with_height = 0;
-  for (size_t t = 0; t < nt; ++t) {
-    if (!r.initial_ok[t]) continue;
-    double* g = r.ground[t].data();
-    for (size_t k = 0; k < tracks[t].views.size(); ++k) {
-      const auto& [i, xy] = tracks[t].views[k];
-      image_seen[i] = 1;
-      const double w = s_ref / sigma_of(tracks[t], k);
-      // Huber on the weighted residual at loss_px * w: linear where the pixel residual exceeds loss_px
-      ceres::LossFunction* loss = new ceres::HuberLoss(o.loss_px * w);
-      if (images[i].fixed) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedObservationCost, 2, 3>(
-                                     new FixedObservationCost{&images[i].model, xy[0], xy[1], w}),
-                                 loss, g);
-      } else {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ObservationCost, 2, 6, 3>(
-                                     new ObservationCost{&images[i].model, xy[0], xy[1], w}),
-                                 loss, block[i].data(), g);
-      }
-    }
-    if (o.height.at) {
-      double h;
-      if (o.height.at(r.ground[t][0], r.ground[t][1], h, nullptr)) {
-        problem.AddResidualBlock(new HeightPriorCost(&o.height, h), nullptr, g);
-        ++with_height;
-      }
-    }
-  }
-  // ground control points: an unknown ground point each, with its prior and its measurements (no loss)
+  ViewMask keep(nt);
+  for (size_t t = 0; t < nt; ++t) keep[t].assign(tracks[t].views.size(), 1);
+  // the zero-bias points (the fit moves r.ground): the residuals "before"
+  std::vector<Eigen::Vector3d> before(nt);
+  for (size_t t = 0; t < nt; ++t) before[t] = r.ground[t];
   r.control_ground.resize(o.control.size());
-  for (size_t c = 0; c < o.control.size(); ++c) {
-    const AdjustControl& gc = o.control[c];
-    r.control_ground[c] = gc.llh;
-    double* g = r.control_ground[c].data();
-    const Eigen::Vector3d w = Eigen::Vector3d::Constant(s_ref).cwiseQuotient(gc.sigma_enu);
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ControlPriorCost, 3, 3>(
-                                 new ControlPriorCost{gc.llh, w, metres_per_degree(gc.llh[1])}),
-                             nullptr, g);
-    for (size_t k = 0; k < gc.views.size(); ++k) {
-      const auto& [i, xy] = gc.views[k];
-      image_seen[i] = 1;
-      const double wk = s_ref / std::max(gc.sigma_px[k], kMinObservationSigma);
-      if (images[i].fixed)
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedObservationCost, 2, 3>(
-                                     new FixedObservationCost{&images[i].model, xy[0], xy[1], wk}),
-                                 nullptr, g);
-      else
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ObservationCost, 2, 6, 3>(
-                                     new ObservationCost{&images[i].model, xy[0], xy[1], wk}),
-                                 nullptr, block[i].data(), g);
+  for (size_t c = 0; c < o.control.size(); ++c) r.control_ground[c] = o.control[c].llh;
+
+  // One solve over the kept views, started from r.ground, block and r.control_ground.
+  auto solve = [&]() {
+    ceres::Problem::Options po;
+    po.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+    po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem problem(po);
+    std::vector<char> image_seen(ni, 0);
+    long with_height = 0;
+    for (size_t t = 0; t < nt; ++t) {
+      if (!r.initial_ok[t]) continue;
+      double* g = r.ground[t].data();
+      for (size_t k = 0; k < tracks[t].views.size(); ++k) {
+        if (!keep[t][k]) continue;
+        const auto& [i, xy] = tracks[t].views[k];
+        image_seen[i] = 1;
+        const double w = s_ref / sigma_of(tracks[t], k);
+        // Huber on the weighted residual at loss_px * w: linear where the pixel residual exceeds loss_px
+        ceres::LossFunction* loss = new ceres::HuberLoss(o.loss_px * w);
+        if (images[i].fixed) {
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedObservationCost, 2, 3>(
+                                       new FixedObservationCost{&images[i].model, xy[0], xy[1], w}),
+                                   loss, g);
+        } else {
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ObservationCost, 2, 6, 3>(
+                                       new ObservationCost{&images[i].model, xy[0], xy[1], w}),
+                                   loss, block[i].data(), g);
+        }
+      }
+      if (o.height.at) {
+        double h;
+        if (o.height.at(r.ground[t][0], r.ground[t][1], h, nullptr)) {
+          // robust (Huber, HeightPrior::loss sigmas): a tree top or a roof edge pulls with a bounded force
+          problem.AddResidualBlock(new HeightPriorCost(&o.height, h),
+                                   o.height.loss > 0 ? new ceres::HuberLoss(o.height.loss * std::max(o.height.tie_sigma0, kMinTieSigma0)) : nullptr, g);
+          ++with_height;
+        }
+      }
     }
-  }
-  if (o.height.at && with_height == 0)
-    throw NumericalError("the height prior reaches none of the " + std::to_string(usable) +
-                         " tie points (a DEM off the scene, or only no-data where they are)");
-  BiasPriorCost prior;
-  for (int k = 0; k < 6; ++k)
-    prior.inv_sigma[k] = 1.0 / (k % 3 == 0 ? o.prior_shift_px : o.prior_linear * kLinearScale);
-  for (size_t i = 0; i < ni; ++i) {
-    if (images[i].fixed || !image_seen[i]) continue;
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BiasPriorCost, 6, 6>(new BiasPriorCost(prior)), nullptr,
-                             block[i].data());
-    if (!constant_terms.empty())
-      problem.SetManifold(block[i].data(), new ceres::SubsetManifold(6, constant_terms));
-  }
+    // ground control points: an unknown ground point each, with its prior and its measurements (no loss)
+    for (size_t c = 0; c < o.control.size(); ++c) {
+      const AdjustControl& gc = o.control[c];
+      double* g = r.control_ground[c].data();
+      const Eigen::Vector3d w = Eigen::Vector3d::Constant(s_ref).cwiseQuotient(gc.sigma_enu);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ControlPriorCost, 3, 3>(
+                                   new ControlPriorCost{gc.llh, w, metres_per_degree(gc.llh[1])}),
+                               nullptr, g);
+      for (size_t k = 0; k < gc.views.size(); ++k) {
+        const auto& [i, xy] = gc.views[k];
+        image_seen[i] = 1;
+        const double wk = s_ref / std::max(gc.sigma_px[k], kMinObservationSigma);
+        if (images[i].fixed)
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<FixedObservationCost, 2, 3>(
+                                       new FixedObservationCost{&images[i].model, xy[0], xy[1], wk}),
+                                   nullptr, g);
+        else
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ObservationCost, 2, 6, 3>(
+                                       new ObservationCost{&images[i].model, xy[0], xy[1], wk}),
+                                   nullptr, block[i].data(), g);
+      }
+    }
+    if (o.height.at && with_height == 0)
+      throw NumericalError("the height prior reaches none of the " + std::to_string(usable) +
+                           " tie points (a DEM off the scene, or only no-data where they are)");
+    BiasPriorCost prior;
+    for (int k = 0; k < 6; ++k)
+      prior.inv_sigma[k] = 1.0 / (k % 3 == 0 ? o.prior_shift_px : o.prior_linear * kLinearScale);
+    for (size_t i = 0; i < ni; ++i) {
+      if (images[i].fixed || !image_seen[i]) continue;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BiasPriorCost, 6, 6>(new BiasPriorCost(prior)), nullptr,
+                               block[i].data());
+      if (!constant_terms.empty())
+        problem.SetManifold(block[i].data(), new ceres::SubsetManifold(6, constant_terms));
+    }
 
-  ceres::Solver::Options so;
-  so.linear_solver_type = ni <= 200 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
-  // Ceres aborts on a thread it cannot start, and warns on stderr (glog) beyond the machine's cores
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  so.num_threads = o.threads > 1 ? std::min(startable_threads(o.threads), cores) : 1;
-  so.max_num_iterations = o.max_iterations;
-  so.function_tolerance = 1e-12;
-  so.gradient_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-12;
-  so.logging_type = ceres::SILENT;
-  std::unique_ptr<Progress> progress;
-  if (o.progress) progress = std::make_unique<Progress>("rpc-adjust: iterations", o.max_iterations);
-  ProgressCallback cb(progress.get());
-  so.callbacks.push_back(&cb);
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  if (progress) progress->done();
-  r.iterations = static_cast<int>(summary.iterations.size());
-  r.converged = summary.termination_type == ceres::CONVERGENCE;
-  r.solver_report = summary.BriefReport();
-  if (!summary.IsSolutionUsable()) throw NumericalError("the adjustment failed: " + summary.BriefReport());
-  if (!std::isfinite(summary.initial_cost) || !std::isfinite(summary.final_cost))
-    throw NumericalError("the adjustment's cost is not finite (initial " + format_figure(summary.initial_cost) +
-                         "): an observation or a prior sigma is out of range");
+    ceres::Solver::Options so;
+    so.linear_solver_type = ni <= 200 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+    // Ceres aborts on a thread it cannot start, and warns on stderr (glog) beyond the machine's cores
+    const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    so.num_threads = o.threads > 1 ? std::min(startable_threads(o.threads), cores) : 1;
+    so.max_num_iterations = o.max_iterations;
+    so.function_tolerance = 1e-12;
+    so.gradient_tolerance = 1e-14;
+    so.parameter_tolerance = 1e-12;
+    so.logging_type = ceres::SILENT;
+    std::unique_ptr<Progress> progress;
+    if (o.progress) progress = std::make_unique<Progress>("rpc-adjust: iterations", o.max_iterations);
+    ProgressCallback cb(progress.get());
+    so.callbacks.push_back(&cb);
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &problem, &summary);
+    if (progress) progress->done();
+    r.iterations += static_cast<int>(summary.iterations.size());
+    r.converged = summary.termination_type == ceres::CONVERGENCE;
+    r.solver_report = summary.BriefReport();
+    if (!summary.IsSolutionUsable()) throw NumericalError("the adjustment failed: " + summary.BriefReport());
+    if (!std::isfinite(summary.initial_cost) || !std::isfinite(summary.final_cost))
+      throw NumericalError("the adjustment's cost is not finite (initial " + format_figure(summary.initial_cost) +
+                           "): an observation or a prior sigma is out of range");
+    r.bias.resize(ni);
+    for (size_t i = 0; i < ni; ++i) r.bias[i] = images[i].fixed ? ImageBias{} : from_block(block[i]);
+  };
 
-  r.bias.resize(ni);
-  for (size_t i = 0; i < ni; ++i) r.bias[i] = images[i].fixed ? ImageBias{} : from_block(block[i]);
-
-  // residuals before (zero bias, initial points) and after, per observation and per track
-  r.rms_after.assign(nt, std::numeric_limits<double>::quiet_NaN());
-  r.sigma_h.assign(nt, std::numeric_limits<double>::quiet_NaN());
-  r.flagged.assign(nt, 0);
+  // residuals before (zero bias, initial points) and after, per observation and per track; a track's RMS
+  // after is over its kept views
   double sum = 0, wsum = 0;
   long count = 0;
-  std::vector<Eigen::Vector3d> before(nt);
+  auto residuals = [&]() {
+    r.rms_after.assign(nt, std::numeric_limits<double>::quiet_NaN());
+    r.flagged.assign(nt, 0);
+    r.views_dropped.assign(nt, 0);
+    r.obs_track.clear(), r.obs_image.clear(), r.obs_xy.clear(), r.res_before.clear(), r.res_after.clear();
+    r.obs_sigma.clear(), r.obs_dropped.clear();
+    sum = wsum = 0;
+    count = 0;
+    for (size_t t = 0; t < nt; ++t) {
+      if (!r.initial_ok[t]) continue;
+      auto v0 = observations(images, nullptr, tracks[t]);
+      auto v = observations(images, &r.bias, tracks[t]);
+      double s = 0;
+      long n = 0;
+      for (size_t k = 0; k < v.size(); ++k) {
+        Eigen::Vector2d e0 = rpc_observe(v0[k], before[t]) - v0[k].xy;
+        Eigen::Vector2d e1 = rpc_observe(v[k], r.ground[t]) - v[k].xy;
+        r.obs_track.push_back(static_cast<int>(t));
+        r.obs_image.push_back(tracks[t].views[k].first);
+        r.obs_xy.push_back(v[k].xy);
+        r.res_before.push_back(e0);
+        r.res_after.push_back(e1);
+        const double sg = sigma_of(tracks[t], k);
+        r.obs_sigma.push_back(sg);
+        r.obs_dropped.push_back(!keep[t][k]);
+        if (!keep[t][k]) {
+          ++r.views_dropped[t];
+          continue;
+        }
+        wsum += e1.squaredNorm() * (s_ref * s_ref) / (sg * sg);
+        s += e1.squaredNorm();
+        ++n;
+      }
+      sum += s;
+      count += n;
+      r.rms_after[t] = std::sqrt(s / n);
+      r.flagged[t] = r.rms_after[t] > o.flag_px;
+    }
+  };
+
+  r.iterations = 0;
+  solve();
   for (size_t t = 0; t < nt; ++t) {
     if (!r.initial_ok[t]) continue;
-    auto v0 = observations(images, nullptr, tracks[t]);
-    RpcIntersection x0 = intersect_rpc(v0);  // the zero-bias point again (the fit moved r.ground)
-    before[t] = x0.ok ? x0.llh : r.ground[t];
-    auto v = observations(images, &r.bias, tracks[t]);
-    double s = 0;
-    for (size_t k = 0; k < v.size(); ++k) {
-      Eigen::Vector2d e0 = rpc_observe(v0[k], before[t]) - v0[k].xy;
-      Eigen::Vector2d e1 = rpc_observe(v[k], r.ground[t]) - v[k].xy;
-      r.obs_track.push_back(static_cast<int>(t));
-      r.obs_image.push_back(tracks[t].views[k].first);
-      r.obs_xy.push_back(v[k].xy);
-      r.res_before.push_back(e0);
-      r.res_after.push_back(e1);
-      const double sg = sigma_of(tracks[t], k);
-      r.obs_sigma.push_back(sg);
-      wsum += e1.squaredNorm() * (s_ref * s_ref) / (sg * sg);
-      s += e1.squaredNorm();
-    }
-    sum += s;
-    count += static_cast<long>(v.size());
-    r.rms_after[t] = std::sqrt(s / v.size());
-    r.flagged[t] = r.rms_after[t] > o.flag_px;
+    RpcIntersection x0 = intersect_rpc(observations(images, nullptr, tracks[t]));  // the zero-bias point again
+    if (x0.ok) before[t] = x0.llh;
   }
+  residuals();
+  // per-view blunders: drop, solve again from the last solution, until the views dropped stay the same
+  // (three rounds at most)
+  for (int round = 0; o.drop_views && round < 3; ++round) {
+    if (drop_blunder_views(images, tracks, r, o.flag_px, o.threads, keep) == 0) break;
+    ++r.drop_rounds;
+    solve();
+    residuals();
+  }
+  r.dropped_views = std::count(r.obs_dropped.begin(), r.obs_dropped.end(), 1);
+  r.tracks_with_dropped = std::count_if(r.views_dropped.begin(), r.views_dropped.end(), [](int d) { return d > 0; });
   r.sigma0 = std::sqrt(sum / std::max(1L, 2 * count));
   r.sigma0_weighted = std::sqrt(wsum / std::max(1L, 2 * count));
   if (!o.keep_untrusted)
     if (const FitTrust trust = fit_trust(images, tracks, r, o.flag_px); !trust.ok()) throw NumericalError(trust.message());
   // sigma_h: the weighted normal matrix of the point, (J^T W J)^-1 (h, h) scaled by the a posteriori
   // variance of unit weight, W = (s_ref / sigma)^2 (unit weights: sigma0^2 (J^T J)^-1, as tp-ground's)
+  r.sigma_h.assign(nt, std::numeric_limits<double>::quiet_NaN());
   for (size_t t = 0; t < nt; ++t) {
     if (!r.initial_ok[t]) continue;
     auto v = observations(images, &r.bias, tracks[t]);
     Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
     for (size_t k = 0; k < v.size(); ++k) {
+      if (!keep[t][k]) continue;
       Eigen::Matrix<double, 2, 3> J;
       rpc_observe(v[k], r.ground[t], &J);
       const double sg = sigma_of(tracks[t], k);
@@ -401,6 +512,7 @@ AdjustResult adjust_rpcs(const std::vector<AdjustImage>& images, const std::vect
   }
   return r;
 }
+
 
 FitTrust fit_trust(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r,
                    double flag_px) {
@@ -414,15 +526,21 @@ FitTrust fit_trust(const std::vector<AdjustImage>& images, const std::vector<Adj
     trust.cause = "wrong models, wrong tracks, or a --flag too tight";
     return trust;
   }
-  std::vector<long> seen(images.size(), 0), bad(images.size(), 0);
+  // per image: the tracks that view it, those flagged, and those kept that lost its view as a blunder (a
+  // wrong model would otherwise lose its every view of a long track and pass)
+  std::vector<long> seen(images.size(), 0), bad(images.size(), 0), dropped(images.size(), 0);
   for (size_t t = 0; t < tracks.size(); ++t)
     if (r.initial_ok[t])
       for (const auto& [i, xy] : tracks[t].views) ++seen[i], bad[i] += r.flagged[t];
+  for (size_t k = 0; k < r.obs_dropped.size() && k < r.obs_track.size(); ++k)
+    if (r.obs_dropped[k] && !r.flagged[static_cast<size_t>(r.obs_track[k])]) ++dropped[r.obs_image[k]], ++bad[r.obs_image[k]];
   for (size_t i = 0; i < images.size(); ++i)
     if (bad[i] > 0 && 2 * bad[i] >= seen[i]) {
       trust.figures = "image" + std::to_string(i + 1) + " " + images[i].path + ": " + std::to_string(bad[i]) + " of the " +
                       std::to_string(seen[i]) + " tracks that view it keep an RMS above " + format_figure(flag_px) +
-                      " px after the fit (its rms " + format_figure(residual_rms(r, false, static_cast<int>(i))) + " px before, " +
+                      " px after the fit" +
+                      (dropped[i] ? " or lost that view as a blunder (" + std::to_string(dropped[i]) + ")" : std::string()) +
+                      " (its rms " + format_figure(residual_rms(r, false, static_cast<int>(i))) + " px before, " +
                       format_figure(residual_rms(r, true, static_cast<int>(i))) + " px after)";
       trust.cause = "its model does not fit them where the other images' do (another image's model, or one that diverges over "
                     "the image, which no bias model follows), or its tracks are wrong";
@@ -436,6 +554,7 @@ double inlier_rms(const AdjustResult& r, int image) {
   long n = 0;
   for (size_t k = 0; k < r.obs_track.size(); ++k) {
     if (r.flagged[static_cast<size_t>(r.obs_track[k])] || (image >= 0 && r.obs_image[k] != image)) continue;
+    if (k < r.obs_dropped.size() && r.obs_dropped[k]) continue;
     s += r.res_after[k].squaredNorm();
     ++n;
   }
@@ -491,61 +610,113 @@ std::vector<ImageReport> image_reports(size_t images, const std::vector<AdjustTr
   return out;
 }
 
+HeightPriorSpread height_prior_spread(const HeightPrior& prior, const AdjustResult& free_fit) {
+  HeightPriorSpread sp;
+  std::vector<double> dh, sh;
+  for (size_t t = 0; t < free_fit.ground.size(); ++t) {
+    if (!free_fit.initial_ok[t] || (t < free_fit.flagged.size() && free_fit.flagged[t])) continue;
+    double h;
+    const Eigen::Vector3d& g = free_fit.ground[t];
+    if (!prior.at || !prior.at(g[0], g[1], h, nullptr)) continue;
+    dh.push_back(h - g[2]);
+    if (t < free_fit.sigma_h.size() && std::isfinite(free_fit.sigma_h[t])) sh.push_back(free_fit.sigma_h[t]);
+  }
+  sp.covered = static_cast<long>(dh.size());
+  if (dh.empty()) return sp;
+  sp.median_dh = median_of(dh);
+  std::vector<double> dev;
+  for (double d : dh) dev.push_back(std::fabs(d - sp.median_dh));
+  sp.nmad_dh = 1.4826 * median_of(dev);
+  sp.median_sigma_h = median_of(sh);
+  return sp;
+}
+
+double estimated_height_sigma(const HeightPriorSpread& sp) {
+  double s = kMinEstimatedHeightSigma;
+  if (std::isfinite(sp.nmad_dh)) s = std::max(s, sp.nmad_dh);
+  if (std::isfinite(sp.median_sigma_h)) s = std::max(s, kPriorPrecisionRatio * sp.median_sigma_h);
+  return s;
+}
+
+double delivered_bias_bound_px(const AdjustImage& im) {
+  double limit = kGroundMaxBiasPx;
+  const double stated = std::hypot(std::max(0.0, im.model.err_bias), std::max(0.0, im.model.err_rand));
+  const double gsd = model_gsd(im.model, im.width, im.height);
+  if (stated > 0 && std::isfinite(gsd) && gsd > 0) limit = std::max(limit, kGroundStatedErrors * stated / gsd);
+  return limit;
+}
+
 HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
-                                    const AdjustOptions& options, const AdjustResult& with_prior) {
+                                    const AdjustOptions& options, const AdjustResult& with_prior, const AdjustResult* given_free) {
   HeightPriorCheck c;
   c.sigma = options.height.sigma;
-  AdjustOptions free_options = options;
-  free_options.height = HeightPrior{};
-  free_options.progress = false;
-  free_options.keep_untrusted = false;  // a free fit that fails too: the models or the tracks are wrong
-  const AdjustResult free_fit = adjust_rpcs(images, tracks, free_options);
-  // the RMS of both fits over the same observations: those of the tracks that neither fit flags, so
-  // that a few blunders (whose residuals grow when a prior holds their heights) do not pass for a
-  // contradiction; the blunders are compared by their count
+  AdjustResult own_free;
+  if (!given_free) {
+    AdjustOptions free_options = options;
+    free_options.height = HeightPrior{};
+    free_options.progress = false;
+    free_options.keep_untrusted = false;  // a free fit that fails too: the models or the tracks are wrong
+    own_free = adjust_rpcs(images, tracks, free_options);
+  }
+  const AdjustResult& free_fit = given_free ? *given_free : own_free;
+  // the RMS of both fits over the same observations: those of the tracks that neither fit flags nor
+  // dropped a view of, so that a few blunders (whose residuals grow when a prior holds their heights) do
+  // not pass for a contradiction; the blunders are compared by their count
   c.flagged_with = std::count(with_prior.flagged.begin(), with_prior.flagged.end(), 1);
   c.flagged_without = std::count(free_fit.flagged.begin(), free_fit.flagged.end(), 1);
+  auto out_of_common = [&](size_t t) {
+    auto lost = [&](const AdjustResult& r) { return t < r.views_dropped.size() && r.views_dropped[t] > 0; };
+    return with_prior.flagged[t] || free_fit.flagged[t] || lost(with_prior) || lost(free_fit);
+  };
   auto common_rms = [&](const AdjustResult& r) {
     double s = 0;
     long n = 0;
     for (size_t k = 0; k < r.obs_track.size(); ++k) {
       const size_t t = static_cast<size_t>(r.obs_track[k]);
-      if (with_prior.flagged[t] || free_fit.flagged[t]) continue;
+      if (out_of_common(t)) continue;
       s += r.res_after[k].squaredNorm();
       ++n;
     }
     c.common_tracks = 0;
-    for (size_t t = 0; t < r.flagged.size(); ++t) c.common_tracks += !with_prior.flagged[t] && !free_fit.flagged[t];
+    for (size_t t = 0; t < r.flagged.size(); ++t) c.common_tracks += r.initial_ok[t] && !out_of_common(t);
     return n ? std::sqrt(s / static_cast<double>(n)) : std::numeric_limits<double>::quiet_NaN();
   };
   c.rms_with = common_rms(with_prior);
   c.rms_without = common_rms(free_fit);
   const long more_flagged = static_cast<long>(c.flagged_with) - static_cast<long>(c.flagged_without);
-  std::vector<double> dh, adh;
+  const HeightPriorSpread sp = height_prior_spread(options.height, free_fit);
+  std::vector<double> adh;
   for (size_t t = 0; t < free_fit.ground.size(); ++t) {
-    if (!free_fit.initial_ok[t]) continue;
+    if (!free_fit.initial_ok[t] || free_fit.flagged[t]) continue;
     double h;
     const Eigen::Vector3d& g = free_fit.ground[t];
-    if (!options.height.at || !options.height.at(g[0], g[1], h, nullptr)) continue;
-    dh.push_back(h - g[2]);
-    adh.push_back(std::fabs(h - g[2]));
+    if (options.height.at && options.height.at(g[0], g[1], h, nullptr)) adh.push_back(std::fabs(h - g[2]));
   }
-  c.covered = static_cast<long>(dh.size());
-  c.median_dh = median_of(dh);
+  c.covered = sp.covered;
+  c.median_dh = sp.median_dh;
+  c.nmad_dh = sp.nmad_dh;
   c.median_abs_dh = median_of(adh);
-  // The heights of the free fit have a level only when something holds it (a fixed image, control points);
-  // otherwise the bias priors choose it, and a prior that moves it is choosing the datum, not contradicting.
-  const bool free_has_datum = !options.control.empty() ||
-                              std::any_of(images.begin(), images.end(), [](const AdjustImage& im) { return im.fixed; });
+  // the level: the free fit's is the delivered models' (a fixed image's, or the smallest biases'); a prior is
+  // there to correct it, and contradicts only beyond its own spread and by biases no delivered model has
+  c.level_limit = 3 * estimated_height_sigma(sp);
+  for (size_t i = 0; i < images.size() && i < with_prior.bias.size() && i < free_fit.bias.size(); ++i) {
+    const Eigen::Vector2d centre(0.5 * (images[i].width - 1), 0.5 * (images[i].height - 1));
+    const double d = (with_prior.bias[i].offset(centre) - free_fit.bias[i].offset(centre)).norm();
+    if (c.forced_image < 0 || d / delivered_bias_bound_px(images[i]) > c.forced_bias_px / c.bias_bound_px)
+      c.forced_bias_px = d, c.forced_image = static_cast<int>(i), c.bias_bound_px = delivered_bias_bound_px(images[i]);
+  }
   // The RMS may grow by what a prior of the tie points' own precision would cost: a quarter of their
   // reference sigma (not a fixed 0.02 px: a 2 m DEM against noise-free tracks costs 0.05-0.09 px).
-  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with_prior.reference_sigma_px ||
-                  (free_has_datum && c.covered > 0 && c.median_abs_dh > 3 * c.sigma) ||
+  c.impossible = c.covered > 0 && std::fabs(c.median_dh) > c.level_limit && c.forced_bias_px > c.bias_bound_px;
+  c.contradicts = c.rms_with > 1.2 * c.rms_without + 0.25 * with_prior.reference_sigma_px || c.impossible ||
                   more_flagged > std::max<long>(10, static_cast<long>(free_fit.flagged.size() / 100));
   c.figures = "rms after " + format_figure(c.rms_with) + " px with it, " + format_figure(c.rms_without) + " px without (over the " +
               std::to_string(c.common_tracks) + " tracks neither flags); flagged tracks " +
               std::to_string(c.flagged_with) + " with, " + std::to_string(c.flagged_without) + " without; prior minus free height: median " +
-              format_figure(c.median_dh) + " m, median |.| " + format_figure(c.median_abs_dh) + " m = " +
+              format_figure(c.median_dh) + " m (3 NMAD " + format_figure(c.level_limit) + " m; the biases it forces: " +
+              format_figure(c.forced_bias_px) + " px at image" + std::to_string(c.forced_image + 1) + ", a delivered model's at most " +
+              format_figure(c.bias_bound_px) + " px), NMAD " +
+              format_figure(c.nmad_dh) + " m, median |.| " + format_figure(c.median_abs_dh) + " m = " +
               format_figure(c.median_abs_dh / c.sigma) + " sigma (sigma " + format_figure(c.sigma) + " m, " + std::to_string(c.covered) + " tracks)";
   return c;
 }
@@ -682,6 +853,7 @@ GcpCheck check_gcps(const std::vector<AdjustImage>& images, const std::vector<Ad
   for (size_t k = 0; k < with.obs_track.size(); ++k) {
     const size_t t = static_cast<size_t>(with.obs_track[k]);
     if (with.flagged[t] || free_fit.flagged[t]) continue;
+    if ((t < with.views_dropped.size() && with.views_dropped[t]) || (t < free_fit.views_dropped.size() && free_fit.views_dropped[t])) continue;
     s[0] += with.res_after[k].squaredNorm();
     s[1] += free_fit.res_after[k].squaredNorm();
     ++n;
@@ -761,14 +933,70 @@ GroundSolution ground_points(const std::vector<AdjustImage>& images, const std::
                          " (do the models belong to these images, and do the images overlap?)");
   g.rms_px = std::sqrt(sum / n);
   g.sigma0 = std::sqrt(sum / (2.0 * n));
-  if (2 * g.residual_flagged > g.intersected) {
-    std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
-    throw NumericalError(std::to_string(g.residual_flagged) + " of " + std::to_string(g.intersected) +
-                         " tracks have an RMS residual above --flag " + format_figure(o.flag_px) + " px (median " +
-                         format_figure(rms[rms.size() / 2]) + " px): the RPC models of " + names +
-                         " do not fit the tracks (another image's model? offsets swapped? biased models: rpc-adjust first)");
+  std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
+  g.median_rms_px = rms[rms.size() / 2];
+  if (2 * g.residual_flagged <= g.intersected) return g;
+  const std::string figures = std::to_string(g.residual_flagged) + " of " + std::to_string(g.intersected) +
+                              " tracks have an RMS residual above --flag " + format_figure(o.flag_px) + " px (median " +
+                              format_figure(g.median_rms_px) + " px)";
+  // Biased models, or models that cannot be right? A shift per image (the first fixed) fitted to the tracks
+  // tells them apart: it explains delivered models' disagreement (Grodecki & Dial 2003: a shift over a
+  // scene), not another image's model (another orientation: 0.9 px left by an affine bias on a 256 px
+  // tp-synth scene, which a shift does not absorb).
+  AdjustOptions ao;
+  ao.model = BiasModel::shift;  // delivered models' errors are shifts over a scene; another image's model is no shift
+  ao.flag_px = o.flag_px;
+  ao.threads = o.threads;
+  ao.keep_untrusted = true;
+  ao.drop_views = false;
+  std::vector<AdjustImage> fixed_first = images;
+  for (size_t i = 0; i < fixed_first.size(); ++i) fixed_first[i].fixed = i == 0;
+  FitTrust trust;
+  AdjustResult fit;
+  try {
+    fit = adjust_rpcs(fixed_first, tracks, ao);
+    trust = fit_trust(fixed_first, tracks, fit, o.flag_px);
+  } catch (const NumericalError& e) {
+    trust.figures = e.what();
   }
+  if (!trust.ok())
+    throw NumericalError(figures + ": the RPC models of " + names + " do not fit the tracks, and no bias of the models explains them (" +
+                         trust.figures + "): another image's model? offsets swapped?");
+  g.bias_fit_rms_px = inlier_rms(fit);
+  g.max_shift_px = 0;
+  std::string beyond;
+  for (size_t i = 0; i < images.size(); ++i) {
+    const AdjustImage& im = images[i];
+    const Eigen::Vector2d c(0.5 * (im.width - 1), 0.5 * (im.height - 1));
+    const double shift = fit.bias[i].offset(c).norm();
+    if (shift > g.max_shift_px) g.max_shift_px = shift, g.max_shift_image = static_cast<int>(i);
+    const double limit = delivered_bias_bound_px(im);
+    const double stated = std::hypot(std::max(0.0, im.model.err_bias), std::max(0.0, im.model.err_rand));
+    if (shift > limit && beyond.empty())
+      beyond = im.path + "'s model is " + format_figure(shift) + " px off the others' (beyond " + format_figure(limit) +
+               " px: no delivered model's error" + (stated > 0 ? ", " + format_figure(kGroundStatedErrors) + " times its stated " + format_figure(stated) + " m" : std::string()) + ")";
+  }
+  if (!beyond.empty())
+    throw NumericalError(figures + ": the RPC models of " + names + " do not fit the tracks: " + beyond +
+                         " (another scene's model? offsets swapped?)");
+  g.biased = true;
+  g.warning = figures + ": the delivered models disagree by a bias (a shift per image, the first fixed, fits the tracks to " +
+              format_figure(g.bias_fit_rms_px) + " px RMS; the largest shift " + format_figure(g.max_shift_px) + " px, " +
+              images[static_cast<size_t>(g.max_shift_image)].path + "): the points are written, those tracks flagged 1; rpc-adjust removes the bias";
   return g;
+}
+
+double model_gsd(const RpcModel& m, long width, long height) {
+  try {
+    const double x = 0.5 * (width - 1), y = 0.5 * (height - 1), h = m.height_off;
+    const Eigen::Vector2d p = m.localize(x, y, h), px = m.localize(x + 1, y, h), py = m.localize(x, y + 1, h);
+    const Eigen::Vector3d mpd = metres_per_degree(p[1]);
+    const double dx = std::hypot((px[0] - p[0]) * mpd[0], (px[1] - p[1]) * mpd[1]);
+    const double dy = std::hypot((py[0] - p[0]) * mpd[0], (py[1] - p[1]) * mpd[1]);
+    return std::sqrt(dx * dy);
+  } catch (const NumericalError&) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
 }
 
 RpcFit fold_bias(const RpcModel& m, const ImageBias& bias, long width, long height, double h_lo, double h_hi) {

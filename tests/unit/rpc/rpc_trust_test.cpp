@@ -185,11 +185,12 @@ TEST(RpcTrust, AdjustmentsThatDoNotStandAreRefused) {
   auto twice = tracks;
   twice[0].views[2].first = 1;
   EXPECT_NE(message([&] { adjust_rpcs(im, twice, o); }).find("views " + image(2) + " twice"), std::string::npos);
-  // another image's model: most tracks stay above --flag after the fit
+  // another image's model: most tracks stay above --flag after the fit, or (their blunder views dropped,
+  // issue 51) most of that image's tracks do or lost its view: the image is named
   auto wrong = im;
   wrong[1].model = im[2].model;
   const std::string e3 = message([&] { adjust_rpcs(wrong, tracks, o); });
-  EXPECT_NE(e3.find("tracks keep an RMS above 1 px after the fit"), std::string::npos) << e3;
+  EXPECT_NE(e3.find("keep an RMS above 1 px after the fit"), std::string::npos) << e3;
   EXPECT_THROW(parse_height_prior("200+-1e-300"), UsageError);
   EXPECT_NO_THROW(parse_height_prior("200+-0.001"));
 }

@@ -25,6 +25,19 @@
 // weighted residual is loss_px * s_ref / sigma_tk); a track is flagged on the RMS of its pixel residuals.
 // Every residual and RMS that the result reports is in pixels, unweighted, except sigma0_weighted.
 //
+// Per-view blunders (AdjustOptions::drop_views): one wrong view (a mismatch in one image of a long track)
+// should cost that view, not the track. After the robust fit, each track of 3 or more views whose RMS
+// over all of them, re-intersected on the adjusted models, exceeds flag_px is re-intersected without each
+// of its views in turn; the view whose removal leaves the smallest RMS is dropped, again while the track
+// stays above flag_px and fewer views would be dropped than kept (at most (n - 1) / 2 of n views); the
+// track is kept when what remains is under flag_px and no other removal fits within twice that RMS (a
+// blunder along the epipolar line of the pair another removal leaves is not named: the track stays
+// flagged), and the fit is solved again without the dropped views, started from the last solution. The
+// drops are decided afresh on each fit's biases (one decided on a fit that still held the blunders may
+// be undone), until they stay the same (three refits at most). Dropped observations stay in the result
+// (obs_dropped, their residual to the refitted point);
+// a track's rms_after is over its kept views. Only tracks no view removal saves stay flagged.
+//
 // Tracks of any length: a track has 2 or more views, each of a distinct image; a view a track is not seen
 // in is simply absent (files: a "nan nan" pair, never read as a coordinate). A matches record is a track
 // of its two images.
@@ -78,6 +91,9 @@ struct AdjustTrack {
 // this, so that no observation dominates the fit.
 constexpr double kMinObservationSigma = 0.02;
 
+// The Huber scale of a height prior, in its sigmas (HeightPrior::loss).
+constexpr double kHeightPriorLossSigmas = 1;
+
 // A ground control point in the adjustment (gcp_file.hpp Gcp, its images matched: gcps_to_adjust).
 struct AdjustControl {
   std::string source;
@@ -95,7 +111,20 @@ struct HeightPrior {
   // lon, lat); false where unknown (off the DEM). Empty: no prior.
   std::function<bool(double lon, double lat, double& h, double* grad)> at;
   double sigma = 0;  // m
+  // Huber scale of the prior's residual (h - H) / sigma, in sigmas (0: none, a plain Gaussian prior). A
+  // surface model disagrees with some tie points by far more than its sigma (a tree top over the ground,
+  // a roof edge, a DSM flown on another date): past loss sigmas each pulls with a bounded force. (A
+  // redescending loss, Cauchy's, lets a prior whose every point is far off pull nothing: a DEM 200 m
+  // off then moved no point and passed for agreeing.)
+  double loss = kHeightPriorLossSigmas;
+  // The tie points' a posteriori sigma0 in their weighted units (AdjustResult::sigma0_weighted of the fit
+  // without the prior; 1: as nominal). The prior's residual is (h - H) / sigma * tie_sigma0 (floored at
+  // kMinTieSigma0), so that it weighs against the tie points' actual precision, not the nominal one an
+  // observation of sigma s_ref is given (1 px): noise-free tie points (sigma0 0.001) are not bent to a
+  // DEM's noise, while the level and plane they cannot see are still the prior's.
+  double tie_sigma0 = 1;
 };
+constexpr double kMinTieSigma0 = 0.1;
 
 struct AdjustOptions {
   BiasModel model = BiasModel::affine;
@@ -113,6 +142,8 @@ struct AdjustOptions {
   // Return a fit that fit_trust() refuses instead of throwing its error, so that the caller can first ask
   // whether a height prior or the GCPs dragged it there (check_height_prior, check_gcps name them).
   bool keep_untrusted = false;
+  // Drop the blunder views of flagged tracks and refit (see the header comment).
+  bool drop_views = true;
 };
 
 struct AdjustResult {
@@ -126,6 +157,11 @@ struct AdjustResult {
   std::vector<int> obs_track, obs_image;
   std::vector<Eigen::Vector2d> obs_xy, res_before, res_after;
   std::vector<double> obs_sigma;  // per observation: the sigma it was weighted with (px, floored or default)
+  std::vector<char> obs_dropped;  // per observation: 1 a blunder view dropped from the fit (AdjustOptions::drop_views)
+  std::vector<int> views_dropped;  // per track: its views dropped
+  long dropped_views = 0;         // observations dropped, over all tracks
+  long tracks_with_dropped = 0;   // tracks that lost a view (kept unless still above flag_px)
+  int drop_rounds = 0;            // fits solved again after dropping views
   long obs_with_sigma = 0;        // observations whose sigma was given (and used)
   double default_sigma_px = 1;    // the sigma of those without one
   double reference_sigma_px = 1;  // s_ref: the median sigma over the observations (weight 1)
@@ -165,14 +201,49 @@ struct FitTrust {
 FitTrust fit_trust(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks, const AdjustResult& r,
                    double flag_px);
 
+// The spread of a height prior about the tie points: dh = prior height minus the height of the free fit
+// (no prior), over the free fit's tracks that it keeps (not flagged) and the prior covers. Its median is
+// the prior's level against the tie points' (which the delivered models set, see Gauge), its NMAD (1.4826
+// median |dh - median|) how far the prior and the tie points disagree point by point: the prior's own
+// error (a first-return DSM's trees, SRTM's 90 m posting on steep slopes, a survey of another date) and the
+// points' height noise together.
+struct HeightPriorSpread {
+  long covered = 0;
+  double median_dh = NAN, nmad_dh = NAN;  // m
+  double median_sigma_h = NAN;            // m: the free points' own height precision (AdjustResult::sigma_h)
+};
+HeightPriorSpread height_prior_spread(const HeightPrior& prior, const AdjustResult& free_fit);
+
+// A prior's sigma estimated from the data where none is given (rpc-adjust --dem without --dem-sigma): the
+// NMAD of dh, floored at kPriorPrecisionRatio times the free points' median height precision and at
+// kMinEstimatedHeightSigma. The floor keeps the prior from overruling the tie points where they see the
+// heights well (a point is pulled by sigma_h^2 / (sigma_h^2 + sigma^2) of its difference, 10% at 3
+// times): what the tie points cannot see, the level and plane of the block, the prior still holds, from
+// every point (on the Jacksonville block a first-return lidar at its NMAD, 0.71 m against points of 0.58
+// m, bent the tie points from 0.26 to 0.33 px RMS and flagged 331 tracks more).
+constexpr double kMinEstimatedHeightSigma = 0.1;  // m
+constexpr double kPriorPrecisionRatio = 3;
+double estimated_height_sigma(const HeightPriorSpread& spread);
+
+// The largest bias (pixels, at its centre) an image's delivered model can have: kGroundMaxBiasPx, or
+// kGroundStatedErrors times its stated error (RPC00B ERR_BIAS and ERR_RAND, root sum of squares, in its
+// pixels: model_gsd) where that is more.
+double delivered_bias_bound_px(const AdjustImage& image);
+// Beyond this change of a model's bias (px) a prior that does not contradict is still said: more than most
+// delivered models are off (kGcpWarnPx's reasoning), and what a DEM over another vertical datum forces.
+constexpr double kPriorWarnBiasPx = 30;
+
 // Does a height prior (options.height: --height-prior or --dem) contradict the tie points? The adjustment
-// is solved again without it and the two compared: the prior contradicts them when, with it, the RMS
-// after the fit (over the tracks neither fit flags: a few blunders held to the prior's heights are no
-// contradiction) exceeds the free fit's by more than 20% and a quarter of the reference sigma s_ref, when
-// it flags more than max(10, 1% of the tracks) tracks more, or, when the free fit has a height level (a
-// fixed image or control points), when the median of |prior - free height| over the tracks the prior
-// covers exceeds 3 prior sigmas. The free fit is as well posed as the problem is without a prior (--fixed
-// images; else the bias priors hold the datum, and a prior that moves it is no contradiction).
+// is solved again without it (or `free_fit` is that fit) and the two compared: the prior contradicts them
+// when, with it, the RMS after the fit (over the tracks neither fit flags nor lost a view in: a few
+// blunders held to the prior's heights are no contradiction) exceeds the free fit's by more than 20% and a
+// quarter of the reference sigma s_ref, when it flags more than max(10, 1% of the tracks) tracks more, or
+// when its level is off: |median dh| (HeightPriorSpread) beyond 3 NMAD of dh (floored as
+// estimated_height_sigma) while the biases it forces (the change of an image's bias at its centre from
+// the free fit's) exceed what a delivered model can be off (delivered_bias_bound_px). The free fit's
+// level is the delivered models' (Gauge): a prior is there to correct it, by as much as their errors allow
+// (a Pleiades model 60 px off: 89 m on the Mont Ventoux pair). Tie points cannot tell a model that far off
+// from a DEM over the wrong datum; only the models' stated accuracy can.
 struct HeightPriorCheck {
   bool contradicts = false;
   double rms_with = 0, rms_without = 0;  // px, after the fit, over the tracks neither fit flags
@@ -180,11 +251,18 @@ struct HeightPriorCheck {
   long flagged_with = 0, flagged_without = 0;  // contradiction too when the prior flags more than max(10, 1%) more
   long covered = 0;                      // tracks whose free ground point the prior gives a height for
   double median_dh = 0, median_abs_dh = 0;  // prior minus free height, m
+  double nmad_dh = 0;                    // its NMAD, m
+  double level_limit = 0;                // 3 NMAD of dh (floored), m
+  double forced_bias_px = 0;             // the largest change of an image's bias the prior forces (px at its centre)
+  int forced_image = -1;                 // that image (0-based)
+  double bias_bound_px = 0;              // its delivered_bias_bound_px
+  bool impossible = false;               // the level contradiction: biases no delivered model has (refused)
   double sigma = 0;                      // the prior's sigma, m
   std::string figures;                   // one line: the figures above
 };
 HeightPriorCheck check_height_prior(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
-                                    const AdjustOptions& options, const AdjustResult& with_prior);
+                                    const AdjustOptions& options, const AdjustResult& with_prior,
+                                    const AdjustResult* free_fit = nullptr);
 
 // The points of GCP files as the adjustment's: those of `role`, each measurement's image matched to one of
 // `images` as a tracks file's are (gather_tracks). InputError (file:line) for an image that is none of
@@ -264,7 +342,8 @@ GcpModelCheck check_gcps_on_models(const std::vector<AdjustImage>& images, const
 
 // RMS summary of residuals: sqrt(mean |r|^2) over the observations selected (all when `image` < 0), pixels.
 double residual_rms(const AdjustResult& r, bool after, int image = -1);
-// The same after the fit, over the observations of the tracks not flagged (AdjustResult::flagged).
+// The same after the fit, over the observations of the tracks not flagged (AdjustResult::flagged), less
+// the views dropped (AdjustResult::obs_dropped).
 double inlier_rms(const AdjustResult& r, int image = -1);
 
 // Per image, over the tracks that were intersected (AdjustResult::initial_ok): its observations, the
@@ -289,7 +368,7 @@ double held_out_rms(const std::vector<AdjustImage>& images, const std::vector<Im
                     const std::vector<AdjustTrack>& tracks, long* n = nullptr);
 
 // Ground points of tracks on the delivered models (tp-ground): each track intersected on its own
-// (rpc_ground.hpp intersect_rpc), flagged, and the run refused when the models do not fit the tracks.
+// (rpc_ground.hpp intersect_rpc), flagged, and the run refused when the models cannot be right.
 enum GroundFlag : int {
   kGroundResidual = 1,     // RMS residual above flag_px
   kGroundOutsideBox = 2,   // outside a view's validity box (normalized ground coordinate beyond +-1.1)
@@ -298,16 +377,36 @@ struct GroundOptions {
   double flag_px = 2;
   int threads = 1;
 };
+// Delivered models disagree by a bias of a few pixels to a few tens (Pleiades 8.5 m CE90, WorldView-3
+// 3.5 m CE90): their points are a normal first look, written with the tracks flagged and a warning. A
+// bias larger than kGroundMaxBiasPx (75 m at 0.5 m, nine times Pleiades' CE90; kGcpRefusePx's reasoning),
+// or than kGroundStatedErrors times a model's stated error (RPC00B ERR_BIAS and ERR_RAND, root sum of
+// squares, in its pixels) where that is more, is no delivered model's.
+constexpr double kGroundMaxBiasPx = 150, kGroundStatedErrors = 10;
 struct GroundSolution {
   std::vector<RpcIntersection> points;  // per track (ok false: not intersected)
   std::vector<int> flags;               // per track, GroundFlag bits
   long intersected = 0, residual_flagged = 0, outside_box = 0;
   double rms_px = 0, sigma0 = 0;        // over the intersected tracks' observations: RMS of |r|, and per coordinate
+  double median_rms_px = 0;             // median of the tracks' RMS
+  // When most tracks are flagged: the models' disagreement told from a wrong model by fitting a shift per
+  // image (rpc-adjust --model shift, the first image fixed, no prior): the RMS over the tracks after it, and
+  // the largest shift it found (pixels, at its image's centre) and that image (0-based).
+  bool biased = false;
+  double bias_fit_rms_px = NAN, max_shift_px = NAN;
+  int max_shift_image = -1;
+  std::string warning;                  // "" or the figures of biased models, for the tool's warning
 };
-// NumericalError when no track can be intersected, or when most tracks have an RMS above flag_px (the
-// message gives the count and median: a wrong model, swapped offsets, another image's model).
+// NumericalError when no track can be intersected, or when most tracks have an RMS above flag_px and the
+// models cannot be right: no shift per image fits the tracks (fit_trust: another image's model, a
+// diverging one), or the bias that does is beyond kGroundMaxBiasPx or kGroundStatedErrors times a model's
+// stated error (offsets swapped, another scene's model). The message gives the count, the median and the
+// bias fit's figures. Biased models that fit otherwise: the points, flagged, and `warning`.
 GroundSolution ground_points(const std::vector<AdjustImage>& images, const std::vector<AdjustTrack>& tracks,
                              const GroundOptions& options);
+// An image's ground sample distance at its centre and its model's height offset (m per pixel; NaN where
+// the model cannot localize it).
+double model_gsd(const RpcModel& m, long width, long height);
 
 // Tracks of several files on one set of images. Each file is a tracks file or a matches file, told apart by
 // its header's kind ("# tpkit matches": matches; "# tpkit tracks" or no header: tracks). Each file's image k
