@@ -30,7 +30,14 @@
 // Precision: the covariance sigma0^2 (J^T W J)^-1 of the final model with sigma0^2 = sum(w r^2) / (n - P),
 // J, w and r those of the last iteration (its model within the tolerance of the solution, as is the model
 // the correlation is measured at);
-// `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error).
+// `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error), and the L1
+// weights make it 5-7x too optimistic; with `sigma_sandwich` the covariance is instead the sandwich
+// B^-1 M B^-1 of the taper-weighted fit at the solution (B = sum tap J^T J, M = sum tap^2 J^T J, times
+// the weighted residual variance), and sigma_scale / sigma_floor calibrate it (match_pair.hpp's
+// pair_lsm_options: x 3.5, set on tp-synth truth). sigma_fit keeps the uncalibrated value.
+// Residual mask (mask_k > 0): the final correlation is also measured over the window's pixels whose
+// residual is within mask_k x 1.4826 x median |residual| (corr_inliers, inlier_share), and the
+// acceptance tests that one; with mask_fit the pixels beyond it also lose their weight in the fit.
 // Arithmetic: the iterations interpolate image 2 in single precision (4 taps at a time) and build the
 // affine normal matrix in single precision, 4 pixels at a time (the covariance inverts it in double);
 // positions, residuals and the right-hand side J^T W r (which fixes the solution) are double. Results do
