@@ -14,6 +14,12 @@
 //       --min-corr R, --max-sigma PX: the LSM acceptance (tp-match's options); --contrast C: the SIFT
 //       contrast threshold (tp-match --contrast); --nodata V: grey level of
 //       invalid pixels (tp-synth --nodata-band writes 0).
+//       --sigma-deciles: also print, over the refined matches of the three pairs, the RMS error (per
+//       coordinate, sqrt(mean(ex^2 + ey^2) / 2)) against the RMS sigma in each decile of sigma, and their ratio
+//       (issue 52: within [0.7, 1.4] when the sigma predicts the error), and the same over the matches
+//       whose error is below 1 px (a wrong match is an outlier, not an imprecise position: no sigma predicts it). --sigma-scale K, --sigma-floor F:
+//       the calibration of the sigma (LsmOptions; 1 and 0 print the normal equations' own);
+//       --mask K: the residual mask (LsmOptions::mask_k, 0 = off).
 //       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
 //       the true local map's Jacobian and Hessians (central differences, 1 px) for error analysis.
 //       --multi: then the triplets refined by multi-image LSM (tp-refine's library: multi_image_lsm.hpp,
@@ -243,6 +249,9 @@ int main(int argc, char** argv) {
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
     int adaptive = -1, sit = -1, epic = -1;
     double stol = -1, min_corr = -2, max_sigma = -1, contrast = -1;
+    double sigma_scale = -1, sigma_floor = -1, mask_k = -1;
+    bool deciles = false, mask_fit = false;
+    int sandwich = -1;
     std::optional<double> nodata;
     std::string score;
     bool multi = false, multi_t1 = false, no_curv = false;
@@ -292,6 +301,12 @@ int main(int argc, char** argv) {
       else if (a == "--min-corr") need(1), min_corr = num();
       else if (a == "--max-sigma") need(1), max_sigma = num();
       else if (a == "--contrast") need(1), contrast = num();
+      else if (a == "--sigma-deciles") deciles = true;
+      else if (a == "--sigma-scale") need(1), sigma_scale = num();
+      else if (a == "--sigma-floor") need(1), sigma_floor = num();
+      else if (a == "--mask") need(1), mask_k = num();
+      else if (a == "--mask-fit") mask_fit = true;
+      else if (a == "--sigma-sandwich") need(1), sandwich = whole();
       else if (a == "--nodata") need(1), nodata = num();
       else if (a == "--multi") multi = true;
       else if (a == "--multi-template1") multi = multi_t1 = true;
@@ -374,6 +389,12 @@ int main(int argc, char** argv) {
       if (min_corr >= -1) po.lsm.min_corr = min_corr;
       if (contrast > 0) po.sift.contrast = contrast;
       if (max_sigma > 0) po.lsm.max_sigma = max_sigma;
+      if (sigma_scale > 0) po.lsm.sigma_scale = sigma_scale;
+      if (sigma_floor >= 0) po.lsm.sigma_floor = sigma_floor;
+      if (mask_k >= 0) po.lsm.mask_k = mask_k;
+      po.lsm.mask_fit = mask_fit;
+      if (sandwich >= 0) po.lsm.sigma_sandwich = sandwich != 0;
+      std::vector<std::pair<double, double>> sig_err;  // refined matches: (sigma, squared error per coordinate)
       const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
       FILE* df = dump.empty() ? nullptr : std::fopen(dump.c_str(), "w");
       if (df)
@@ -397,6 +418,8 @@ int main(int argc, char** argv) {
           eraw.push_back((Eigen::Vector2d(m.extra.values(r, ckx), m.extra.values(r, cky)) - tr).norm());
           const bool unrefined = crf >= 0 && m.extra.values(r, crf) == 0;
           (unrefined ? eunref : eref).push_back((Eigen::Vector2d(m.xy(r, 2), m.xy(r, 3)) - tr).norm());
+          if (!unrefined && m.extra.find("sigma") >= 0)
+            sig_err.emplace_back(m.extra.values(r, m.extra.find("sigma")), 0.5 * eref.back() * eref.back());
           if (df) {
             // true local map f(d) = project(view 2, ground_point(view 1, p1 + d)): Jacobian and Hessians
             // by central differences (step 1 px)
@@ -428,6 +451,29 @@ int main(int argc, char** argv) {
         ms.push_back(std::move(m));
       }
       if (df) std::fclose(df);
+      if (deciles && sig_err.size() >= 10) {
+        // deciles of sigma over the three pairs' refined matches: RMS error per coordinate / RMS sigma
+        std::sort(sig_err.begin(), sig_err.end());
+        const size_t N = sig_err.size();
+        std::printf("sigma deciles (%zu refined matches, three pairs; error per coordinate against the truth):\n", N);
+        double worst_lo = 1e9, worst_hi = 0;
+        for (int d = 0; d < 10; ++d) {
+          const size_t a = d * N / 10, b = (d + 1) * N / 10;
+          double ss = 0, se = 0, ssc = 0, sec = 0;
+          long wrong = 0;
+          for (size_t q = a; q < b; ++q) {
+            ss += sig_err[q].first * sig_err[q].first, se += sig_err[q].second;
+            if (sig_err[q].second < 0.5) ssc += sig_err[q].first * sig_err[q].first, sec += sig_err[q].second;  // error < 1 px
+            else ++wrong;
+          }
+          const double rs = std::sqrt(ss / (b - a)), re = std::sqrt(se / (b - a)), ratio = re / rs;
+          const double ratio_c = std::sqrt(sec / ssc);
+          worst_lo = std::min(worst_lo, ratio), worst_hi = std::max(worst_hi, ratio);
+          std::printf("  decile %2d  sigma %.4f..%.4f  rms sigma %.4f  rms error %.4f  ratio %.3f  (errors < 1 px: ratio %.3f, %ld wrong)\n",
+                      d + 1, sig_err[a].first, sig_err[b - 1].first, rs, re, ratio, ratio_c, wrong);
+        }
+        std::printf("  error / sigma ratio over the deciles: %.3f..%.3f\n", worst_lo, worst_hi);
+      }
       tpkit::ChainOptions co;
       co.images = {v[0], v[1], v[2]};
       tpkit::ChainStats cs;

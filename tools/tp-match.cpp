@@ -201,6 +201,13 @@ int main(int argc, char** argv) {
         app.add_option("--max-shift", o->p.lsm.max_shift, "reject refinements farther from SIFT, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->p.lsm.max_sigma, "reject refinements whose sigma is larger, pixels")->check(tpkit::Positive);
         app.add_option("--min-corr", o->p.lsm.min_corr, "reject refinements with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
+        app.add_option("--residual-mask", o->p.lsm.mask_k,
+                       "LSM: pixels whose residual exceeds K robust sigmas are left out of the correlation (0 = off)")
+            ->check(tpkit::NonNegative);
+        app.add_option("--sigma-scale", o->p.lsm.sigma_scale, "LSM sigma calibration: factor on the normal equations' sigma")
+            ->check(tpkit::Positive);
+        app.add_option("--sigma-floor", o->p.lsm.sigma_floor, "LSM sigma calibration: floor added in quadrature, pixels")
+            ->check(tpkit::NonNegative);
         app.add_option("--unrefined-sigma", o->p.unrefined_sigma, "least sigma of a match kept unrefined, pixels")->check(tpkit::Positive);
         app.add_flag("--drop-unrefined", o->drop_unrefined, "drop verified matches whose refinement is rejected (counted by reason)");
         app.add_option("--blur", auto_or_pixels(o->p.blur, "--blur", -10, 10),

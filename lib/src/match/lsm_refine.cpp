@@ -395,6 +395,52 @@ double var_p2(const Normal<P>& ne) {
   f.solve(e1);
   return 0.5 * (e0[0] + e1[1]);
 }
+// Covariance of p2 by the sandwich of taper-weighted least squares at the solution, over the pixels
+// with keep[k] > 0 (their taper weights): C = B^-1 M B^-1, B = sum keep J^T J, M = sum keep^2 J^T J, times
+// the weighted residual variance; returns (C(0,0) + C(1,1)) / 2, infinite when B is singular. (The
+// IRLS normal matrix with the L1 weights taper / |r| is no covariance: its small residuals' large
+// weights make it 5x too optimistic on white noise.) Overwrites s.wt (left as keep).
+template <int P>
+double sandwich_var_p2(Scratch& s, int m, double r1, double qs, double ex, double ey, const std::vector<double>& keep) {
+  Normal<P> ne;
+  auto full = [&](const Normal<P>& x) {
+    Eigen::Matrix<double, P, P> F;
+    for (int a = 0, row = 0; a < P; row += ++a)
+      for (int c = 0; c <= a; ++c) F(a, c) = F(c, a) = x.N[row + c];
+    return F;
+  };
+  double sw = 0, swr2 = 0;
+  int kept = 0;
+  for (int k = 0; k < m; ++k) {
+    s.wt[k] = keep[k] * keep[k];
+    sw += keep[k], swr2 += keep[k] * s.r[k] * s.r[k], kept += keep[k] > 0;
+  }
+  accumulate<P>(s, m, r1, qs, ne, false, ex, ey);
+  const Eigen::Matrix<double, P, P> M = full(ne);
+  for (int k = 0; k < m; ++k) s.wt[k] = keep[k];
+  accumulate<P>(s, m, r1, qs, ne, false, ex, ey);
+  const Eigen::Matrix<double, P, P> B = full(ne);
+  if (kept <= P || !(sw > 0)) return std::numeric_limits<double>::infinity();
+  Eigen::LDLT<Eigen::Matrix<double, P, P>> f(B);
+  if (f.info() != Eigen::Success || !f.isPositive()) return std::numeric_limits<double>::infinity();
+  const Eigen::Matrix<double, P, 2> Bi = f.solve(Eigen::Matrix<double, P, P>::Identity().template leftCols<2>());
+  const Eigen::Matrix2d C = Bi.transpose() * M * Bi;
+  return 0.5 * (C(0, 0) + C(1, 1)) * swr2 / sw * kept / (kept - P);
+}
+
+// Residual mask: the threshold mask_k x 1.4826 x median |r| over the first m pixels (a robust scale of the
+// residuals, which a minority of changed pixels does not inflate), and zero weight beyond it. Returns the
+// threshold (infinite when k <= 0: no mask).
+double mask_residuals(Scratch& s, int m, double k, std::vector<double>& buf) {
+  if (!(k > 0) || m < 8) return std::numeric_limits<double>::infinity();
+  buf.resize(static_cast<size_t>(m));
+  for (int i = 0; i < m; ++i) buf[static_cast<size_t>(i)] = std::abs(s.r[i]);
+  std::nth_element(buf.begin(), buf.begin() + m / 2, buf.end());
+  const double thr = k * 1.4826 * std::max(buf[static_cast<size_t>(m / 2)], 1e-6);
+  for (int i = 0; i < m; ++i)
+    if (std::abs(s.r[i]) > thr) s.wt[i] = 0;
+  return thr;
+}
 }  // namespace
 
 double lsm_curvature(const Eigen::Matrix<double, 6, 1>& H) {
@@ -554,6 +600,8 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   double last_step = 0;
   // the quadratic stages have their own budget beyond the affine stage's max_iterations
   const int cap = o.max_iterations + (o.quadratic ? o.stage_iterations * (o.adaptive ? 2 : 1) : 0);
+  double mask_thr = std::numeric_limits<double>::infinity();  // the residual mask's last threshold
+  thread_local std::vector<double> mask_buf;
   for (; it < cap; ++it) {
     if (stage == 0 && it >= o.max_iterations) break;
     if (stage > 0 && it - stage_start >= o.stage_iterations) {
@@ -571,6 +619,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       for (int k = 0; k < m; ++k) s.wt[k] = s.tap[k] / std::max(std::abs(s.r[k]), o.eps);
     else
       for (int k = 0; k < m; ++k) s.wt[k] = s.tap[k];
+    if (o.mask_fit && it >= 2) mask_thr = mask_residuals(s, m, o.mask_k, mask_buf);
     bool ok;
     if (P == 8) {
       accumulate8_fast(s, m, th(7), n8);
@@ -657,6 +706,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       return res;
     }
     for (int k = 0; k < m; ++k) s.wt[k] = o.l1 ? s.tap[k] / std::max(std::abs(s.r[k]), o.eps) : s.tap[k];
+    if (o.mask_fit) mask_thr = mask_residuals(s, m, o.mask_k, mask_buf);
     converged = true;
   }
   res.iterations = it;
@@ -697,9 +747,21 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
       accumulate<kMaxP>(s, m, th(7), qs, n14, false);
       var = var_p2<kMaxP>(n14);
     }
-    var *= sum_wr2 / std::max(1, m - P);
+    // degrees of freedom: the pixels that kept a weight (all of the support without a mask)
+    int kept = 0;
+    for (int k = 0; k < m; ++k) kept += s.wt[k] > 0;
+    var *= sum_wr2 / std::max(1, kept - P);
+    if (o.sigma_sandwich) {
+      thread_local std::vector<double> keep;
+      keep.assign(static_cast<size_t>(m), 0.0);
+      for (int k = 0; k < m; ++k) keep[static_cast<size_t>(k)] = s.wt[k] > 0 ? s.tap[k] : 0.0;
+      const double r1 = last_state ? th_eval(7) : th(7);
+      var = P == 8 ? sandwich_var_p2<8>(s, m, r1, qs, ex, ey, keep)
+                   : P == 11 ? sandwich_var_p2<11>(s, m, r1, qs, ex, ey, keep) : sandwich_var_p2<kMaxP>(s, m, r1, qs, ex, ey, keep);
+    }
     // a singular final matrix gives no precision: refused as imprecise, not passed as sigma 0
-    res.sigma = std::isfinite(var) ? std::sqrt(std::max(var, 0.0)) : std::numeric_limits<double>::infinity();
+    res.sigma_fit = std::isfinite(var) ? std::sqrt(std::max(var, 0.0)) : std::numeric_limits<double>::infinity();
+    res.sigma = std::hypot(o.sigma_scale * res.sigma_fit, o.sigma_floor);
   }
   {
     const double mg = sum4(n, [&](int k) { return s.g[k]; }) / n;
@@ -707,6 +769,36 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     const double stg = sum4(n, [&](int k) { return (s.g[k] - mg) * s.t[k]; });
     const double stt = sum4(n, [&](int k) { return s.t[k] * s.t[k]; });
     res.corr = sgg > 0 ? stg / std::sqrt(sgg * stt) : 0;
+    res.corr_inliers = res.corr;
+    res.inlier_share = 1;
+    if (!o.mask_fit && o.mask_k > 0) {
+      // the threshold from the support's final residuals (weights untouched: the fit kept its L1 weights)
+      std::vector<double>& b = mask_buf;
+      b.assign(s.r.begin(), s.r.begin() + m);
+      for (double& v : b) v = std::abs(v);
+      std::nth_element(b.begin(), b.begin() + m / 2, b.end());
+      mask_thr = o.mask_k * 1.4826 * std::max(b[static_cast<size_t>(m / 2)], 1e-6);
+    }
+    if (std::isfinite(mask_thr)) {
+      // the same over the pixels within the mask's threshold (the whole window's residuals at the model
+      // the correlation is measured at)
+      double c = 0, a = 0, b = 0;
+      for (int k = 0; k < n; ++k)
+        if (std::abs(s.r[k]) <= mask_thr) c += 1, a += s.g[k], b += s.t[k];
+      res.inlier_share = c / n;
+      if (c > 2) {
+        a /= c, b /= c;
+        double gg = 0, tg = 0, tt = 0;
+        for (int k = 0; k < n; ++k)
+          if (std::abs(s.r[k]) <= mask_thr) {
+            const double dg = s.g[k] - a, dt = s.t[k] - b;
+            gg += dg * dg, tg += dg * dt, tt += dt * dt;
+          }
+        res.corr_inliers = gg > 0 && tt > 0 ? tg / std::sqrt(gg * tt) : 0;
+      } else {
+        res.corr_inliers = 0;
+      }
+    }
   }
   double det = res.A.determinant(), det0 = A0.determinant();
   if (!(det > 0) || !(det0 > 0) || det / det0 > 4 || det / det0 < 0.25) {
@@ -721,7 +813,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     res.status = LsmStatus::Imprecise;
     return res;
   }
-  if (res.corr < o.min_corr) {
+  if (res.corr_inliers < o.min_corr || res.inlier_share < o.min_inliers) {
     res.status = LsmStatus::LowCorrelation;
     return res;
   }

@@ -307,6 +307,16 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
     for (size_t q = q0; q < q1; ++q) {
       Rec& r = recs[G.js[q]];
       LsmResult L = lsm_refine(R.first, R.second, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[G.js[q]], lsm);
+      // a window that leaves the image (a keypoint near its edge) or meets nodata: smaller windows, the
+      // taper in proportion (their sigma says what the fewer pixels give); on the synthetic default
+      // scene this refines 2.6% more of pair 1-2's verified matches (out-of-image 253 -> 45)
+      for (int win : {15, 11}) {
+        if (!(L.status == LsmStatus::OutOfImage || L.status == LsmStatus::Invalid) || win >= lsm.window) continue;
+        LsmOptions small = lsm;
+        small.window = win;
+        small.taper = lsm.taper * win / lsm.window;
+        L = lsm_refine(R.first, R.second, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[G.js[q]], small);
+      }
       if (L.ok() && F && !(std::abs(F->residual(r.x1, r.y1, L.p2.x(), L.p2.y())) <= max_residual))
         L.status = LsmStatus::OffEpipolar;
       r.ok = L.ok();
@@ -592,6 +602,8 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
     meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (o.lsm.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") + " taper " + format_number(o.lsm.taper) +
                                        " max_shift " + format_number(o.lsm.max_shift) + " max_sigma " + format_number(o.lsm.max_sigma) +
                                        " min_corr " + format_number(o.lsm.min_corr) +
+                                       (o.lsm.mask_k > 0 ? " residual mask " + format_number(o.lsm.mask_k) + " (min_inliers " + format_number(o.lsm.min_inliers) + ")" : "") +
+                                       " sigma " + format_number(o.lsm.sigma_scale) + " x fit (+) " + format_number(o.lsm.sigma_floor) + " px" +
                                        (o.lsm.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
                                        ": " + std::to_string(st.refined) + " converged");
     long nu = 0, nd = 0;

@@ -30,7 +30,14 @@
 // Precision: the covariance sigma0^2 (J^T W J)^-1 of the final model with sigma0^2 = sum(w r^2) / (n - P),
 // J, w and r those of the last iteration (its model within the tolerance of the solution, as is the model
 // the correlation is measured at);
-// `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error).
+// `sigma` = sqrt((var x2 + var y2) / 2) px. It counts image noise only (not model error), and the L1
+// weights make it 5-7x too optimistic; with `sigma_sandwich` the covariance is instead the sandwich
+// B^-1 M B^-1 of the taper-weighted fit at the solution (B = sum tap J^T J, M = sum tap^2 J^T J, times
+// the weighted residual variance), and sigma_scale / sigma_floor calibrate it (match_pair.hpp's
+// pair_lsm_options: x 3.5, set on tp-synth truth). sigma_fit keeps the uncalibrated value.
+// Residual mask (mask_k > 0): the final correlation is also measured over the window's pixels whose
+// residual is within mask_k x 1.4826 x median |residual| (corr_inliers, inlier_share), and the
+// acceptance tests that one; with mask_fit the pixels beyond it also lose their weight in the fit.
 // Arithmetic: the iterations interpolate image 2 in single precision (4 taps at a time) and build the
 // affine normal matrix in single precision, 4 pixels at a time (the covariance inverts it in double);
 // positions, residuals and the right-hand side J^T W r (which fixes the solution) are double. Results do
@@ -77,6 +84,24 @@ struct LsmOptions {
   // The interpolation of image 2 in the x86-64 baseline code even where the CPU has AVX2 (whose code
   // interpolates two pixels at a time, cpu_dispatch.hpp): the same values; for the tests that compare them.
   bool baseline_code = false;
+  // Residual mask (images of different dates: shadows that moved, cars, vegetation): from the first L1
+  // iteration on, a pixel whose residual exceeds mask_k x 1.4826 x the median |residual| of the support
+  // gets no weight, so the window leaves out what changed instead of moving the position to explain it.
+  // 0 = off. The final correlation is then also measured over the pixels kept (corr_inliers), and a
+  // window that keeps less than min_inliers of its pixels is rejected as low-correlation.
+  double mask_k = 0;
+  double min_inliers = 0.5;
+  // false: the mask only measures (corr_inliers, inlier_share) and the fit keeps its L1 weights, which
+  // already bound what one pixel can pull (on synthetic windows with moved shadows, zero weights beyond
+  // the threshold moved the position no closer to the truth than L1's 1/|r|).
+  bool mask_fit = false;
+  // Sigma that predicts the error: sigma = sqrt((sigma_scale x s)^2 + sigma_floor^2), s the normal
+  // equations' standard deviation (which counts the residuals as independent, while neighbouring
+  // pixels of a sampled, interpolated image are not, and counts no model error). 1 and 0 = s itself.
+  double sigma_scale = 1, sigma_floor = 0;
+  // true: s is the sandwich covariance of taper-weighted least squares at the solution (lsm_refine.cpp);
+  // false: sigma0^2 (J^T W J)^-1 with the last iteration's L1 weights (about 5x too small on white noise)
+  bool sigma_sandwich = false;
 };
 
 // Why a refinement was rejected. OffEpipolar is set by match_keypoints (the refined position leaves the
@@ -91,11 +116,14 @@ struct LsmResult {
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
   Eigen::Matrix<double, 6, 1> H = Eigen::Matrix<double, 6, 1>::Zero();  // quadratic terms: x (u^2, uv, v^2), y (same)
   double r0 = 0, r1 = 1;  // radiometric offset and gain (normalised grey levels)
-  double sigma = 0;       // pixels
+  double sigma = 0;       // pixels (calibrated: LsmOptions::sigma_scale, sigma_floor)
   double corr = 0;        // normalised cross-correlation of the template and the resampled window
   int iterations = 0;
   double taper = 0;       // taper of the last stage, pixels
   bool quadratic = false; // the result is the quadratic model's (false: affine, also after a fallback)
+  double sigma_fit = 0;   // pixels: the normal equations' standard deviation before calibration
+  double corr_inliers = 0;  // correlation over the pixels the residual mask kept (= corr without a mask)
+  double inlier_share = 1;  // share of the window's pixels the residual mask kept
   bool ok() const { return status == LsmStatus::Ok; }
 };
 

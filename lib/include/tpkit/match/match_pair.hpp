@@ -35,6 +35,25 @@
 
 namespace tpkit {
 
+// The refinement's settings for a pair (lsm_refine.hpp's defaults, and): the residual mask measures the
+// correlation over the pixels that did not change between the dates (3 robust sigmas, at least half the
+// window kept); the sigma is the sandwich covariance of the taper-weighted fit times 3.5, the factor that
+// makes it predict the error on tp-synth truth (default scene, every decile of sigma but the last, which
+// holds the wrong matches: error / sigma 0.79..1.17; La Reunion pair, distance to the RPC epipolar curves:
+// 0.77..1.27); a refinement is accepted where that sigma is at most 1 px: on the Jacksonville pair 001-004
+// the refinements with sigma 0.5..1 px lie 0.60 px RMS from the RPC epipolar curves, the verified
+// matches whose refinement fails 0.81 px: the refined position is still the better one.
+inline LsmOptions pair_lsm_options() {
+  LsmOptions l;
+  l.mask_k = 3;
+  l.min_inliers = 0.5;
+  l.sigma_sandwich = true;
+  l.sigma_scale = 3.5;
+  l.sigma_floor = 0;
+  l.max_sigma = 1;
+  return l;
+}
+
 struct PairMatchOptions {
   SiftOptions sift;
   DescriptorMatchOptions desc;
@@ -54,7 +73,7 @@ struct PairMatchOptions {
   int grid = 0;                   // grid cells per side (0 = off)
   int per_cell = 4;               // matches kept per grid cell (best ratio first)
   bool refine = true;
-  LsmOptions lsm;
+  LsmOptions lsm = pair_lsm_options();
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
   double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
   // Relative blur of the images before refinement (relative_blur.hpp: > 0 blurs image 1, < 0 image 2,
