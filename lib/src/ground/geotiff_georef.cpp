@@ -11,38 +11,11 @@
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/input_file.hpp"
+#include "geotiff_tags.hpp"
 
 namespace tpkit {
 
 namespace {
-
-// The affine map of pixel centres from the GeoTIFF tags: ModelTransformation, else one tie point and the
-// pixel scale (rows run towards -y).
-std::array<double, 6> pixel_to_model(TIFF* tif, GTIF* gtif, const std::string& path) {
-  unsigned short raster_type = RasterPixelIsArea;
-  GTIFKeyGetSHORT(gtif, GTRasterTypeGeoKey, &raster_type, 0, 1);
-  const double centre = raster_type == RasterPixelIsPoint ? 0.0 : 0.5;  // raster space of pixel centre (0, 0)
-  uint16_t n_scale = 0, n_tie = 0, n_matrix = 0;
-  double *scale = nullptr, *tie = nullptr, *matrix = nullptr;
-  TIFFGetField(tif, TIFFTAG_GEOPIXELSCALE, &n_scale, &scale);
-  TIFFGetField(tif, TIFFTAG_GEOTIEPOINTS, &n_tie, &tie);
-  TIFFGetField(tif, TIFFTAG_GEOTRANSMATRIX, &n_matrix, &matrix);
-  double m[6];  // model = m * (i, j, 1) in raster space
-  if (n_matrix >= 16 && matrix) {
-    m[0] = matrix[3], m[1] = matrix[0], m[2] = matrix[1];
-    m[3] = matrix[7], m[4] = matrix[4], m[5] = matrix[5];
-  } else if (n_scale >= 2 && scale && n_tie >= 6 && tie) {
-    if (n_tie > 6) throw InputError(path, 0, "several GeoTIFF tie points without a transformation (not a regular grid)");
-    m[1] = scale[0], m[2] = 0, m[0] = tie[3] - tie[0] * scale[0];
-    m[4] = 0, m[5] = -scale[1], m[3] = tie[4] + tie[1] * scale[1];
-  } else {
-    throw InputError(path, 0, "no georeferencing (no GeoTIFF ModelTiepoint + ModelPixelScale nor ModelTransformation)");
-  }
-  std::array<double, 6> a{m[0] + centre * (m[1] + m[2]), m[1], m[2], m[3] + centre * (m[4] + m[5]), m[4], m[5]};
-  const double det = a[1] * a[5] - a[2] * a[4];
-  if (!(std::fabs(det) > 0) || !std::isfinite(det)) throw InputError(path, 0, "degenerate georeferencing (pixel size 0)");
-  return a;
-}
 
 // "EPSG:N" from the model type's code key, else libgeotiff's PROJ string of a user-defined CRS.
 std::string crs_of(GTIF* gtif, const std::string& path, bool& geographic) {
@@ -68,6 +41,32 @@ std::string crs_of(GTIF* gtif, const std::string& path, bool& geographic) {
 
 }  // namespace
 
+std::array<double, 6> geotiff_pixel_to_model(TIFF* tif, GTIF* gtif, const std::string& path) {
+  unsigned short raster_type = RasterPixelIsArea;
+  GTIFKeyGetSHORT(gtif, GTRasterTypeGeoKey, &raster_type, 0, 1);
+  const double centre = raster_type == RasterPixelIsPoint ? 0.0 : 0.5;  // raster space of pixel centre (0, 0)
+  uint16_t n_scale = 0, n_tie = 0, n_matrix = 0;
+  double *scale = nullptr, *tie = nullptr, *matrix = nullptr;
+  TIFFGetField(tif, TIFFTAG_GEOPIXELSCALE, &n_scale, &scale);
+  TIFFGetField(tif, TIFFTAG_GEOTIEPOINTS, &n_tie, &tie);
+  TIFFGetField(tif, TIFFTAG_GEOTRANSMATRIX, &n_matrix, &matrix);
+  double m[6];  // model = m * (i, j, 1) in raster space
+  if (n_matrix >= 16 && matrix) {
+    m[0] = matrix[3], m[1] = matrix[0], m[2] = matrix[1];
+    m[3] = matrix[7], m[4] = matrix[4], m[5] = matrix[5];
+  } else if (n_scale >= 2 && scale && n_tie >= 6 && tie) {
+    if (n_tie > 6) throw InputError(path, 0, "several GeoTIFF tie points without a transformation (not a regular grid)");
+    m[1] = scale[0], m[2] = 0, m[0] = tie[3] - tie[0] * scale[0];
+    m[4] = 0, m[5] = -scale[1], m[3] = tie[4] + tie[1] * scale[1];
+  } else {
+    throw InputError(path, 0, "no georeferencing (no GeoTIFF ModelTiepoint + ModelPixelScale nor ModelTransformation)");
+  }
+  std::array<double, 6> a{m[0] + centre * (m[1] + m[2]), m[1], m[2], m[3] + centre * (m[4] + m[5]), m[4], m[5]};
+  const double det = a[1] * a[5] - a[2] * a[4];
+  if (!(std::fabs(det) > 0) || !std::isfinite(det)) throw InputError(path, 0, "degenerate georeferencing (pixel size 0)");
+  return a;
+}
+
 GeoTiffGeoref read_geotiff_georef(const std::string& path) {
   check_input_file(path, InputKind::image);  // libtiff's open blocks on a FIFO for ever
   TIFFSetErrorHandler(nullptr);
@@ -83,7 +82,7 @@ GeoTiffGeoref read_geotiff_georef(const std::string& path) {
     TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, &w);
     TIFFGetField(tif, TIFFTAG_IMAGELENGTH, &h);
     g.width = w, g.height = h;
-    g.a = pixel_to_model(tif, gtif, path);
+    g.a = geotiff_pixel_to_model(tif, gtif, path);
     g.crs = crs_of(gtif, path, g.geographic);
   } catch (...) {
     if (gtif) GTIFFree(gtif);

@@ -19,6 +19,7 @@
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/input_file.hpp"
+#include "geotiff_tags.hpp"
 
 namespace tpkit {
 
@@ -218,31 +219,9 @@ void ReferenceDem::Impl::read_layout() {
 }
 
 void ReferenceDem::Impl::read_georeferencing(GTIF* gtif) {
-  unsigned short raster_type = RasterPixelIsArea;
-  GTIFKeyGetSHORT(gtif, GTRasterTypeGeoKey, &raster_type, 0, 1);
-  // Raster space: PixelIsArea puts (0, 0) at the top-left pixel's corner, PixelIsPoint at its centre.
-  const double centre = raster_type == RasterPixelIsPoint ? 0.0 : 0.5;
-  uint16_t n_scale = 0, n_tie = 0, n_matrix = 0;
-  double *scale = nullptr, *tie = nullptr, *matrix = nullptr;
-  TIFFGetField(tif, TIFFTAG_GEOPIXELSCALE, &n_scale, &scale);
-  TIFFGetField(tif, TIFFTAG_GEOTIEPOINTS, &n_tie, &tie);
-  TIFFGetField(tif, TIFFTAG_GEOTRANSMATRIX, &n_matrix, &matrix);
-  double m[6];  // model = m * (i, j, 1) in raster space
-  if (n_matrix >= 16 && matrix) {
-    m[0] = matrix[3]; m[1] = matrix[0]; m[2] = matrix[1];
-    m[3] = matrix[7]; m[4] = matrix[4]; m[5] = matrix[5];
-  } else if (n_scale >= 2 && scale && n_tie >= 6 && tie) {
-    if (n_tie > 6) fail("several GeoTIFF tie points without a pixel scale fit (not a regular grid)");
-    m[1] = scale[0]; m[2] = 0; m[0] = tie[3] - tie[0] * scale[0];
-    m[4] = 0; m[5] = -scale[1]; m[3] = tie[4] + tie[1] * scale[1];
-  } else {
-    fail("no georeferencing (no GeoTIFF ModelTiepoint + ModelPixelScale nor ModelTransformation)");
-  }
-  // Pixel centre (c, r) is raster (c + centre, r + centre).
-  a[1] = m[1]; a[2] = m[2]; a[0] = m[0] + centre * (m[1] + m[2]);
-  a[4] = m[4]; a[5] = m[5]; a[3] = m[3] + centre * (m[4] + m[5]);
+  const std::array<double, 6> m = geotiff_pixel_to_model(tif, gtif, path);
+  std::copy(m.begin(), m.end(), a);
   const double det = a[1] * a[5] - a[2] * a[4];
-  if (!(std::fabs(det) > 0) || !std::isfinite(det)) fail("degenerate georeferencing (pixel size 0)");
   inv[1] = a[5] / det; inv[2] = -a[2] / det; inv[4] = -a[4] / det; inv[5] = a[1] / det;
   inv[0] = -(inv[1] * a[0] + inv[2] * a[3]);
   inv[3] = -(inv[4] * a[0] + inv[5] * a[3]);
