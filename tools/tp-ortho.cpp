@@ -27,8 +27,8 @@ using namespace tpkit;
 
 struct Opts {
   std::vector<std::string> inputs, rpc;
-  std::string output, dem, dem_datum, crs, like, resampling = "bilinear";
-  double height = NAN, gsd = 0;
+  std::string output, dem, dem_datum, crs, like, resampling = "bilinear", occluded = "keep";
+  double height = NAN, gsd = 0, wall_slope = 60, min_valid = 0.95;
   std::vector<double> bounds;
   bool compare = false, quiet = false;
   long tile = 128;
@@ -53,8 +53,9 @@ bool ends_with_tif(const std::string& p) {
 int run_compare(const Opts& o) {
   if (o.inputs.size() < 2) throw UsageError("--compare needs two orthos or more");
   if (!o.rpc.empty() || !o.dem.empty() || !o.dem_datum.empty() || std::isfinite(o.height) || !o.crs.empty() || o.gsd > 0 ||
-      !o.bounds.empty() || !o.like.empty() || o.resampling != "bilinear")
-    throw UsageError("--compare measures orthos already made: --rpc, --dem, --dem-datum, --height, --crs, --gsd, --bounds, --like and --resampling go with orthorectification");
+      !o.bounds.empty() || !o.like.empty() || o.resampling != "bilinear" || o.occluded != "keep" ||
+      o.wall_slope != 60)
+    throw UsageError("--compare measures orthos already made: --rpc, --dem, --dem-datum, --height, --crs, --gsd, --bounds, --like, --resampling, --occluded and --wall-slope go with orthorectification");
   if (o.tile < 32 || o.tile > 4096) throw UsageError("--tile " + std::to_string(o.tile) + ": 32 to 4096 pixels");
   const std::string out = o.output.empty() ? "-" : o.output;
   check_outputs({{"-o", out}}, o.inputs);
@@ -62,6 +63,7 @@ int run_compare(const Opts& o) {
   for (const auto& f : o.inputs) info.push_back(read_ortho_info(f));
   AlignmentOptions opt;
   opt.tile = o.tile;
+  opt.min_valid = o.min_valid;
   opt.threads = o.threads;
   std::vector<ImageRef> refs;
   for (size_t i = 0; i < o.inputs.size(); ++i) refs.push_back({o.inputs[i], info[i].grid.width, info[i].grid.height});
@@ -99,11 +101,15 @@ int run_compare(const Opts& o) {
 int run_ortho(const Opts& o) {
   if (o.inputs.empty()) throw UsageError("no IMAGE given");
   if (o.tile != 128) throw UsageError("--tile goes with --compare");
+  if (o.min_valid != 0.95) throw UsageError("--min-valid goes with --compare");
+  if (o.wall_slope != 60 && o.occluded != "nodata") throw UsageError("--wall-slope goes with --occluded nodata");
   if (o.dem.empty() == !std::isfinite(o.height)) throw UsageError("give the heights: --dem FILE or --height H (one of them)");
   if (!o.dem_datum.empty() && o.dem.empty()) throw UsageError("--dem-datum goes with --dem");
   if (!o.like.empty() && (!o.crs.empty() || o.gsd > 0 || !o.bounds.empty()))
     throw UsageError("--like takes the grid of an ortho: --crs, --gsd and --bounds go without it");
   const Resampling resampling = parse_resampling(o.resampling);
+  if (o.occluded != "keep" && o.occluded != "nodata") throw UsageError("--occluded '" + o.occluded + "': keep or nodata");
+  if (o.occluded == "nodata" && o.dem.empty()) throw UsageError("--occluded nodata needs a surface that can hide the ground: --dem");
   // outputs: OUTDIR/STEM.ortho.tif, or the file itself for one image and -o NAME.tif
   std::vector<std::string> outs;
   const bool one_file = o.inputs.size() == 1 && ends_with_tif(o.output);
@@ -187,8 +193,11 @@ int run_ortho(const Opts& o) {
     OrthoOptions opt;
     opt.resampling = resampling;
     opt.threads = o.threads;
+    opt.hide_occluded = o.occluded == "nodata";
+    opt.wall_slope_deg = o.wall_slope;
     opt.description = "tpkit ortho of " + o.inputs[i] + " through " + src[i].path + " (" + rpc_form_name(src[i].form) + "), heights " +
-                      (dem ? "of " + o.dem + " (" + dem->datum() + ")" : format_number(o.height) + " m above the ellipsoid") + ", " + o.resampling;
+                      (dem ? "of " + o.dem + " (" + dem->datum() + ")" : format_number(o.height) + " m above the ellipsoid") + ", " + o.resampling +
+                      (opt.hide_occluded ? ", hidden ground nodata" : "");
     const auto t0 = std::chrono::steady_clock::now();
     const OrthoStats st = orthorectify(o.inputs[i], sources[i].model, grid, crs, surface, opt, outs[i]);
     const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -198,6 +207,7 @@ int run_ortho(const Opts& o) {
     if (st.no_height > 0)
       warn(o.inputs[i] + ": " + std::to_string(st.no_height) + " grid pixels have no height (off the DEM, or its nodata): nodata in the ortho");
     lines.push_back(o.inputs[i] + " -> " + outs[i] + ": " + format_figure(100.0 * st.valid / st.pixels, 3) + "% of the grid valid, " +
+                    (opt.hide_occluded ? format_figure(100.0 * st.hidden / st.pixels, 3) + "% hidden from the view (nodata), " : "") +
                     std::to_string(st.bands) + " band(s) " + st.type + ", " + format_figure(sec, 3) + " s (" +
                     format_figure(st.pixels / sec / 1e6, 3) + " Mpx/s)");
   }
@@ -224,10 +234,13 @@ int main(int argc, char** argv) {
     app.add_option("--bounds", o->bounds, "XMIN YMIN XMAX YMAX of the grid in its CRS, metres (default: the union of the footprints)")->expected(4);
     app.add_option("--like", o->like, "the grid of this ortho (CRS, corner, pixel size, size)");
     app.add_option("--resampling", o->resampling, "bilinear (default) | bicubic");
+    app.add_option("--occluded", o->occluded, "ground the view cannot see behind what the DEM holds (buildings, trees, ridges): keep (default: the surface that hides it, as gdalwarp) | nodata (a true ortho)");
     app.add_option("--threads", o->threads, "worker threads (default: the machine's cores)")->check(CLI::Range(1, kMaxThreads));
     app.add_option("-o,--output", o->output, "output folder (IMAGE's stem + .ortho.tif; default .), or a .tif for one image; --compare: the table (default -)");
     app.add_flag("--compare", o->compare, "measure the shift between every pair of orthos (IMAGE...) of one grid");
     app.add_option("--tile", o->tile, "--compare: tile side, pixels (default 128)");
+    app.add_option("--min-valid", o->min_valid, "--compare: share of a tile's pixels valid in both orthos for it to be measured (default 0.95)")->check(CLI::Range(0.05, 1.0));
+    app.add_option("--wall-slope", o->wall_slope, "with --occluded nodata: DEM slopes steeper than this, degrees, are walls and nodata too (default 60; 90: none)")->check(CLI::Range(1.0, 90.0));
     app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
     return [o]() { return o->compare ? run_compare(*o) : run_ortho(*o); };
   }, tpkit_man_page);

@@ -46,3 +46,15 @@ tpkit_tool_test(tp-ortho.grid-misses-the-image
 tpkit_tool_test(tp-ortho.geographic-crs-refused
   COMMAND "tp-ortho ${_mars}/img_01.tif --height 150 --crs EPSG:4326 -o o.tif@SEMI@ echo exit $?"
   STDOUT_MATCH "exit 2" STDERR_MATCH "--crs EPSG:4326: not a projected CRS")
+# --occluded nodata on a crop 27 degrees off nadir over the lidar DSM: part of the grid hidden from the view
+# (behind the buildings, and their walls), every other pixel as the ortho that keeps them has it (--compare
+# of the two: no shift)
+tpkit_tool_test(tp-ortho.true-ortho-hides-ground
+  COMMAND "tp-ortho -q ${_jax}/JAX_068_020_RGB.tif --dem ${_jax}/lidar_dsm_utm17n.tif --threads 2 -o keep.tif && tp-ortho ${_jax}/JAX_068_020_RGB.tif --dem ${_jax}/lidar_dsm_utm17n.tif --like keep.tif --occluded nodata --threads 2 -o true.tif 2> log && sed -nE 's/.* ([0-9.]+)% hidden from the view.*/\\1/p' log | awk '{ print ($1 >= 1 && $1 <= 30 ? \"some hidden\" : $1) }' && tp-ortho -q --compare keep.tif true.tif --tile 64 --min-valid 0.5 | grep -v '^#' | awk '{ print ($5 ^ 2 + $6 ^ 2 < 0.01 ^ 2 ? \"same pixels\" : $5 \" \" $6) }'"
+  STDOUT_MATCH "^some hidden\nsame pixels\n$")
+tpkit_tool_test(tp-ortho.occluded-needs-a-dem
+  COMMAND "tp-ortho ${_mars}/img_01.tif --height 100 --occluded nodata -o o.tif@SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 2" STDERR_MATCH "--occluded nodata needs a surface that can hide the ground: --dem" NO_FILE o.tif)
+tpkit_tool_test(tp-ortho.wall-slope-goes-with-occluded
+  COMMAND "tp-ortho ${_jax}/JAX_068_020_RGB.tif --dem ${_jax}/lidar_dsm_utm17n.tif --wall-slope 45 -o o.tif@SEMI@ echo exit $?"
+  STDOUT_MATCH "exit 2" STDERR_MATCH "--wall-slope goes with --occluded nodata" NO_FILE o.tif)

@@ -11,6 +11,7 @@
 #include "tpkit/core/parallel_for.hpp"
 #include "tpkit/core/tool_support.hpp"
 #include "tpkit/ground/reference_dem.hpp"
+#include "tpkit/ortho/occlusion.hpp"
 
 namespace tpkit {
 
@@ -26,6 +27,7 @@ constexpr long kLattice = 16;             // exact ground points every 16 pixels
 constexpr double kLatticeTolerance = 1e-3;  // pixels: a flat height's projection bilinear within a lattice cell
 constexpr double kFoldBack = 3;           // normalized |lon|, |lat| beyond which the model is not trusted
 constexpr double kMaxWindowPixels = 1 << 26;  // the image window one tile may read (64 Mpx): a guard
+constexpr long kMaxOccluderMargin = 512;      // pixels: how far towards the sensor a tile looks for occluders
 
 // What every tile needs.
 struct Job {
@@ -41,13 +43,14 @@ struct Job {
   double src_nodata;
   SampleType type;
   double nodata;  // output
+  double top = NAN;  // the surface's highest height over the grid (hidden ground only)
 };
 
 // A worker's buffers, kept from tile to tile: fresh ones cost a page fault and the zeroing of every page
 // (a third of the run's time, measured on a Marseille crop).
 struct Scratch {
   std::vector<double> sx, sy, lon, lat, h, lx, ly, nx, ny;
-  std::vector<char> smooth;
+  std::vector<char> smooth, hidden;
   std::vector<unsigned char> samples;
   Raster reuse;
 };
@@ -145,6 +148,63 @@ long tile_image_points(const Job& j, long c0, long r0, Scratch& w) {
       }
     }
   return no_height;
+}
+
+// The surface's heights at grid pixels (c0 + i, r0 + j), i < w, j < h: ground points exact on a lattice every
+// kLattice pixels and bilinear between (as stage 1), heights from the DEM at every pixel.
+HeightWindow window_heights(const Job& j, long c0, long r0, long w, long h) {
+  const OrthoGrid& g = j.grid;
+  const long na = h / kLattice + 2, nb = w / kLattice + 2;
+  std::vector<double> lx(static_cast<size_t>(na * nb)), ly(lx.size());
+  for (long a = 0; a < na; ++a)
+    for (long b = 0; b < nb; ++b) {
+      lx[static_cast<size_t>(a * nb + b)] = g.x0 + (c0 + b * kLattice + 0.5) * g.gsd;
+      ly[static_cast<size_t>(a * nb + b)] = g.y0 - (r0 + a * kLattice + 0.5) * g.gsd;
+    }
+  j.crs.to_lonlat(lx.size(), lx.data(), ly.data());
+  const size_t n = static_cast<size_t>(w * h);
+  std::vector<double> lon(n), lat(n);
+  for (long r = 0; r < h; ++r)
+    for (long c = 0; c < w; ++c) {
+      const long a = r / kLattice, b = c / kLattice;
+      const double u = static_cast<double>(c % kLattice) / kLattice, v = static_cast<double>(r % kLattice) / kLattice;
+      const size_t k00 = static_cast<size_t>(a * nb + b), k10 = k00 + 1, k01 = k00 + nb, k11 = k01 + 1;
+      const size_t i = static_cast<size_t>(r * w + c);
+      lon[i] = (1 - v) * ((1 - u) * lx[k00] + u * lx[k10]) + v * ((1 - u) * lx[k01] + u * lx[k11]);
+      lat[i] = (1 - v) * ((1 - u) * ly[k00] + u * ly[k10]) + v * ((1 - u) * ly[k01] + u * ly[k11]);
+    }
+  HeightWindow H{c0, r0, w, h, std::vector<double>(n)};
+  j.surface.dem->heights(n, lon.data(), lat.data(), H.z.data());
+  return H;
+}
+
+// Stage 1b (hide_occluded, with a DEM): the tile's pixels the view cannot see lose their image point.
+// Returns how many valid points were hidden.
+long hide_occluded_points(const Job& j, const OrthoOptions& o, long c0, long r0, Scratch& w) {
+  // the tile's line of sight at its centre's height (the median of its known heights)
+  std::vector<double> known;
+  for (size_t i = 0; i < w.h.size(); ++i)
+    if (std::isfinite(w.h[i]) && std::isfinite(w.sx[i])) known.push_back(w.h[i]);
+  if (known.empty()) return 0;
+  std::nth_element(known.begin(), known.begin() + static_cast<long>(known.size() / 2), known.end());
+  const double hc = known[known.size() / 2], lowest = *std::min_element(known.begin(), known.end());
+  const LineOfSight los = line_of_sight(j.model, j.grid, j.crs, c0 + kTile / 2.0, r0 + kTile / 2.0, hc);
+  const long m = occluder_margin(los, j.top - lowest, kMaxOccluderMargin);
+  if (m == 0) return 0;
+  // the window reaches m pixels towards the sensor (and 2 the other way, for the bilinear surface)
+  const double per_m = std::hypot(los.dc, los.dr);
+  const long ex = static_cast<long>(std::ceil(m * std::abs(los.dc) / per_m)) + 2, ey = static_cast<long>(std::ceil(m * std::abs(los.dr) / per_m)) + 2;
+  const long wc0 = c0 - (los.dc < 0 ? ex : 2), wr0 = r0 - (los.dr < 0 ? ey : 2);
+  const HeightWindow H = window_heights(j, wc0, wr0, kTile + ex + 2, kTile + ey + 2);
+  mark_hidden(H, los, c0, r0, kTile, kTile, o.hidden_tolerance, w.hidden);
+  if (o.wall_slope_deg < 90) mark_walls(H, j.grid.gsd, o.wall_slope_deg, c0, r0, kTile, kTile, w.hidden);
+  long n = 0;
+  for (size_t i = 0; i < w.hidden.size(); ++i)
+    if (w.hidden[i] && std::isfinite(w.sx[i])) {
+      w.sx[i] = w.sy[i] = NAN;
+      ++n;
+    }
+  return n;
 }
 
 // Keys' cubic convolution weights (a = -0.5) of the 4 samples around t in [0, 1) (at -1, 0, 1, 2).
@@ -260,6 +320,25 @@ long resample_any(const Job& j, const std::vector<Raster>& win, const std::vecto
   }
   return 0;
 }
+// The surface's highest height over the grid: the DEM sampled every `step` grid pixels (at most about a
+// million samples), where a missed peak only shortens the search for occluders by its excess.
+double surface_top(const Job& j) {
+  const OrthoGrid& g = j.grid;
+  const long step = std::max(4L, static_cast<long>(std::ceil(std::sqrt(static_cast<double>(g.width) * g.height / 1e6))));
+  std::vector<double> x, y;
+  for (long r = 0; r < g.height + step - 1; r += step)
+    for (long c = 0; c < g.width + step - 1; c += step) {
+      x.push_back(g.x0 + (std::min(c, g.width - 1) + 0.5) * g.gsd);
+      y.push_back(g.y0 - (std::min(r, g.height - 1) + 0.5) * g.gsd);
+    }
+  j.crs.to_lonlat(x.size(), x.data(), y.data());
+  std::vector<double> h(x.size());
+  j.surface.dem->heights(x.size(), x.data(), y.data(), h.data());
+  double top = NAN;
+  for (double v : h)
+    if (std::isfinite(v)) top = std::isfinite(top) ? std::max(top, v) : v;
+  return top;
+}
 }  // namespace
 
 OrthoStats orthorectify(const std::string& image, const RpcModel& model, const OrthoGrid& grid, const GridCrs& crs,
@@ -276,9 +355,10 @@ OrthoStats orthorectify(const std::string& image, const RpcModel& model, const O
   layout.description = options.description;
   Job j{image, model, grid, crs, surface, options.resampling, info.width, info.height, info.bands, info.nodata.has_value(),
         info.nodata.value_or(0), layout.type, layout.nodata};
+  if (options.hide_occluded && surface.dem) j.top = surface_top(j);
   OrthoTiffWriter writer(out, layout);
   const long across = layout.tiles_across(), down = layout.tiles_down();
-  std::atomic<long> valid{0}, no_height{0};
+  std::atomic<long> valid{0}, no_height{0}, hidden{0};
   std::vector<int> bands(static_cast<size_t>(info.bands));
   for (int b = 0; b < info.bands; ++b) bands[static_cast<size_t>(b)] = b;
   const int margin = options.resampling == Resampling::bicubic ? 2 : 1;
@@ -288,6 +368,7 @@ OrthoStats orthorectify(const std::string& image, const RpcModel& model, const O
     const size_t n = static_cast<size_t>(kTile * kTile);
     thread_local Scratch w;
     no_height += tile_image_points(j, tx * kTile, ty * kTile, w);
+    if (std::isfinite(j.top)) hidden += hide_occluded_points(j, options, tx * kTile, ty * kTile, w);
     const std::vector<double>&sx = w.sx, &sy = w.sy;
     // the image window the tile's points need
     double xmin = std::numeric_limits<double>::infinity(), ymin = xmin, xmax = -xmin, ymax = -xmin;
@@ -321,6 +402,7 @@ OrthoStats orthorectify(const std::string& image, const RpcModel& model, const O
   st.pixels = grid.width * grid.height;
   st.valid = valid;
   st.no_height = no_height;
+  st.hidden = hidden;
   st.bands = info.bands;
   st.type = info.format;
   st.nodata = layout.nodata;

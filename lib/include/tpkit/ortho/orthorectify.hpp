@@ -17,7 +17,9 @@
 // its heights exact at every pixel, its projections too with a DEM; at a flat height the projection is
 // exact at the lattice's nodes and bilinear between them in each lattice cell where that is within 0.001 px
 // of the exact value at the cell's centre (every cell, on the crops tried), exact elsewhere. A tile reads
-// only the image window its pixels see, so memory is bounded by the tile, not the scene.
+// only the image window its pixels see, so memory is bounded by the tile, not the scene. Hidden ground
+// (hide_occluded): each tile's heights are taken again over a window stretched towards the sensor by the
+// DEM's relief along the tile's line of sight (at most 512 pixels), and every pixel's ray is followed over it.
 #pragma once
 #include <string>
 
@@ -42,6 +44,15 @@ struct OrthoSurface {
 struct OrthoOptions {
   Resampling resampling = Resampling::bilinear;
   int threads = 1;
+  // With a DEM: ground the view cannot see (occlusion.hpp: behind a building, a tree, a ridge) written as
+  // nodata, not as the surface that hides it; `hidden_tolerance` metres: how far the surface must rise above
+  // the line of sight to hide a point (the DEM's own noise and interpolation at roof edges stay below it)
+  // and the DEM's walls (slopes above `wall_slope_deg`): a vertical face at a DEM's posting is a ramp a pixel or
+  // two wide whose ground points land on the wall in the image, a strip of wall on the roof's edge on the
+  // side of the sensor, different for every view (90: none)
+  bool hide_occluded = false;
+  double hidden_tolerance = 0.5;
+  double wall_slope_deg = 60;
   // output nodata: the image's own nodata when it has one, else 0 for integer samples, NaN for floats
   std::string description;  // the GeoTIFF's ImageDescription
 };
@@ -50,6 +61,7 @@ struct OrthoStats {
   long pixels = 0;     // of the grid
   long valid = 0;      // written from the image
   long no_height = 0;  // nodata because the surface had no height there
+  long hidden = 0;     // nodata because the view cannot see the ground there (OrthoOptions::hide_occluded)
   int bands = 0;
   std::string type;    // the sample type written
   double nodata = 0;
