@@ -243,7 +243,7 @@ int main(int argc, char** argv) {
     int threads = std::max(1u, std::thread::hardware_concurrency());
     int window = 21;
     double taper = 3;
-    bool l2 = false, global = false;
+    bool l2 = false, global = false, no_retry = false;
     std::string dump;
     int quad = -1;
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
@@ -258,7 +258,7 @@ int main(int argc, char** argv) {
     double model_sigma = -1;
     int score_a = 1, score_b = 2;
     const char* usage =
-        "usage: bench_match_accuracy --synth DIR [--check MED P90] [--multi | --multi-template1 [--model-sigma PX] [--no-curvature]] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
+        "usage: bench_match_accuracy --synth DIR [--check MED P90] [--no-retry] [--multi | --multi-template1 [--model-sigma PX] [--no-curvature]] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       auto need = [&](int k) {
@@ -286,6 +286,7 @@ int main(int argc, char** argv) {
       else if (a == "--taper") need(1), taper = num();
       else if (a == "--l2") l2 = true;
       else if (a == "--global") global = true;
+      else if (a == "--no-retry") no_retry = true;
       else if (a == "--dump") need(1), dump = argv[++i];
       else if (a == "--quadratic") need(1), quad = whole();
       else if (a == "--epipolar-curvature") need(1), epic = whole();
@@ -376,6 +377,7 @@ int main(int argc, char** argv) {
       po.lsm.taper = taper;
       po.lsm.l1 = !l2;
       po.guided = !global;
+      if (no_retry) po.retry_windows.clear();
       if (quad >= 0) po.lsm.quadratic = quad != 0;
       if (cut >= 0) po.lsm.support = cut;
       if (adaptive >= 0) po.lsm.adaptive = adaptive != 0;

@@ -57,6 +57,7 @@ struct Opts {
   int threads = 0;
   bool no_refine = false, drop_unrefined = false, no_mutual = false, global = false, l2 = false, quiet = false;
   tpkit::PairMatchOptions p;
+  std::string retry_windows;  // --retry-windows W,W... | none
   std::vector<long> region;  // --region X0 Y0 W H
   double region_margin = 128;
   int detect = 0;  // --detect N: image N's detection tiles into the cache
@@ -198,6 +199,7 @@ int main(int argc, char** argv) {
         app.add_option("--per-cell", o->p.per_cell, "matches kept per grid cell")->check(tpkit::Positive);
         app.add_flag("--no-refine", o->no_refine, "keep raw SIFT positions");
         app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd)")->check(CLI::Range(5, 101));
+        app.add_option("--retry-windows", o->retry_windows, "LSM windows, pixels, tried in turn where --window's refinement failed on its content (default 15,31,41; none: no retry)");
         app.add_option("--max-shift", o->p.lsm.max_shift, "reject refinements farther from SIFT, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->p.lsm.max_sigma, "reject refinements whose sigma is larger, pixels")->check(tpkit::Positive);
         app.add_option("--min-corr", o->p.lsm.min_corr, "reject refinements with a lower final correlation")->check(CLI::Range(-1.0, 1.0));
@@ -257,6 +259,19 @@ int main(int argc, char** argv) {
           if (o->p.sift.stretch_lo < 0 || o->p.sift.stretch_hi > 100 || !(o->p.sift.stretch_lo < o->p.sift.stretch_hi))
             throw tpkit::UsageError("--stretch needs 0 <= LOW < HIGH <= 100");
           if (o->p.lsm.window % 2 == 0) throw tpkit::UsageError("--window must be odd");
+          if (!o->retry_windows.empty()) {
+            o->p.retry_windows.clear();
+            if (o->retry_windows != "none") {
+              std::stringstream ss(o->retry_windows);
+              for (std::string t; std::getline(ss, t, ',');) {
+                char* end = nullptr;
+                const long w = std::strtol(t.c_str(), &end, 10);
+                if (t.empty() || *end != '\0' || w < 5 || w > 101 || w % 2 == 0)
+                  throw tpkit::UsageError("--retry-windows '" + o->retry_windows + "': odd window sizes of 5 to 101 pixels, comma-separated, or none");
+                o->p.retry_windows.push_back(static_cast<int>(w));
+              }
+            }
+          }
           o->p.desc.mutual = !o->no_mutual;
           o->p.guided = !o->global;
           o->p.refine = !o->no_refine;

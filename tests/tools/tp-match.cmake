@@ -202,3 +202,15 @@ endif()
 tpkit_tool_test(tp-match.residual-mask-bad-value
   COMMAND "tp-synth --out s --size 128 --seed 1 > /dev/null && tp-match s/view1.tif s/view2.tif --residual-mask -1 -o out.matches"
   EXPECT_FAIL STDERR_MATCH "residual-mask" NO_FILE out.matches)
+# Retry windows on a pair of two dates (Jacksonville 009, January, and 018, May: shadows moved): some
+# matches whose 21-px window failed are refined at another, the file's RMS distance to the RPC epipolar
+# curves over all its matches (an affine bias per image removed) no worse than without retries (+0.005 px),
+# and more refined; bad sizes are refused.
+if(TPKIT_BENCH)
+tpkit_tool_test(tp-match.retry-windows-multidate
+  COMMAND "J=$SHARED/data/wv3-jacksonville && tp-match $J/JAX_068_009_RGB.tif $J/JAX_068_018_RGB.tif --threads 2 -q -o r.m && tp-match $J/JAX_068_009_RGB.tif $J/JAX_068_018_RGB.tif --threads 2 -q --retry-windows none -o n.m && grep -o '[0-9]* at a retry window' r.m | awk '{ print ($1 > 0 ? \"retried\" : $1) }' && ! grep -q 'retry window' n.m && for f in r.m n.m@SEMI@ do bench_epipolar_distance $J/JAX_068_009_RGB.tif $J/JAX_068_018_RGB.tif $f --heights -40,80 | tail -1@SEMI@ done | awk 'NR == 1 { r = $3@SEMI@ a = $6 } NR == 2 { print (r > $3 ? \"more refined\" : r \" vs \" $3), (a <= $6 + 0.005 ? \"no less precise\" : a \" vs \" $6) }'"
+  STDOUT_MATCH "^retried\nmore refined no less precise\n$" TIMEOUT 300)
+endif()
+tpkit_tool_test(tp-match.retry-windows-bad
+  COMMAND "tp-synth --out s --size 128 --seed 1 > /dev/null && tp-match s/view1.tif s/view2.tif --retry-windows 15,20 -o out.matches"
+  EXPECT_FAIL STDERR_MATCH "--retry-windows '15,20': odd window sizes of 5 to 101 pixels" NO_FILE out.matches)

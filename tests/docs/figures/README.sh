@@ -3,7 +3,7 @@
 n=$(records triplet.tracks)
 within "$n" 7700 8300 || fail "triplet.tracks: $n triplets, the page says about 8000"
 rmse=$(header rmse_px fit-ml.eval)
-within "$rmse" 0.09 0.12 || fail "fit-ml.eval: rmse $rmse px, the page says about 0.12 px"
+within "$rmse" 0.09 0.125 || fail "fit-ml.eval: rmse $rmse px, the page says about 0.12 px"
 # "by 0.56 px RMS; adjusted, by 0.106 px"
 read -r before after < <(sed -n 's/^rpc-adjust: .*model affine: rms \([0-9.]*\) px before, \([0-9.]*\) px after.*/\1 \2/p' "$log")
 within "${before:-0}" 0.55 0.58 && within "${after:-0}" 0.100 0.112 ||

@@ -74,6 +74,11 @@ struct PairMatchOptions {
   int per_cell = 4;               // matches kept per grid cell (best ratio first)
   bool refine = true;
   LsmOptions lsm = pair_lsm_options();
+  // Windows (odd, pixels) tried in turn where lsm.window's refinement failed on its content (drifted, low
+  // correlation, imprecise, not converged, diverged, off the pair model); the first accepted with a sigma
+  // within the 90th percentile of the pair's first-window sigmas is kept. Empty:
+  // none. Not where the window left the image (smaller windows 15 and 11 then, always).
+  std::vector<int> retry_windows = {15, 31, 41};
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
   double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
   // Relative blur of the images before refinement (relative_blur.hpp: > 0 blurs image 1, < 0 image 2,
@@ -101,6 +106,7 @@ struct PairMatchOptions {
 
 struct PairMatchStats {
   long keypoints1 = 0, keypoints2 = 0, putative = 0, verified = 0, gridded = 0, refined = 0;
+  long retried = 0;  // of the refined: at a retry window (PairMatchOptions::retry_windows)
   long in_window = 0;                          // of the gridded ones, those in PairMatchOptions::window (all without one)
   double ransac_rms = 0;
   bool cached1 = false, cached2 = false;       // keypoints read from the cache
