@@ -76,7 +76,7 @@ struct PairMatchOptions {
   LsmOptions lsm = pair_lsm_options();
   // Windows (odd, pixels) tried in turn where lsm.window's refinement failed on its content (drifted, low
   // correlation, imprecise, not converged, diverged, off the pair model); the first accepted with a sigma
-  // within the 90th percentile of the pair's first-window sigmas is kept. Empty:
+  // within the median of the pair's first-window sigmas is kept. Empty:
   // none. Not where the window left the image (smaller windows 15 and 11 then, always).
   std::vector<int> retry_windows = {15, 31, 41};
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
