@@ -83,7 +83,7 @@ int run_compare(const Opts& o) {
       const PairAlignment p = measure_alignment(o.inputs[a], o.inputs[b], opt);
       const double s = std::hypot(p.dx, p.dy);
       write_record(os, {double(a + 1), double(b + 1), double(p.tiles.size()), double(p.tiles_tried), p.dx, p.dy, p.nmad_dx, p.nmad_dy, s,
-                        p.dx * g.gsd, -p.dy * g.gsd, s * g.gsd});
+                        p.dx * g.gsd, std::isnan(p.dy) ? p.dy : -p.dy * g.gsd, s * g.gsd});  // (nan, not -nan)
       ++pairs;
       if (p.tiles.empty())
         ++unmeasured;
@@ -91,7 +91,7 @@ int run_compare(const Opts& o) {
         worst = std::max(worst, s);
     }
   file.commit();
-  if (unmeasured) warn(std::to_string(unmeasured) + " of " + std::to_string(pairs) + " pairs have no tile measured (no common valid area, or no texture): nan in the table");
+  if (unmeasured) warn(std::to_string(unmeasured) + " of " + std::to_string(pairs) + " pairs have no tile measured (no common valid area, no texture, or holes in every tile: true orthos of a city need --tile 64 or --min-valid 0.5): nan in the table");
   if (!o.quiet)
     summary(std::to_string(pairs) + " pairs of " + std::to_string(o.inputs.size()) + " orthos: largest median shift " + format_figure(worst, 3) +
             " px (" + format_figure(worst * g.gsd, 3) + " m) -> " + out);

@@ -58,3 +58,7 @@ tpkit_tool_test(tp-ortho.occluded-needs-a-dem
 tpkit_tool_test(tp-ortho.wall-slope-goes-with-occluded
   COMMAND "tp-ortho ${_jax}/JAX_068_020_RGB.tif --dem ${_jax}/lidar_dsm_utm17n.tif --wall-slope 45 -o o.tif@SEMI@ echo exit $?"
   STDOUT_MATCH "exit 2" STDERR_MATCH "--wall-slope goes with --occluded nodata" NO_FILE o.tif)
+# True orthos of a city have holes in every 128-px tile: the default compare measures nothing and says how to
+tpkit_tool_test(tp-ortho.compare-true-orthos-hint
+  COMMAND "tp-ortho -q ${_jax}/JAX_068_001_RGB.tif ${_jax}/JAX_068_003_RGB.tif --dem ${_jax}/lidar_dsm_utm17n.tif --occluded nodata --threads 2 -o t 2> /dev/null && tp-ortho -q --compare t/JAX_068_001_RGB.ortho.tif t/JAX_068_003_RGB.ortho.tif -o a 2> err@SEMI@ cat err && grep -v '^#' a | awk '{ print $11 }' && tp-ortho -q --compare t/JAX_068_001_RGB.ortho.tif t/JAX_068_003_RGB.ortho.tif --tile 64 -o b && grep -v '^#' b | awk '{ print ($3 >= 2 ? \"measured on 64-px tiles\" : $3) }'"
+  STDOUT_MATCH "holes in every tile: true orthos of a city need --tile 64 or --min-valid 0.5.*\nnan\nmeasured on 64-px tiles\n$")
