@@ -186,6 +186,7 @@ int run_ortho(const Opts& o) {
   }
   check_grid(grid, o.like.empty() ? "the grid" : o.like);
   const GridCrs crs(grid.epsg, o.like.empty() ? "--crs" : o.like);
+  if (o.occluded == "nodata") surface.top = highest_height(surface, grid, crs);  // one search bound for every image
 
   // one ortho per image
   std::vector<std::string> lines;

@@ -321,6 +321,7 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
         if (L.ok() && F && !(std::abs(F->residual(r.x1, r.y1, L.p2.x(), L.p2.y())) <= max_residual)) L.status = LsmStatus::OffEpipolar;
         return L;
       };
+      LsmResult L;
       if (retry) {
         // a second pass over records whose first window failed on its content (images of different dates:
         // a shadow, a car, a turned field inside it pulled the fit away, left too little correlation or too
@@ -329,27 +330,21 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
         // (the pair's own precision: the median of the first pass's) is kept. A failed record keeps
         // its first status.
         for (int win : o.retry_windows) {
-          if (win < 5 || win == lsm.window) continue;
-          const LsmResult T = attempt(win);
-          if (T.ok() && T.sigma <= retry_max_sigma) {
-            r.ok = true;
-            r.retried = true;
-            r.x2 = T.p2.x();
-            r.y2 = T.p2.y();
-            r.sigma = T.sigma;
-            r.corr = std::isfinite(T.corr) ? T.corr : 0;
-            break;
-          }
+          if (win == lsm.window) continue;
+          L = attempt(win);
+          if (L.ok() && L.sigma <= retry_max_sigma) break;
         }
-        continue;
-      }
-      LsmResult L = attempt(lsm.window);
-      // a window that leaves the image (a keypoint near its edge) or meets nodata: smaller windows, the
-      // taper in proportion (their sigma says what the fewer pixels give); on the synthetic default
-      // scene this refines 2.6% more of pair 1-2's verified matches (out-of-image 253 -> 45)
-      for (int win : {15, 11}) {
-        if (!(L.status == LsmStatus::OutOfImage || L.status == LsmStatus::Invalid) || win >= lsm.window) continue;
-        L = attempt(win);
+        if (!(L.ok() && L.sigma <= retry_max_sigma)) continue;
+        r.retried = true;
+      } else {
+        L = attempt(lsm.window);
+        // a window that leaves the image (a keypoint near its edge) or meets nodata: smaller windows, the
+        // taper in proportion (their sigma says what the fewer pixels give); on the synthetic default
+        // scene this refines 2.6% more of pair 1-2's verified matches (out-of-image 253 -> 45)
+        for (int win : {15, 11}) {
+          if (!(L.status == LsmStatus::OutOfImage || L.status == LsmStatus::Invalid) || win >= lsm.window) continue;
+          L = attempt(win);
+        }
       }
       r.ok = L.ok();
       r.status = L.status;

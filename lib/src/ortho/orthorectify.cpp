@@ -55,34 +55,46 @@ struct Scratch {
   Raster reuse;
 };
 
+// The ground points (lon, lat) of grid pixels (c0 + i, r0 + j), i < w, j < h, row-major in lon, lat: exact
+// (PROJ) on a lattice every kLattice pixels, whose nodes ((h - 1) / kLattice + 2 rows of (w - 1) / kLattice + 2)
+// are left in lx, ly, and bilinear between them (a map projection is smooth: below 1e-6 m over 16 pixels).
+void grid_lonlat(const Job& j, long c0, long r0, long w, long h, std::vector<double>& lx, std::vector<double>& ly, std::vector<double>& lon,
+                 std::vector<double>& lat) {
+  const OrthoGrid& g = j.grid;
+  const long na = (h - 1) / kLattice + 2, nb = (w - 1) / kLattice + 2;
+  lx.resize(static_cast<size_t>(na * nb));
+  ly.resize(lx.size());
+  for (long a = 0; a < na; ++a)
+    for (long b = 0; b < nb; ++b) {
+      lx[static_cast<size_t>(a * nb + b)] = g.x0 + (c0 + b * kLattice + 0.5) * g.gsd;
+      ly[static_cast<size_t>(a * nb + b)] = g.y0 - (r0 + a * kLattice + 0.5) * g.gsd;
+    }
+  j.crs.to_lonlat(lx.size(), lx.data(), ly.data());  // now lon, lat
+  lon.resize(static_cast<size_t>(w * h));
+  lat.resize(lon.size());
+  for (long r = 0; r < h; ++r) {
+    const long a = r / kLattice;
+    const double v = static_cast<double>(r % kLattice) / kLattice;
+    for (long c = 0; c < w; ++c) {
+      const long b = c / kLattice;
+      const double u = static_cast<double>(c % kLattice) / kLattice;
+      const size_t k00 = static_cast<size_t>(a * nb + b), k10 = k00 + 1, k01 = k00 + nb, k11 = k01 + 1;
+      const size_t i = static_cast<size_t>(r * w + c);
+      lon[i] = (1 - v) * ((1 - u) * lx[k00] + u * lx[k10]) + v * ((1 - u) * lx[k01] + u * lx[k11]);
+      lat[i] = (1 - v) * ((1 - u) * ly[k00] + u * ly[k10]) + v * ((1 - u) * ly[k01] + u * ly[k11]);
+    }
+  }
+}
+
 // Stage 1: the image pixel (x, y) seen by each output pixel of the tile (NaN: none), row-major kTile x kTile,
 // in w.sx, w.sy. Returns the pixels without a height.
 long tile_image_points(const Job& j, long c0, long r0, Scratch& w) {
   const OrthoGrid& g = j.grid;
   const long n_lat = kTile / kLattice + 1;
   std::vector<double>&lx = w.lx, &ly = w.ly, &sx = w.sx, &sy = w.sy, &lon = w.lon, &lat = w.lat, &h = w.h;
-  lx.resize(static_cast<size_t>(n_lat * n_lat));
-  ly.resize(lx.size());
-  for (long a = 0; a < n_lat; ++a)
-    for (long b = 0; b < n_lat; ++b) {
-      lx[static_cast<size_t>(a * n_lat + b)] = g.x0 + (c0 + b * kLattice + 0.5) * g.gsd;
-      ly[static_cast<size_t>(a * n_lat + b)] = g.y0 - (r0 + a * kLattice + 0.5) * g.gsd;
-    }
-  j.crs.to_lonlat(lx.size(), lx.data(), ly.data());  // now lon, lat
+  grid_lonlat(j, c0, r0, kTile, kTile, lx, ly, lon, lat);
   const size_t n = static_cast<size_t>(kTile * kTile);
-  for (auto* v : {&lon, &lat, &h, &sx, &sy}) v->resize(n);
-  for (long r = 0; r < kTile; ++r) {
-    const long a = r / kLattice;
-    const double v = static_cast<double>(r % kLattice) / kLattice;
-    for (long c = 0; c < kTile; ++c) {
-      const long b = c / kLattice;
-      const double u = static_cast<double>(c % kLattice) / kLattice;
-      const size_t k00 = static_cast<size_t>(a * n_lat + b), k10 = k00 + 1, k01 = k00 + n_lat, k11 = k01 + 1;
-      const size_t i = static_cast<size_t>(r * kTile + c);
-      lon[i] = (1 - v) * ((1 - u) * lx[k00] + u * lx[k10]) + v * ((1 - u) * lx[k01] + u * lx[k11]);
-      lat[i] = (1 - v) * ((1 - u) * ly[k00] + u * ly[k10]) + v * ((1 - u) * ly[k01] + u * ly[k11]);
-    }
-  }
+  for (auto* v : {&h, &sx, &sy}) v->resize(n);
   if (j.surface.dem)
     j.surface.dem->heights(n, lon.data(), lat.data(), h.data());
   else
@@ -150,31 +162,13 @@ long tile_image_points(const Job& j, long c0, long r0, Scratch& w) {
   return no_height;
 }
 
-// The surface's heights at grid pixels (c0 + i, r0 + j), i < w, j < h: ground points exact on a lattice every
-// kLattice pixels and bilinear between (as stage 1), heights from the DEM at every pixel.
+// The surface's heights at grid pixels (c0 + i, r0 + j), i < w, j < h: ground points as stage 1's
+// (grid_lonlat), heights from the DEM at every pixel.
 HeightWindow window_heights(const Job& j, long c0, long r0, long w, long h) {
-  const OrthoGrid& g = j.grid;
-  const long na = h / kLattice + 2, nb = w / kLattice + 2;
-  std::vector<double> lx(static_cast<size_t>(na * nb)), ly(lx.size());
-  for (long a = 0; a < na; ++a)
-    for (long b = 0; b < nb; ++b) {
-      lx[static_cast<size_t>(a * nb + b)] = g.x0 + (c0 + b * kLattice + 0.5) * g.gsd;
-      ly[static_cast<size_t>(a * nb + b)] = g.y0 - (r0 + a * kLattice + 0.5) * g.gsd;
-    }
-  j.crs.to_lonlat(lx.size(), lx.data(), ly.data());
-  const size_t n = static_cast<size_t>(w * h);
-  std::vector<double> lon(n), lat(n);
-  for (long r = 0; r < h; ++r)
-    for (long c = 0; c < w; ++c) {
-      const long a = r / kLattice, b = c / kLattice;
-      const double u = static_cast<double>(c % kLattice) / kLattice, v = static_cast<double>(r % kLattice) / kLattice;
-      const size_t k00 = static_cast<size_t>(a * nb + b), k10 = k00 + 1, k01 = k00 + nb, k11 = k01 + 1;
-      const size_t i = static_cast<size_t>(r * w + c);
-      lon[i] = (1 - v) * ((1 - u) * lx[k00] + u * lx[k10]) + v * ((1 - u) * lx[k01] + u * lx[k11]);
-      lat[i] = (1 - v) * ((1 - u) * ly[k00] + u * ly[k10]) + v * ((1 - u) * ly[k01] + u * ly[k11]);
-    }
-  HeightWindow H{c0, r0, w, h, std::vector<double>(n)};
-  j.surface.dem->heights(n, lon.data(), lat.data(), H.z.data());
+  std::vector<double> lx, ly, lon, lat;
+  grid_lonlat(j, c0, r0, w, h, lx, ly, lon, lat);
+  HeightWindow H{c0, r0, w, h, std::vector<double>(lon.size())};
+  j.surface.dem->heights(lon.size(), lon.data(), lat.data(), H.z.data());
   return H;
 }
 
@@ -320,10 +314,10 @@ long resample_any(const Job& j, const std::vector<Raster>& win, const std::vecto
   }
   return 0;
 }
-// The surface's highest height over the grid: the DEM sampled every `step` grid pixels (at most about a
-// million samples), where a missed peak only shortens the search for occluders by its excess.
-double surface_top(const Job& j) {
-  const OrthoGrid& g = j.grid;
+}  // namespace
+
+double highest_height(const OrthoSurface& surface, const OrthoGrid& g, const GridCrs& crs) {
+  if (!surface.dem) return surface.height;
   const long step = std::max(4L, static_cast<long>(std::ceil(std::sqrt(static_cast<double>(g.width) * g.height / 1e6))));
   std::vector<double> x, y;
   for (long r = 0; r < g.height + step - 1; r += step)
@@ -331,15 +325,14 @@ double surface_top(const Job& j) {
       x.push_back(g.x0 + (std::min(c, g.width - 1) + 0.5) * g.gsd);
       y.push_back(g.y0 - (std::min(r, g.height - 1) + 0.5) * g.gsd);
     }
-  j.crs.to_lonlat(x.size(), x.data(), y.data());
+  crs.to_lonlat(x.size(), x.data(), y.data());
   std::vector<double> h(x.size());
-  j.surface.dem->heights(x.size(), x.data(), y.data(), h.data());
+  surface.dem->heights(x.size(), x.data(), y.data(), h.data());
   double top = NAN;
   for (double v : h)
     if (std::isfinite(v)) top = std::isfinite(top) ? std::max(top, v) : v;
   return top;
 }
-}  // namespace
 
 OrthoStats orthorectify(const std::string& image, const RpcModel& model, const OrthoGrid& grid, const GridCrs& crs,
                         const OrthoSurface& surface, const OrthoOptions& options, const std::string& out) {
@@ -355,7 +348,7 @@ OrthoStats orthorectify(const std::string& image, const RpcModel& model, const O
   layout.description = options.description;
   Job j{image, model, grid, crs, surface, options.resampling, info.width, info.height, info.bands, info.nodata.has_value(),
         info.nodata.value_or(0), layout.type, layout.nodata};
-  if (options.hide_occluded && surface.dem) j.top = surface_top(j);
+  if (options.hide_occluded && surface.dem) j.top = std::isfinite(surface.top) ? surface.top : highest_height(surface, grid, crs);
   OrthoTiffWriter writer(out, layout);
   const long across = layout.tiles_across(), down = layout.tiles_down();
   std::atomic<long> valid{0}, no_height{0}, hidden{0};

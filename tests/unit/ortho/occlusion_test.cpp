@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "tpkit/ortho/occlusion.hpp"
+#include "affine_rpc.hpp"
 
 using namespace tpkit;
 
@@ -94,20 +95,9 @@ TEST(Occlusion, MarginCoversTheReliefAlongTheLineOfSight) {
 }
 
 TEST(Occlusion, LineOfSightOfAModelWithKnownParallax) {
-  // x = 200 + 200 L + 20 H, y = 200 - 200 P (normalized lon, lat, h): one metre higher moves x by 0.1 px, as
-  // 1e-6 degree of longitude does; so the ground point seen one metre higher lies 1e-6 degree west
-  RpcModel m;
-  m.lon_off = 3.0;  // the central meridian of UTM zone 31: grid north is true north there
-  m.lat_off = 43.3;
-  m.height_off = 100;
-  m.lon_scale = m.lat_scale = 0.002;
-  m.height_scale = 200;
-  m.samp_off = m.line_off = 200;
-  m.samp_scale = m.line_scale = 200;
-  m.samp_num[1] = 1;
-  m.samp_num[3] = 0.1;
-  m.line_num[2] = -1;
-  m.samp_den[0] = m.line_den[0] = 1;
+  // affine_rpc.hpp: one metre higher moves x by 0.1 px, as 1e-6 degree of longitude does; so the ground point
+  // seen one metre higher lies 1e-6 degree west
+  const RpcModel m = affine_rpc(3.0);  // on the central meridian of UTM zone 31: grid north is true north
   const GridCrs crs(32631);
   double x = 3.0, y = 43.3;
   crs.from_lonlat(1, &x, &y);

@@ -16,6 +16,7 @@
 #include "tpkit/ortho/ortho_geotiff.hpp"
 #include "tpkit/ortho/ortho_grid.hpp"
 #include "tpkit/ortho/orthorectify.hpp"
+#include "affine_rpc.hpp"
 
 using namespace tpkit;
 
@@ -27,23 +28,8 @@ std::string scratch(const std::string& name) {
   return (dir / name).string();
 }
 
-// x = 200 + 200 L + 20 H, y = 200 - 200 P (L, P, H the normalized lon, lat, h): a 400 x 400 image over
-// 0.004 deg of longitude and latitude (about 320 x 440 m at 43.3 N), 20 px of parallax per height scale.
-RpcModel affine_model() {
-  RpcModel m;
-  m.lon_off = 5.4;
-  m.lat_off = 43.3;
-  m.height_off = 100;
-  m.lon_scale = m.lat_scale = 0.002;
-  m.height_scale = 200;
-  m.samp_off = m.line_off = 200;
-  m.samp_scale = m.line_scale = 200;
-  m.samp_num[1] = 1;
-  m.samp_num[3] = 0.1;
-  m.line_num[2] = -1;
-  m.samp_den[0] = m.line_den[0] = 1;
-  return m;
-}
+// affine_rpc.hpp's model centred at 5.4 E
+RpcModel affine_model() { return affine_rpc(5.4); }
 Eigen::Vector2d affine_pixel(double lon, double lat, double h) {
   return {200 + 200 * (lon - 5.4) / 0.002 + 20 * (h - 100) / 200, 200 - 200 * (lat - 43.3) / 0.002};
 }

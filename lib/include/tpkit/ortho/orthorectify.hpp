@@ -21,6 +21,7 @@
 // (hide_occluded): each tile's heights are taken again over a window stretched towards the sensor by the
 // DEM's relief along the tile's line of sight (at most 512 pixels), and every pixel's ray is followed over it.
 #pragma once
+#include <cmath>
 #include <string>
 
 #include "tpkit/ortho/ortho_geotiff.hpp"
@@ -39,7 +40,15 @@ Resampling parse_resampling(const std::string&);
 struct OrthoSurface {
   const ReferenceDem* dem = nullptr;
   double height = 0;  // metres above the ellipsoid
+  // The surface's highest height over the grid, for hidden ground (OrthoOptions::hide_occluded): set it once
+  // for the images of a run (highest_height); NaN: orthorectify finds it for each image.
+  double top = NAN;
 };
+
+// The surface's highest height over `grid`: the DEM sampled every 4 grid pixels or more (at most about a
+// million samples; a peak missed only shortens the search for occluders by its excess); NaN without any
+// height; `height` without a DEM.
+double highest_height(const OrthoSurface& surface, const OrthoGrid& grid, const GridCrs& crs);
 
 struct OrthoOptions {
   Resampling resampling = Resampling::bilinear;
