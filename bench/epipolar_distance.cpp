@@ -16,7 +16,8 @@
 // by a Huber reweighted least squares, is removed; what remains is the match's distance. Printed per file: records, refined records (column
 // `refined`, when the file has one), then RMS and median |d| of all records and of the refined ones,
 // before and after the bias is removed. A matches file of another program (COLMAP through
-// `tp-convert --from colmap`) is scored the same way.
+// `tp-convert --from colmap`) is scored the same way. --dump FILE: one row per record (file, x1 y1 x2 y2,
+// sigma, refined, the distance before and after the bias is removed), for error analysis.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -116,10 +117,10 @@ std::vector<double> numbers(const std::string& text, const char* option) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const char* usage = "usage: bench_epipolar_distance IMAGE1 IMAGE2 MATCHES... [--rpc1 MODEL] [--rpc2 MODEL] [--heights LO,HI]\n";
+  const char* usage = "usage: bench_epipolar_distance IMAGE1 IMAGE2 MATCHES... [--rpc1 MODEL] [--rpc2 MODEL] [--heights LO,HI] [--dump FILE]\n";
   try {
     std::vector<std::string> pos;
-    std::string rpc1, rpc2;
+    std::string rpc1, rpc2, dump_path;
     std::optional<std::pair<double, double>> heights;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -134,6 +135,8 @@ int main(int argc, char** argv) {
         rpc1 = value();
       } else if (a == "--rpc2") {
         rpc2 = value();
+      } else if (a == "--dump") {
+        dump_path = value();
       } else if (a == "--heights") {
         const auto v = numbers(value(), "--heights");
         if (v.size() != 2 || !(v[0] < v[1])) throw tpkit::UsageError("--heights: LO,HI with LO < HI (metres above the ellipsoid)");
@@ -150,12 +153,20 @@ int main(int argc, char** argv) {
     const double lo = heights ? heights->first : std::max(m1.height_min(), m2.height_min());
     const double hi = heights ? heights->second : std::min(m1.height_max(), m2.height_max());
     if (!(lo < hi)) throw tpkit::InputError(pos[0] + ", " + pos[1] + ": the models' height ranges do not meet: give --heights");
+    FILE* dump = nullptr;
+    if (!dump_path.empty()) {
+      dump = std::fopen(dump_path.c_str(), "w");
+      if (!dump) throw tpkit::InputError(dump_path + ": cannot write");
+      std::fprintf(dump, "# file x1 y1 x2 y2 sigma refined d_before d (px of image 2)\n");
+    }
     std::printf("# file records refined rms_all_before med_all_before rms_all med_all rms_refined med_refined (px of image 2; heights %.0f..%.0f m)\n", lo, hi);
     for (size_t f = 2; f < pos.size(); ++f) {
       const tpkit::Matches mt = tpkit::read_matches(pos[f]);
       const int refined_col = mt.extra.find("refined");
       std::vector<double> before;
       std::vector<int> kept_refined;
+      std::vector<double> kept_sigma;
+      const int sigma_col = mt.extra.find("sigma");
       Eigen::MatrixXd kept_xy(static_cast<Eigen::Index>(mt.size()), 4);
       for (size_t i = 0; i < mt.size(); ++i) {
         const Eigen::Index r = static_cast<Eigen::Index>(i);
@@ -164,15 +175,22 @@ int main(int argc, char** argv) {
         kept_xy.row(static_cast<Eigen::Index>(before.size())) = mt.xy.row(r);
         before.push_back(*c);
         kept_refined.push_back(refined_col < 0 ? 1 : mt.extra.values(r, refined_col) != 0);
+        kept_sigma.push_back(sigma_col < 0 ? NAN : mt.extra.values(r, sigma_col));
       }
       kept_xy.conservativeResize(static_cast<Eigen::Index>(before.size()), 4);
       const std::vector<double> after = before.size() >= 3 ? remove_affine_bias(kept_xy, before) : before;
+      if (dump)
+        for (size_t i = 0; i < after.size(); ++i)
+          std::fprintf(dump, "%s %.4f %.4f %.4f %.4f %.5f %d %.5f %.5f\n", pos[f].c_str(), kept_xy(static_cast<Eigen::Index>(i), 0),
+                       kept_xy(static_cast<Eigen::Index>(i), 1), kept_xy(static_cast<Eigen::Index>(i), 2), kept_xy(static_cast<Eigen::Index>(i), 3),
+                       kept_sigma[i], kept_refined[i], before[i], after[i]);
       std::vector<double> refined;
       for (size_t i = 0; i < after.size(); ++i)
         if (kept_refined[i]) refined.push_back(after[i]);
       std::printf("%s %zu %zu %.4f %.4f %.4f %.4f %.4f %.4f\n", pos[f].c_str(), before.size(), refined.size(), rms(before),
                   median_abs(before), rms(after), median_abs(after), rms(refined), median_abs(refined));
     }
+    if (dump) std::fclose(dump);
     return 0;
   } catch (const tpkit::UsageError& e) {
     std::fprintf(stderr, "bench_epipolar_distance: %s\n", e.what());
