@@ -27,28 +27,6 @@
 extern const char* const tpkit_man_page;
 
 namespace {
-// CLI11 callback of an option that takes `auto` (unset) or a number of pixels in [lo, hi].
-std::function<bool(const CLI::results_t&)> auto_or_pixels(std::optional<double>& target, const std::string& name, double lo, double hi) {
-  return [&target, name, lo, hi](const CLI::results_t& r) {
-    if (r[0] == "auto") {
-      target.reset();
-      return true;
-    }
-    size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(r[0], &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != r[0].size() || !std::isfinite(v) || v < lo || v > hi)
-      throw CLI::ValidationError(name, "auto or a number of pixels in [" + tpkit::format_number(lo) + ", " + tpkit::format_number(hi) +
-                                           "], got '" + r[0] + "'");
-    target = v;
-    return true;
-  };
-}
-
 struct Opts {
   std::vector<std::string> images;
   std::string out = "-", mask1, mask2, coverage;
@@ -58,6 +36,8 @@ struct Opts {
   bool no_refine = false, drop_unrefined = false, no_mutual = false, global = false, l2 = false, quiet = false;
   tpkit::PairMatchOptions p;
   std::string retry_windows;  // --retry-windows W,W... | none
+  std::string shape = "auto";  // --shape
+  bool quadratic = false;      // --quadratic (= --shape quadratic)
   std::vector<long> region;  // --region X0 Y0 W H
   double region_margin = 128;
   int detect = 0;  // --detect N: image N's detection tiles into the cache
@@ -212,16 +192,18 @@ int main(int argc, char** argv) {
             ->check(tpkit::NonNegative);
         app.add_option("--unrefined-sigma", o->p.unrefined_sigma, "least sigma of a match kept unrefined, pixels")->check(tpkit::Positive);
         app.add_flag("--drop-unrefined", o->drop_unrefined, "drop verified matches whose refinement is rejected (counted by reason)");
-        app.add_option("--blur", auto_or_pixels(o->p.blur, "--blur", -10, 10),
+        app.add_option("--blur", tpkit::auto_or_pixels(o->p.blur, "--blur", -10, 10),
                        "relative blur before refinement: auto (default), 0 none, > 0 blurs IMG1, < 0 IMG2, pixels")
             ->type_name("auto|SIGMA");
-        app.add_option("--highpass", auto_or_pixels(o->p.highpass, "--highpass", 0, 10),
+        app.add_option("--highpass", tpkit::auto_or_pixels(o->p.highpass, "--highpass", 0, 10),
                        "local mean subtracted from both images before refinement: auto (default), 0 none, Gaussian sigma in pixels")
             ->type_name("auto|SIGMA");
         app.add_option("--taper", o->p.lsm.taper, "Gaussian weight of the LSM window, sigma in pixels (0 = flat)")
             ->check(tpkit::NonNegative);
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
-        app.add_flag("--quadratic", o->p.lsm.quadratic, "LSM: after the affine fit, bend the map along the epipolar lines (steep terrain)");
+        app.add_option("--shape", o->shape, "LSM window model: auto (default: chosen on a sample of the pair's matches), affine, or quadratic (the map bends along the epipolar lines)")
+            ->check(CLI::IsMember({"auto", "affine", "quadratic"}));
+        app.add_flag("--quadratic", o->quadratic, "the same as --shape quadratic");
         app.add_option("--region", [o](CLI::results_t r) {
           o->region.clear();
           for (const auto& v : r) {
@@ -259,6 +241,10 @@ int main(int argc, char** argv) {
           if (o->p.sift.stretch_lo < 0 || o->p.sift.stretch_hi > 100 || !(o->p.sift.stretch_lo < o->p.sift.stretch_hi))
             throw tpkit::UsageError("--stretch needs 0 <= LOW < HIGH <= 100");
           if (o->p.lsm.window % 2 == 0) throw tpkit::UsageError("--window must be odd");
+          if (o->quadratic && o->shape == "affine") throw tpkit::UsageError("--quadratic contradicts --shape affine");
+          o->p.shape = o->quadratic || o->shape == "quadratic" ? tpkit::PairMatchOptions::Shape::quadratic
+                       : o->shape == "affine"                   ? tpkit::PairMatchOptions::Shape::affine
+                                                                : tpkit::PairMatchOptions::Shape::automatic;
           if (!o->retry_windows.empty()) {
             o->p.retry_windows.clear();
             if (o->retry_windows != "none") {

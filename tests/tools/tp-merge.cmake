@@ -1,9 +1,11 @@
 # tp-match --region / --write-geometry and tp-merge: a pair split into four regions, merged, against
-# the whole run (same ids and positions for at least 99% of its matches, nothing invented); the
+# the whole run (same ids and positions within 0.01 px for at least 99% of its matches, nothing
+# invented: the scene's relief gets the quadratic window model, which bends along each run's own
+# epipolar geometry, a region's differing from the whole pair's in the last digits); the
 # duplicates of overlapping regions; files of another pair refused; bad regions and geometries.
 set(_scene "tp-synth --out s --size 640 --seed 4 --threads 2 --supersample 1 >/dev/null")
 set(_regions "tp-match -q --write-geometry g s/view1.tif s/view2.tif && for r in '0 0 320 320' '320 0 320 320' '0 320 320 320' '320 320 320 320'; do set -- $r; tp-match -q --threads 2 --geometry g --region $r s/view1.tif s/view2.tif -o t-$1-$2.m || exit 1; done")
-set(_compare "awk 'FNR == 1 { f++ } /^#/ { next } f == 1 { w[$1 \" \" $4] = $2 \" \" $3 \" \" $5 \" \" $6; n++; next } { m++; k = $1 \" \" $4; if ((k in w) && w[k] == $2 \" \" $3 \" \" $5 \" \" $6) s++ } END { printf \"whole %d merged %d same %d\\n\", n, m, s; exit !(n > 1000 && s >= 0.99 * n && m <= 1.01 * n) }'")
+set(_compare "awk 'FNR == 1 { f++ } /^#/ { next } f == 1 { w[$1 \" \" $4] = $2 \" \" $3 \" \" $5 \" \" $6; n++; next } { m++; k = $1 \" \" $4; if (k in w) { split(w[k], a); if (a[1] == $2 && a[2] == $3 && (a[3] - $5) ^ 2 + (a[4] - $6) ^ 2 <= 1e-4) s++ } } END { printf \"whole %d merged %d same %d\\n\", n, m, s; exit !(n > 1000 && s >= 0.99 * n && m <= 1.01 * n) }'")
 tpkit_tool_test(tp-merge.regions-equal-whole
   COMMAND "${_scene} && tp-match -q --threads 2 s/view1.tif s/view2.tif -o whole.m && ${_regions} && tp-merge t-*.m -o merged.m && ${_compare} whole.m merged.m"
   STDERR_MATCH "4 files, [0-9]+ records: 0 duplicates"

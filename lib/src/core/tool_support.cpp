@@ -13,6 +13,7 @@
 #include "tpkit/core/atomic_output.hpp"
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/input_file.hpp"
+#include "tpkit/core/text_table.hpp"
 #include "tpkit/core/version.hpp"
 
 namespace tpkit {
@@ -118,6 +119,27 @@ CLI::Validator number_check(bool allow_zero) {
 
 const CLI::Validator Positive = number_check(false);
 const CLI::Validator NonNegative = number_check(true);
+
+std::function<bool(const CLI::results_t&)> auto_or_pixels(std::optional<double>& target, const std::string& name, double lo, double hi) {
+  return [&target, name, lo, hi](const CLI::results_t& r) {
+    if (r[0] == "auto") {
+      target.reset();
+      return true;
+    }
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(r[0], &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != r[0].size() || !std::isfinite(v) || v < lo || v > hi)
+      throw CLI::ValidationError(name, "auto or a number of pixels in [" + format_number(lo) + ", " + format_number(hi) +
+                                           "], got '" + r[0] + "'");
+    target = v;
+    return true;
+  };
+}
 
 const std::string& tool_name() { return g_tool; }
 

@@ -397,11 +397,20 @@ double var_p2(const Normal<P>& ne) {
 }
 // Covariance of p2 by the sandwich of taper-weighted least squares at the solution, over the pixels
 // with keep[k] > 0 (their taper weights): C = B^-1 M B^-1, B = sum keep J^T J, M = sum keep^2 J^T J, times
-// the weighted residual variance; returns (C(0,0) + C(1,1)) / 2, infinite when B is singular. (The
+// the weighted residual variance; returns the 2 x 2 block of p2 (Sandwich: C and the factor's terms apart, so
+// that var() is computed in the order it always was), infinite when B is singular. (The
 // IRLS normal matrix with the L1 weights taper / |r| is no covariance: its small residuals' large
 // weights make it 5x too optimistic on white noise.) Overwrites s.wt (left as keep).
+struct Sandwich {
+  Eigen::Matrix2d C = Eigen::Matrix2d::Constant(std::numeric_limits<double>::infinity());
+  double swr2 = 1, sw = 1;  // the factor swr2 / sw * kept / (kept - P)
+  int kept = 1, P = 0;
+  double var() const { return 0.5 * (C(0, 0) + C(1, 1)) * swr2 / sw * kept / (kept - P); }
+  Eigen::Matrix2d cov() const { return C * (swr2 / sw * kept / (kept - P)); }
+};
 template <int P>
-double sandwich_var_p2(Scratch& s, int m, double r1, double qs, double ex, double ey, const std::vector<double>& keep) {
+Sandwich sandwich_cov_p2(Scratch& s, int m, double r1, double qs, double ex, double ey, const std::vector<double>& keep) {
+  const Sandwich none;
   Normal<P> ne;
   auto full = [&](const Normal<P>& x) {
     Eigen::Matrix<double, P, P> F;
@@ -420,12 +429,23 @@ double sandwich_var_p2(Scratch& s, int m, double r1, double qs, double ex, doubl
   for (int k = 0; k < m; ++k) s.wt[k] = keep[k];
   accumulate<P>(s, m, r1, qs, ne, false, ex, ey);
   const Eigen::Matrix<double, P, P> B = full(ne);
-  if (kept <= P || !(sw > 0)) return std::numeric_limits<double>::infinity();
+  if (kept <= P || !(sw > 0)) return none;
   Eigen::LDLT<Eigen::Matrix<double, P, P>> f(B);
-  if (f.info() != Eigen::Success || !f.isPositive()) return std::numeric_limits<double>::infinity();
+  if (f.info() != Eigen::Success || !f.isPositive()) return none;
   const Eigen::Matrix<double, P, 2> Bi = f.solve(Eigen::Matrix<double, P, P>::Identity().template leftCols<2>());
-  const Eigen::Matrix2d C = Bi.transpose() * M * Bi;
-  return 0.5 * (C(0, 0) + C(1, 1)) * swr2 / sw * kept / (kept - P);
+  Sandwich out;
+  out.C = Bi.transpose() * M * Bi;
+  out.swr2 = swr2, out.sw = sw, out.kept = kept, out.P = P;
+  return out;
+}
+// The sandwich covariance of p2 for the model of P parameters at the current state, over the pixels the
+// fit kept (weight > 0; their taper weights).
+template <int P>
+Sandwich sandwich_cov_kept(Scratch& s, int m, double r1, double qs, double ex, double ey) {
+  thread_local std::vector<double> keep;
+  keep.assign(static_cast<size_t>(m), 0.0);
+  for (int k = 0; k < m; ++k) keep[static_cast<size_t>(k)] = s.wt[k] > 0 ? s.tap[k] : 0.0;
+  return sandwich_cov_p2<P>(s, m, r1, qs, ex, ey, keep);
 }
 
 // Residual mask: the threshold mask_k x 1.4826 x median |r| over the first m pixels (a robust scale of the
@@ -591,6 +611,11 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   Normal<8> n8;
   Normal<kMaxP> n14;
   Normal<11> n11;
+  // the sandwich covariance of p2 of the current model (P parameters) at the support's last evaluation
+  auto sandwich_cov = [&](int P, double r1) -> Sandwich {
+    return P == 8 ? sandwich_cov_kept<8>(s, m, r1, qs, ex, ey)
+                  : P == 11 ? sandwich_cov_kept<11>(s, m, r1, qs, ex, ey) : sandwich_cov_kept<kMaxP>(s, m, r1, qs, ex, ey);
+  };
   // stages: 0 affine (taper); 1 quadratic (taper); 2 quadratic with the taper chosen from stage 1's curvature
   int stage = 0, P = 8, stage_start = 0;
   bool converged = false, fallback = false;
@@ -598,6 +623,27 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   Eigen::Matrix<double, kMaxP, 1> delta, th_affine = th;
   Eigen::Matrix<double, kMaxP, 1> last = Eigen::Matrix<double, kMaxP, 1>::Zero();  // the last IRLS step, and its shift
   double last_step = 0;
+  // The curvature's significance (LsmOptions::measure_curvature): the quadratic model's position differs
+  // from the affine one's by d (the affine window's bias where the map curves, plus the noise the
+  // curvature terms add). Without curvature d has the covariance Cq - Ca of the two sandwich estimates
+  // (nested models, as in Hausman's test), so d' (Cq - Ca)^-1 d, along the epipolar direction when the
+  // curvature acts only along it, is chi-square with 1 (else 2) degrees of freedom. Cq - Ca is floored at
+  // 5% of Cq (two estimates of nearly equal covariances).
+  Eigen::Matrix2d cov_affine = Eigen::Matrix2d::Zero();
+  auto curvature_chi2 = [&](const Eigen::Matrix2d& cov_quadratic) {
+    const Eigen::Vector2d d = th.head<2>() - th_affine.head<2>();
+    const Eigen::Matrix2d D = cov_quadratic - cov_affine;
+    if (!D.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+    if (epi) {
+      const Eigen::Vector2d e(ex, ey);
+      const double v = std::max(e.dot(D * e), 0.05 * e.dot(cov_quadratic * e));
+      return d.dot(e) * d.dot(e) / v;
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(D);
+    const Eigen::Vector2d lam = es.eigenvalues().cwiseMax(0.05 * 0.5 * cov_quadratic.trace());
+    const Eigen::Vector2d c = es.eigenvectors().transpose() * d;
+    return c(0) * c(0) / lam(0) + c(1) * c(1) / lam(1);
+  };
   // the quadratic stages have their own budget beyond the affine stage's max_iterations
   const int cap = o.max_iterations + (o.quadratic ? o.stage_iterations * (o.adaptive ? 2 : 1) : 0);
   double mask_thr = std::numeric_limits<double>::infinity();  // the residual mask's last threshold
@@ -672,12 +718,14 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     // stages, which start from the affine solution, keep the two.
     if (step < (stage == 0 ? o.tolerance : o.stage_tolerance) && (!o.l1 || it >= (stage == 0 ? 2 : 3))) {
       if (stage == 0 && o.quadratic) {
+        if (o.measure_curvature) cov_affine = sandwich_cov(8, th_eval(7)).cov();
         stage = 1;
         stage_start = it + 1;
         P = PQ;
         th_affine = th;
         continue;
       }
+      if (stage == 1 && o.measure_curvature) res.curvature_chi2 = curvature_chi2(sandwich_cov(P, th_eval(7)).cov());
       if (stage == 1 && o.adaptive) {
         stage = 2;
         const Eigen::Matrix<double, 6, 1> H = quadratic_terms(th) * qs;
@@ -751,17 +799,10 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     int kept = 0;
     for (int k = 0; k < m; ++k) kept += s.wt[k] > 0;
     var *= sum_wr2 / std::max(1, kept - P);
-    if (o.sigma_sandwich) {
-      thread_local std::vector<double> keep;
-      keep.assign(static_cast<size_t>(m), 0.0);
-      for (int k = 0; k < m; ++k) keep[static_cast<size_t>(k)] = s.wt[k] > 0 ? s.tap[k] : 0.0;
-      const double r1 = last_state ? th_eval(7) : th(7);
-      var = P == 8 ? sandwich_var_p2<8>(s, m, r1, qs, ex, ey, keep)
-                   : P == 11 ? sandwich_var_p2<11>(s, m, r1, qs, ex, ey, keep) : sandwich_var_p2<kMaxP>(s, m, r1, qs, ex, ey, keep);
-    }
+    if (o.sigma_sandwich) var = sandwich_cov(P, last_state ? th_eval(7) : th(7)).var();
     // a singular final matrix gives no precision: refused as imprecise, not passed as sigma 0
     res.sigma_fit = std::isfinite(var) ? std::sqrt(std::max(var, 0.0)) : std::numeric_limits<double>::infinity();
-    res.sigma = std::hypot(o.sigma_scale * res.sigma_fit, o.sigma_floor);
+    res.sigma = std::hypot(o.sigma_scale * (res.quadratic ? o.quadratic_sigma_ratio : 1.0) * res.sigma_fit, o.sigma_floor);
   }
   {
     const double mg = sum4(n, [&](int k) { return s.g[k]; }) / n;

@@ -167,6 +167,7 @@ struct Rec {
   bool ok;           // (x2, y2) is the accepted LSM position (or there was no refinement)
   LsmStatus status;  // why not, when refined
   bool retried = false;  // refined at one of PairMatchOptions::retry_windows after the first window failed
+  double curvature_chi2 = NAN;  // LsmResult::curvature_chi2 (the shape estimate's sample)
 };
 
 // The pixels the refinement reads. The blur and high-pass estimates refine samples of the records a few
@@ -349,6 +350,7 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
       r.ok = L.ok();
       r.status = L.status;
       r.corr = std::isfinite(L.corr) ? L.corr : 0;
+      r.curvature_chi2 = L.curvature_chi2;
       if (r.ok) {
         r.x2 = L.p2.x();
         r.y2 = L.p2.y();
@@ -504,6 +506,44 @@ void retry_failed_records(const RefinePixels& px, std::vector<Rec>& recs, const 
   for (size_t i = 0; i < failed.size(); ++i) recs[failed[i]] = sub[i];
 }
 
+// 5c. The window's shape model (PairMatchOptions::shape). Automatic: the high-pass estimate's sample is
+// refined with the quadratic stages and the curvature's significance measured (lsm_refine.hpp,
+// LsmResult::curvature_chi2); where its median over the sample exceeds kQuadraticChi2 the map curves
+// within the windows of most of the pair, and every match gets the quadratic model, else the affine.
+// One model per pair, not per match: chosen match by match (at any threshold), the Marseille triplet's
+// trifocal fit and transfer came out worse than with either model throughout (a match's affine bias is
+// shared by a track's pairs only when they use the same model). Medians seen (chi-square with one degree
+// of freedom: 0.45): tp-synth relief 150/80/40/15 m 74/16/6.9/1.2; the 66 Jacksonville pairs 0.24 to 2.74
+// (median 0.53; only 004-009, 17 degrees apart over buildings, above 2), Marseille and La Reunion 0.3 to
+// 0.6. On real pairs the quadratic model mostly adds noise along the epipolar lines, where the heights are:
+// with it on every pair the Jacksonville block's ground points against the lidar (slopes under 5
+// degrees) had an NMAD of 0.352 m, 0.336 m affine (0.335 m with 004-009 alone quadratic).
+constexpr double kQuadraticChi2 = 2;
+ShapeChoice choose_pair_shape(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
+                              const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double blur, double highpass) {
+  ShapeChoice sc;
+  if (o.shape != PairMatchOptions::Shape::automatic) {
+    sc.quadratic = o.shape == PairMatchOptions::Shape::quadratic;
+    return sc;
+  }
+  if (recs.size() < 50) return sc;  // too few to judge: affine
+  const RecordSample sample = sample_records(recs, A0, kHighpassSample);
+  LsmOptions q = lsm;
+  q.quadratic = true;
+  q.measure_curvature = true;
+  std::vector<Rec> s = sample.recs;
+  refine_records(px, s, sample.A0, q, o, F, o.ransac_threshold, blur, highpass, false, /*per_record=*/true);
+  std::vector<double> c;
+  for (const Rec& r : s)
+    if (std::isfinite(r.curvature_chi2)) c.push_back(r.curvature_chi2);
+  if (c.size() < 20) return sc;
+  std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
+  sc.median_chi2 = c[c.size() / 2];
+  sc.samples = static_cast<long>(c.size());
+  sc.quadratic = sc.median_chi2 > kQuadraticChi2;
+  return sc;
+}
+
 // 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
 // 200 records spread evenly over the list, each candidate a refinement of that sample scored by the
 // median final correlation (a failed refinement counts its correlation too, 0 when none), record by
@@ -651,6 +691,15 @@ std::string describe_highpass(const HighpassChoice& h, const PairMatchOptions& o
   return s + ")";
 }
 
+// The "# shape:" header value: the window's model and, when chosen here, what the sample showed.
+std::string describe_shape(const ShapeChoice& c, const PairMatchOptions& o) {
+  std::string s = c.quadratic ? "quadratic (the map bends along the epipolar lines within the window)" : "affine";
+  if (o.shape != PairMatchOptions::Shape::automatic) return s + " (--shape)";
+  if (c.samples == 0) return s + " (not estimated: fewer than 50 verified matches)";
+  return s + " (estimated on " + std::to_string(c.samples) + " sampled matches: median significance of the curvature, chi-square, " +
+         format_number(std::round(c.median_chi2 * 100) / 100) + ", quadratic above " + format_number(kQuadraticChi2) + ")";
+}
+
 // The header lines that say how the records were made.
 std::string retry_list(const std::vector<int>& w) {
   std::string s;
@@ -674,8 +723,8 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
                                        " max_shift " + format_number(o.lsm.max_shift) + " max_sigma " + format_number(o.lsm.max_sigma) +
                                        " min_corr " + format_number(o.lsm.min_corr) +
                                        (o.lsm.mask_k > 0 ? " residual mask " + format_number(o.lsm.mask_k) + " (min_inliers " + format_number(o.lsm.min_inliers) + ")" : "") +
-                                       " sigma " + format_number(o.lsm.sigma_scale) + " x fit (+) " + format_number(o.lsm.sigma_floor) + " px" +
-                                       (o.lsm.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
+                                       " sigma " + format_number(o.lsm.sigma_scale * (st.shape.quadratic ? o.lsm.quadratic_sigma_ratio : 1.0)) + " x fit (+) " + format_number(o.lsm.sigma_floor) + " px" +
+                                       (st.shape.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
                                        ": " + std::to_string(st.refined) + " converged" +
                                        (st.retried > 0 ? " (" + std::to_string(st.retried) + " at a retry window: " + retry_list(o.retry_windows) + " px)" : ""));
     long nu = 0, nd = 0;
@@ -693,6 +742,7 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
       blur += " (--blur)";
     meta_set(M.meta, "blur", blur);
     meta_set(M.meta, "highpass", describe_highpass(st.highpass, o));
+    meta_set(M.meta, "shape", describe_shape(st.shape, o));
   } else
     meta_set(M.meta, "refinement", "none (raw SIFT positions)");
   meta_set(M.meta, "positions", o.refine ? "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2 (refined 1) or its keypoint (refined 0); kx2 ky2 keypoint of image2"
@@ -763,6 +813,8 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     const RefinePixels& epx = windows ? *windows : px;
     st.blur = choose_relative_blur(epx, recs, A0, lsm, o, F);
     st.highpass = choose_pair_highpass(epx, recs, A0, lsm, o, F, st.blur.sigma);
+    st.shape = choose_pair_shape(epx, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
+    lsm.quadratic = st.shape.quadratic;
     refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);
     retry_failed_records(px, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
   }

@@ -190,7 +190,9 @@ TEST(Lsm, QuadraticStageRemovesCurvatureBias) {
   // the same warp bends along y only: the epipolar model (3 curvature terms along y) must follow it too
   LsmOptions epi = quad;
   epi.epipolar_dir = Eigen::Vector2d(0, 2.5);
-  std::vector<double> ea, eq, ee;
+  LsmOptions measured = epi;  // tp-match's shape choice: the same refinement, the curvature's significance measured
+  measured.measure_curvature = true;
+  std::vector<double> ea, eq, ee, chi2;
   for (double px : {62.3, 78.0, 91.7})
     for (double py : {64.1, 80.5, 94.4}) {
       Eigen::Vector2d p1(px, py), truth = warp(p1);
@@ -214,7 +216,14 @@ TEST(Lsm, QuadraticStageRemovesCurvatureBias) {
       EXPECT_NEAR(2 * e.H(5), 2 * kq, 0.002);
       EXPECT_EQ(e.H(0), 0.0);  // nothing across the epipolar direction
       EXPECT_EQ(e.H(2), 0.0);
+      const LsmResult m = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.4, -0.3), J, measured);
+      EXPECT_EQ(m.p2, e.p2);  // measuring changes nothing
+      EXPECT_TRUE(std::isnan(e.curvature_chi2));
+      chi2.push_back(m.curvature_chi2);
     }
+  // a curvature of 0.004 px^-1 moves the affine window's position by tens of its standard deviations
+  std::sort(chi2.begin(), chi2.end());
+  EXPECT_GT(chi2.front(), 10);
   std::sort(ee.begin(), ee.end());
   EXPECT_LT(ee[ee.size() / 2], 0.015);
   EXPECT_LT(ee.back(), 0.03);
@@ -223,6 +232,39 @@ TEST(Lsm, QuadraticStageRemovesCurvatureBias) {
   EXPECT_GT(ea[ea.size() / 2], 0.04);  // the affine bias (about 2 kq taper^2 = 0.07 px less the weighting)
   EXPECT_LT(eq[eq.size() / 2], 0.015);
   EXPECT_LT(eq.back(), 0.03);
+}
+
+TEST(Lsm, CurvatureSignificanceOfAnAffineMap) {
+  // image 2 an affine warp of image 1 with noise: the quadratic stage's curvature is noise, and its
+  // significance (chi-square with one degree of freedom along the epipolar direction: median 0.45) stays
+  // below tp-match's threshold of 2 for the quadratic model
+  Texture tex(13);
+  const long S = 160;
+  const Eigen::Vector2d c(80, 80);
+  Eigen::Matrix2d B;
+  B << 1.02, 0.0, -0.05, 1.1;
+  // noise 6 grey levels on a texture of gain 300: nearly noiseless, any difference between the two
+  // renderings becomes significant (image 2's pixels integrate a sheared footprint of image 1's: median 4.0
+  // at noise 1, 1.8 at 3, 1.2 at 6, 0.27 at 12); the real pairs of the tests come out at 0.3-0.9
+  const double noise = 6;
+  const Raster I1 = render(tex, S, Eigen::Matrix2d::Identity(), c, 300, 1000, noise, 7);
+  const Raster I2 = render(tex, S, B.inverse(), c, 280, 900, noise, 8);
+  LsmOptions o;
+  o.quadratic = true;
+  o.measure_curvature = true;
+  o.epipolar_dir = Eigen::Vector2d(0, 1);
+  std::vector<double> chi2;
+  for (double px : {52.3, 62.3, 78.0, 91.7, 104.2})
+    for (double py : {54.1, 64.1, 80.5, 94.4, 106.8}) {
+      const Eigen::Vector2d p1(px, py), truth = c + B * (p1 - c);
+      const LsmResult r = lsm_refine(I1, I2, p1, truth + Eigen::Vector2d(0.3, -0.2), B, o);
+      ASSERT_TRUE(r.ok()) << to_string(r.status);
+      EXPECT_LT((r.p2 - truth).norm(), 0.05);
+      ASSERT_TRUE(std::isfinite(r.curvature_chi2));
+      chi2.push_back(r.curvature_chi2);
+    }
+  std::sort(chi2.begin(), chi2.end());
+  EXPECT_LT(chi2[chi2.size() / 2], 2);
 }
 
 TEST(Lsm, SupportDiscChangesLittle) {

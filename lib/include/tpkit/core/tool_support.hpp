@@ -11,6 +11,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace tpkit {
@@ -19,6 +20,9 @@ namespace tpkit {
 // NonNegativeNumber print the largest double in full.
 extern const CLI::Validator Positive;
 extern const CLI::Validator NonNegative;
+
+// CLI11 callback of an option that takes `auto` (target unset) or a number of pixels in [lo, hi].
+std::function<bool(const CLI::results_t&)> auto_or_pixels(std::optional<double>& target, const std::string& name, double lo, double hi);
 
 // Exit code of a run that finished but has no answer it can stand behind (cluster-homog's rejected
 // verdict): its outputs, if it wrote any (marked as such), are committed like those of a success.

@@ -44,6 +44,7 @@
 // not depend on threads.
 #pragma once
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 
 #include "tpkit/core/image_io.hpp"
@@ -73,6 +74,9 @@ struct LsmOptions {
   double quadratic_support = 3;
   bool quadratic = false;   // second stage with a quadratic geometric model (after the affine converges)
   bool adaptive = true;     // third stage: quadratic with the taper chosen from the second stage's curvature
+  // With quadratic: measure how significant the curvature is (LsmResult::curvature_chi2), when the first
+  // quadratic stage converges; the refinement itself is unchanged.
+  bool measure_curvature = false;
   double curvature_ref = 0.0625;  // adaptive taper = taper * (curvature / curvature_ref)^(-1/4), px^-1
   double taper_min = 2.5, taper_max = 6;  // bounds of the adaptive taper, pixels
   double stage_tolerance = 3e-3;  // pixels, on the update of p2 in the quadratic stages
@@ -99,6 +103,11 @@ struct LsmOptions {
   // equations' standard deviation (which counts the residuals as independent, while neighbouring
   // pixels of a sampled, interpolated image are not, and counts no model error). 1 and 0 = s itself.
   double sigma_scale = 1, sigma_floor = 0;
+  // The quadratic model's calibration relative to the affine one's: sigma_scale x quadratic_sigma_ratio
+  // when the result is the quadratic model's (its sandwich covariance already counts the curvature terms'
+  // noise, and it leaves no curvature bias for the scale to cover; pair_lsm_options: 0.6, set on tp-synth's
+  // default scene, where at 1 the error / sigma ratio was 0.51-0.66 in the deciles of sigma).
+  double quadratic_sigma_ratio = 1;
   // true: s is the sandwich covariance of taper-weighted least squares at the solution (lsm_refine.cpp);
   // false: sigma0^2 (J^T W J)^-1 with the last iteration's L1 weights (about 5x too small on white noise)
   bool sigma_sandwich = false;
@@ -124,6 +133,10 @@ struct LsmResult {
   double sigma_fit = 0;   // pixels: the normal equations' standard deviation before calibration
   double corr_inliers = 0;  // correlation over the pixels the residual mask kept (= corr without a mask)
   double inlier_share = 1;  // share of the window's pixels the residual mask kept
+  // LsmOptions::measure_curvature: d' (Cq - Ca)^-1 d, d the first quadratic stage's position minus the
+  // affine one's, Cq and Ca their sandwich covariances (along the epipolar direction when given): chi-square
+  // with 1 (2) degrees of freedom where the map does not curve. NaN when not measured.
+  double curvature_chi2 = std::numeric_limits<double>::quiet_NaN();
   bool ok() const { return status == LsmStatus::Ok; }
 };
 

@@ -49,6 +49,7 @@ inline LsmOptions pair_lsm_options() {
   l.min_inliers = 0.5;
   l.sigma_sandwich = true;
   l.sigma_scale = 3.5;
+  l.quadratic_sigma_ratio = 0.6;
   l.sigma_floor = 0;
   l.max_sigma = 1;
   return l;
@@ -74,6 +75,11 @@ struct PairMatchOptions {
   int per_cell = 4;               // matches kept per grid cell (best ratio first)
   bool refine = true;
   LsmOptions lsm = pair_lsm_options();
+  // The window's shape model: automatic (choose_pair_shape in match_pair.cpp: quadratic where a sample of
+  // the pair's matches shows the map curving within the window, else affine), affine, or quadratic.
+  // lsm.quadratic is set from it (a value set there by hand is overridden).
+  enum class Shape { automatic, affine, quadratic };
+  Shape shape = Shape::automatic;
   // Windows (odd, pixels) tried in turn where lsm.window's refinement failed on its content (drifted, low
   // correlation, imprecise, not converged, diverged, off the pair model); the first accepted with a sigma
   // within the median of the pair's first-window sigmas is kept. Empty:
@@ -104,6 +110,13 @@ struct PairMatchOptions {
   bool progress = false;
 };
 
+// The window's shape model of a pair's refinement (PairMatchOptions::shape).
+struct ShapeChoice {
+  bool quadratic = false;
+  double median_chi2 = NAN;  // over the sample: the curvature's significance (LsmResult::curvature_chi2)
+  long samples = 0;          // matches whose quadratic stage measured it (0: given, or not estimated)
+};
+
 struct PairMatchStats {
   long keypoints1 = 0, keypoints2 = 0, putative = 0, verified = 0, gridded = 0, refined = 0;
   long retried = 0;  // of the refined: at a retry window (PairMatchOptions::retry_windows)
@@ -121,6 +134,7 @@ struct PairMatchStats {
   double unrefined_sigma = 0;                  // the sigma those got
   RelativeBlur blur;                           // the relative blur the refinement used (relative_blur.hpp)
   HighpassChoice highpass;                     // the high-pass it used (radiometric_highpass.hpp)
+  ShapeChoice shape;                           // the window's shape model it used (choose_pair_shape)
   bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
   bool overlap = true;                         // false: too few verified matches, zero records
 };
