@@ -17,7 +17,8 @@
 //       --sigma-deciles: also print, over the refined matches of the three pairs, the RMS error (per
 //       coordinate, sqrt(mean(ex^2 + ey^2) / 2)) against the RMS sigma in each decile of sigma, and their ratio
 //       (issue 52: within [0.7, 1.4] when the sigma predicts the error), and the same over the matches
-//       whose error is below 1 px (a wrong match is an outlier, not an imprecise position: no sigma predicts it). --sigma-scale K, --sigma-floor F:
+//       whose error is below 1 px (a wrong match is an outlier, not an imprecise position: no sigma predicts it);
+//       with --multi also over the non-template views the multi-image LSM refined. --sigma-scale K, --sigma-floor F:
 //       the calibration of the sigma (LsmOptions; 1 and 0 print the normal equations' own);
 //       --mask K: the residual mask (LsmOptions::mask_k, 0 = off).
 //       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
@@ -26,7 +27,8 @@
 //       RPCs from DIR, biases estimated from the triplets) and their error against the truth before ->
 //       after: views 2+3 with the truth under view 1's position, and every non-template view with the
 //       truth under the template's position (the refinement keeps the template fixed), sigma ratio.
-//       --multi-template1: view 1 is always the template; --model-sigma PX, --no-curvature as tp-refine's.
+//       --multi-template1: view 1 is always the template; --model-sigma PX, --no-curvature, --multi-highpass
+//       auto|SIGMA (default auto) as tp-refine's.
 //   bench_match_accuracy --tracks FILE [--check-rmse R]
 //       Affine maximum-likelihood fit of the tracks (Tomasi-Kanade: rank-3 factorization of the
 //       centred 2K x n measurement matrix) and its reprojection RMSE, sqrt(mean squared 2-D residual)
@@ -164,10 +166,36 @@ double secs(std::chrono::steady_clock::time_point a) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
 }
 
+// Deciles of sigma: RMS error per coordinate against RMS sigma in each (sig_err: sigma and squared error
+// per coordinate, (ex^2 + ey^2) / 2), and the same over the errors below 1 px.
+void print_sigma_deciles(std::vector<std::pair<double, double>> sig_err, const char* what) {
+  if (sig_err.size() < 10) return;
+  std::sort(sig_err.begin(), sig_err.end());
+  const size_t N = sig_err.size();
+  std::printf("sigma deciles (%zu %s; error per coordinate against the truth):\n", N, what);
+  double worst_lo = 1e9, worst_hi = 0;
+  for (int d = 0; d < 10; ++d) {
+    const size_t a = d * N / 10, b = (d + 1) * N / 10;
+    double ss = 0, se = 0, ssc = 0, sec = 0;
+    long wrong = 0;
+    for (size_t q = a; q < b; ++q) {
+      ss += sig_err[q].first * sig_err[q].first, se += sig_err[q].second;
+      if (sig_err[q].second < 0.5) ssc += sig_err[q].first * sig_err[q].first, sec += sig_err[q].second;  // error < 1 px
+      else ++wrong;
+    }
+    const double rs = std::sqrt(ss / (b - a)), re = std::sqrt(se / (b - a)), ratio = re / rs;
+    const double ratio_c = std::sqrt(sec / ssc);
+    worst_lo = std::min(worst_lo, ratio), worst_hi = std::max(worst_hi, ratio);
+    std::printf("  decile %2d  sigma %.4f..%.4f  rms sigma %.4f  rms error %.4f  ratio %.3f  (errors < 1 px: ratio %.3f, %ld wrong)\n",
+                d + 1, sig_err[a].first, sig_err[b - 1].first, rs, re, ratio, ratio_c, wrong);
+  }
+  std::printf("  error / sigma ratio over the deciles: %.3f..%.3f\n", worst_lo, worst_hi);
+}
+
 // The triplets refined by multi-image LSM, their errors against the truth before and after (the same
 // tracks: those the refinement kept).
 void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpkit::ImageSource* src, const tpkit::Tracks& t,
-                 int threads, bool template1, double model_sigma, bool no_curvature) {
+                 int threads, bool template1, double model_sigma, bool no_curvature, double highpass, bool deciles) {
   std::vector<tpkit::RpcModel> models(3);
   std::vector<tpkit::Raster> rasters(3);
   std::vector<const tpkit::RpcModel*> mp;
@@ -185,6 +213,12 @@ void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpk
   if (model_sigma >= 0) o.model_sigma = model_sigma;
   o.curvature = !no_curvature;
   auto t0 = std::chrono::steady_clock::now();
+  // tp-refine's high-pass: chosen on a sample of the tracks (highpass < 0) or as given
+  tpkit::HighpassChoice hc;
+  if (highpass >= 0) hc.sigma = highpass;
+  else hc = tpkit::choose_track_highpass(t, images, o, threads);
+  for (auto& ras : rasters) tpkit::highpass_raster(ras, hc.sigma);
+  std::printf("multi-image LSM highpass: %s\n", tpkit::describe_track_highpass(hc, highpass >= 0).c_str());
   tpkit::MultiLsmStats st;
   const tpkit::Tracks r = tpkit::refine_tracks(t, images, o, threads, &st);
   const double dt = secs(t0);
@@ -200,6 +234,7 @@ void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpk
   for (size_t i = 0; i < t.size(); ++i) row_of[t.id[i]] = i;
   const int ct = r.extra.find("template");
   std::vector<double> b23, a23, bnt, ant, sig, err2;
+  std::vector<std::pair<double, double>> sig_err;  // every non-template view: sigma, squared error per coordinate
   for (size_t i = 0; i < r.size(); ++i) {
     const size_t j = row_of.at(r.id[i]);
     const int tv = static_cast<int>(r.extra.values(i, ct)) - 1;
@@ -222,6 +257,7 @@ void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpk
         bnt.push_back((t.point(j, k) - tr).norm());
         const double s = r.extra.values(i, r.extra.find("sigma" + std::to_string(k + 1)));
         if (ant.back() < 1) sig.push_back(s * s), err2.push_back(ant.back() * ant.back() / 2);
+        sig_err.push_back({s, ant.back() * ant.back() / 2});
       }
   }
   print("before, views 2+3", dist(b23));
@@ -233,6 +269,7 @@ void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpk
   if (!sig.empty())
     std::printf("  RMS error per coordinate / RMS sigma (errors < 1 px) %.3f (RMS sigma %.4f px)\n", std::sqrt(se / ss),
                 std::sqrt(ss / sig.size()));
+  if (deciles) print_sigma_deciles(sig_err, "non-template views refined by multi-image LSM");
 }
 }  // namespace
 
@@ -255,10 +292,10 @@ int main(int argc, char** argv) {
     std::optional<double> nodata;
     std::string score;
     bool multi = false, multi_t1 = false, no_curv = false;
-    double model_sigma = -1;
+    double model_sigma = -1, multi_highpass = -1;  // multi_highpass < 0: auto
     int score_a = 1, score_b = 2;
     const char* usage =
-        "usage: bench_match_accuracy --synth DIR [--check MED P90] [--no-retry] [--multi | --multi-template1 [--model-sigma PX] [--no-curvature]] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
+        "usage: bench_match_accuracy --synth DIR [--check MED P90] [--no-retry] [--multi | --multi-template1 [--model-sigma PX] [--no-curvature] [--multi-highpass auto|SIGMA]] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       auto need = [&](int k) {
@@ -313,6 +350,7 @@ int main(int argc, char** argv) {
       else if (a == "--multi-template1") multi = multi_t1 = true;
       else if (a == "--model-sigma") need(1), model_sigma = num();
       else if (a == "--no-curvature") no_curv = true;
+      else if (a == "--multi-highpass") need(1), multi_highpass = std::string(argv[i + 1]) == "auto" ? (++i, -1.0) : num();
       else if (a == "--score") need(3), score = argv[++i], score_a = whole(), score_b = whole();
       else {
         std::fputs(usage, a == "--help" || a == "-h" ? stdout : stderr);
@@ -378,7 +416,7 @@ int main(int argc, char** argv) {
       po.lsm.l1 = !l2;
       po.guided = !global;
       if (no_retry) po.retry_windows.clear();
-      if (quad >= 0) po.lsm.quadratic = quad != 0;
+      if (quad >= 0) po.shape = quad != 0 ? tpkit::PairMatchOptions::Shape::quadratic : tpkit::PairMatchOptions::Shape::affine;
       if (cut >= 0) po.lsm.support = cut;
       if (adaptive >= 0) po.lsm.adaptive = adaptive != 0;
       if (epic >= 0) po.lsm.epipolar_curvature = epic != 0;
@@ -453,29 +491,7 @@ int main(int argc, char** argv) {
         ms.push_back(std::move(m));
       }
       if (df) std::fclose(df);
-      if (deciles && sig_err.size() >= 10) {
-        // deciles of sigma over the three pairs' refined matches: RMS error per coordinate / RMS sigma
-        std::sort(sig_err.begin(), sig_err.end());
-        const size_t N = sig_err.size();
-        std::printf("sigma deciles (%zu refined matches, three pairs; error per coordinate against the truth):\n", N);
-        double worst_lo = 1e9, worst_hi = 0;
-        for (int d = 0; d < 10; ++d) {
-          const size_t a = d * N / 10, b = (d + 1) * N / 10;
-          double ss = 0, se = 0, ssc = 0, sec = 0;
-          long wrong = 0;
-          for (size_t q = a; q < b; ++q) {
-            ss += sig_err[q].first * sig_err[q].first, se += sig_err[q].second;
-            if (sig_err[q].second < 0.5) ssc += sig_err[q].first * sig_err[q].first, sec += sig_err[q].second;  // error < 1 px
-            else ++wrong;
-          }
-          const double rs = std::sqrt(ss / (b - a)), re = std::sqrt(se / (b - a)), ratio = re / rs;
-          const double ratio_c = std::sqrt(sec / ssc);
-          worst_lo = std::min(worst_lo, ratio), worst_hi = std::max(worst_hi, ratio);
-          std::printf("  decile %2d  sigma %.4f..%.4f  rms sigma %.4f  rms error %.4f  ratio %.3f  (errors < 1 px: ratio %.3f, %ld wrong)\n",
-                      d + 1, sig_err[a].first, sig_err[b - 1].first, rs, re, ratio, ratio_c, wrong);
-        }
-        std::printf("  error / sigma ratio over the deciles: %.3f..%.3f\n", worst_lo, worst_hi);
-      }
+      if (deciles) print_sigma_deciles(sig_err, "refined matches, three pairs");
       tpkit::ChainOptions co;
       co.images = {v[0], v[1], v[2]};
       tpkit::ChainStats cs;
@@ -564,7 +580,7 @@ int main(int argc, char** argv) {
         }
         print("consistency, views 2+3", dist(c23));
       }
-      if (multi) multi_image(scene, v, src, t, threads, multi_t1, model_sigma, no_curv);
+      if (multi) multi_image(scene, v, src, t, threads, multi_t1, model_sigma, no_curv, multi_highpass, deciles);
       if (cmed > 0 && !(da.n > 0 && da.med <= cmed && da.p90 <= cp90)) {
         std::printf("FAIL: triplet median %.4f / p90 %.4f above %.4f / %.4f\n", da.med, da.p90, cmed, cp90);
         fail = true;

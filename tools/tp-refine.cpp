@@ -25,9 +25,9 @@ using namespace tpkit;
 struct Opts {
   std::vector<std::string> images, rpc;
   std::string tracks, out = "-", bias = "affine", reference, model_sigma = "auto";
+  std::optional<double> highpass;  // --highpass SIGMA; unset: auto
   int threads = 1;
-  double highpass = 0;
-  bool quiet = false, no_curvature = false;
+  bool quiet = false, no_curvature = false, no_extend = false;
   MultiLsmOptions lsm;
 };
 
@@ -63,7 +63,6 @@ int run(const Opts& o) {
     // the grey level tp-match reads (a band, or the luminance of RGB), invalid pixels NaN; whole images
     const ImageSource src = open_image_source(paths[k], std::nullopt, std::nullopt, "");
     rasters[k] = read_valid_region(src, 0, 0, src.info.width, src.info.height);
-    highpass_raster(rasters[k], o.highpass);  // images of other dates: the local mean out (tp-match's --highpass)
   }
   std::vector<const RpcModel*> mp;
   for (const auto& m : models) mp.push_back(&m);
@@ -79,17 +78,25 @@ int run(const Opts& o) {
       throw UsageError("--model-sigma: 'auto' or a number of pixels >= 0, got '" + o.model_sigma + "'");
   }
   lo.curvature = !o.no_curvature;
+  lo.extend = !o.no_extend;
+  // images of other dates: each image's local mean out before the refinement (tp-match's --highpass),
+  // chosen on a sample of the tracks unless given
+  HighpassChoice hp;
+  if (o.highpass) hp.sigma = *o.highpass;
+  else hp = choose_track_highpass(t, images, lo, o.threads);
+  for (auto& r : rasters) highpass_raster(r, hp.sigma);
   MultiLsmStats st;
   Tracks out = refine_tracks(t, images, lo, o.threads, &st);
   if (out.size() == 0) throw InputError(o.tracks, 0, "no track kept a second view after the refinement");
-  out.meta.push_back({"refined", "tp-refine multi-image LSM (bias " + o.bias + ", model sigma " + o.model_sigma + ")"});
+  out.meta.push_back({"refined", "tp-refine multi-image LSM (bias " + o.bias + ", model sigma " + o.model_sigma + (lo.extend ? ", extended to the images each track lacks" : "") + ")"});
+  out.meta.push_back({"highpass", describe_track_highpass(hp, o.highpass.has_value())});
   AtomicOutput f(o.out);
   write_tracks(f.stream(), out);
   f.commit();
   if (!o.quiet) {
     std::ostringstream s;
     s << st.tracks << " tracks, " << st.views << " views: " << st.tracks_written << " tracks written, " << st.tracks_dropped
-      << " dropped (fewer than 2 views left); views refined " << st.views_refined << ", dropped " << st.views_dropped;
+      << " dropped (fewer than 2 views left); views refined " << st.views_refined << " (" << st.views_added << " of them added), dropped " << st.views_dropped;
     std::string sep = " (";
     for (int i = 0; i < kMultiLsmStatusCount; ++i)
       if (st.by_status[i] > 0) s << sep << to_string(static_cast<MultiLsmViewStatus>(i)) << " " << st.by_status[i], sep = ", ";
@@ -98,6 +105,7 @@ int run(const Opts& o) {
     for (long n : st.template_count) s << " " << n;
     s << "; bias fit residual RMS per image (px, the first the reference's offsets):";
     for (int k = 0; k < K; ++k) s << " " << (std::isnan(bias_rms[k]) ? std::string("-") : std::to_string(bias_rms[k]).substr(0, 5));
+    s << "; highpass " << format_number(hp.sigma) << " px";
     summary(s.str());
   }
   return 0;
@@ -117,12 +125,12 @@ int main(int argc, char** argv) {
         app.add_option("--window", o->lsm.window, "template block, pixels (odd)");
         app.add_option("--taper", o->lsm.taper, "Gaussian weight of the window's pixels, pixels")->check(tpkit::Positive);
         app.add_option("--model-sigma", o->model_sigma, "prior deviation of a view from the models, pixels (0: hard constraint; auto: each image's bias fit residual)");
+        app.add_flag("--no-extend", o->no_extend, "refine only the views each track has (default: also those in the images it lacks, where its ground point projects inside them)");
         app.add_flag("--no-curvature", o->no_curvature, "a planar surface under each window (3 unknowns, not 6)");
         app.add_option("--max-shift", o->lsm.max_shift, "drop a view moved farther than this from its input, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->lsm.max_sigma, "drop a view whose sigma is larger, pixels")->check(tpkit::Positive);
         app.add_option("--min-corr", o->lsm.min_corr, "drop a view whose correlation with the template is lower");
-        app.add_option("--highpass", o->highpass, "subtract each image's local mean (Gaussian of this sigma, pixels) first; 0 = none")
-            ->check(tpkit::NonNegative);
+        app.add_option("--highpass", tpkit::auto_or_pixels(o->highpass, "--highpass", 0, 10), "auto or SIGMA: subtract each image's local mean (Gaussian of SIGMA pixels) first; 0 = none; auto: chosen on a sample of the tracks");
         app.add_option("--threads", o->threads, "threads");
         app.add_option("-o,--output", o->out, "refined tracks file (- = stdout)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -10,7 +11,9 @@
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/parallel_for.hpp"
+#include "tpkit/core/text_table.hpp"
 #include "tpkit/match/lsm_refine.hpp"
+#include "tpkit/match/radiometric_highpass.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
 
 namespace tpkit {
@@ -248,7 +251,7 @@ class TrackSolver {
       Jq(0, G_ + 4 * j + 2) = 1;
       Jq(1, G_ + 4 * j + 3) = 1;
       const Eigen::Matrix2d Cq = Jq * C * Jq.transpose();
-      out.sigma[j] = std::sqrt(std::max(0.0, Cq.trace() / 2));
+      out.sigma[j] = o_.sigma_scale * std::sqrt(std::max(0.0, Cq.trace() / 2));
     }
     out.h = h;
     out.iterations = total_it;
@@ -362,6 +365,66 @@ double median(std::vector<double> v) {
   return (hi + *std::max_element(v.begin(), v.begin() + h)) / 2;
 }
 
+// The track's views in the images it lacks (MultiLsmOptions::extend): each image whose view of the
+// track's ground point (res.llh) lies inside it by the window is tried with the template alone (a
+// two-view solve started at the projection: it stands on its own evidence), and the views accepted
+// there are solved together with the track's own. The joint solve replaces the track's when it keeps
+// the template; otherwise the track stays as it was.
+MultiLsmResult extend_track(const std::vector<MultiLsmImage>& images, const std::vector<MultiLsmView>& input, const MultiLsmResult& res,
+                            const MultiLsmOptions& o) {
+  const int K = static_cast<int>(images.size());
+  std::vector<char> has(static_cast<size_t>(K), 0);
+  std::vector<MultiLsmView> kept;
+  int t = -1;
+  for (const auto& v : res.views) {
+    has[static_cast<size_t>(v.image)] = 1;
+    if (v.status != MultiLsmViewStatus::Ok && v.status != MultiLsmViewStatus::Template) continue;
+    if (v.status == MultiLsmViewStatus::Template) t = static_cast<int>(kept.size());
+    kept.push_back(v);
+  }
+  Vec3 llh = res.llh;
+  if (!res.ok) {
+    // the track's own views failed together: its template alone, at the intersection of its input views
+    if (res.template_view < 0 || res.views[static_cast<size_t>(res.template_view)].status == MultiLsmViewStatus::Geometry) return res;
+    std::vector<RpcObservation> obs;
+    for (const auto& v : input) obs.push_back({images[static_cast<size_t>(v.image)].model, &images[static_cast<size_t>(v.image)].bias, v.xy});
+    const RpcIntersection X = intersect_rpc(obs);
+    if (!X.ok) return res;
+    kept.clear();
+    MultiLsmView tv = input[static_cast<size_t>(res.template_view)];
+    tv.status = MultiLsmViewStatus::Template;
+    kept.push_back(tv);
+    t = 0;
+    llh = X.llh;
+  }
+  if (t < 0 || !llh.allFinite()) return res;
+  const MultiLsmView tpl = kept[static_cast<size_t>(t)];
+  const double margin = o.window / 2 + 3;
+  const size_t own = kept.size();
+  for (int k = 0; k < K; ++k) {
+    if (has[static_cast<size_t>(k)]) continue;
+    const Raster& r = *images[static_cast<size_t>(k)].raster;
+    Vec2 q;
+    try {
+      q = observe(images[static_cast<size_t>(k)], llh);
+    } catch (const NumericalError&) {
+      continue;
+    }
+    if (!(q.x() >= r.x0 + margin && q.y() >= r.y0 + margin && q.x() <= r.x0 + r.width - 1 - margin && q.y() <= r.y0 + r.height - 1 - margin)) continue;
+    MultiLsmView c;
+    c.image = k;
+    c.xy = q;
+    const MultiLsmResult pair = refine_track_views(images, {tpl, c}, o, 0);
+    if (pair.ok && pair.views[1].status == MultiLsmViewStatus::Ok) {
+      c.xy = pair.views[1].xy;
+      kept.push_back(c);
+    }
+  }
+  if (kept.size() == own || kept.size() < 2) return res;
+  MultiLsmResult joint = refine_track_views(images, kept, o, t);
+  if (!joint.ok) return res;
+  return joint;
+}
 }  // namespace
 
 int choose_template(const std::vector<MultiLsmImage>& images, const std::vector<MultiLsmView>& views, const MultiLsmOptions& o,
@@ -611,6 +674,7 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
     for (size_t i = 0; i < v.size(); ++i)
       if (v[i].image == o.template_image) tv = static_cast<int>(i);
     res[r] = refine_track_views(images, v, o, tv);
+    if (o.extend) res[r] = extend_track(images, v, res[r], o);
   });
   MultiLsmStats st;
   st.template_count.assign(K, 0);
@@ -633,10 +697,11 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
   for (size_t r = 0; r < t.size(); ++r) {
     ++st.tracks;
     int ok = 0;
+    long added = 0;
     for (const auto& v : res[r].views) {
       ++st.views;
       if (v.status == MultiLsmViewStatus::Ok || v.status == MultiLsmViewStatus::Template) {
-        if (res[r].ok) ++ok;
+        if (res[r].ok) ++ok, added += !t.seen(r, v.image);
       } else {
         ++st.views_dropped;
         ++st.by_status[static_cast<int>(v.status)];
@@ -645,6 +710,7 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
     if (res[r].ok && ok >= 2) {
       rows.push_back(r);
       st.views_refined += ok - 1;
+      st.views_added += added;
       ++st.template_count[res[r].views[res[r].template_view].image];
     } else {
       ++st.tracks_dropped;
@@ -682,6 +748,81 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
     }
   if (stats) *stats = st;
   return out;
+}
+
+HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
+                                     const std::vector<double>& candidates, size_t samples) {
+  const int K = t.views();
+  if (static_cast<int>(images.size()) != K) throw UsageError("choose_track_highpass: one image per column pair of the tracks");
+  // the sample: tracks spread evenly over the file
+  std::vector<size_t> rows;
+  const size_t n = t.size(), want = std::min(n, samples);
+  for (size_t i = 0; i < want; ++i) rows.push_back(i * n / want);
+  MultiLsmOptions so = o;
+  so.extend = false;
+  so.model_sigma = kHighpassModelSigma;  // loose: the views may leave the models across their epipolar lines
+  auto spread = [&](double sigma) {
+    std::vector<Raster> filtered(static_cast<size_t>(K));
+    std::vector<MultiLsmImage> im = images;
+    for (int k = 0; k < K; ++k) {
+      filtered[static_cast<size_t>(k)] = *images[static_cast<size_t>(k)].raster;
+      highpass_raster(filtered[static_cast<size_t>(k)], sigma);
+      im[static_cast<size_t>(k)].raster = &filtered[static_cast<size_t>(k)];
+    }
+    // per sampled track: (template image, view image, signed distance across the epipolar direction)
+    std::vector<std::vector<std::array<double, 3>>> across(rows.size());
+    parallel_for(rows.size(), threads, [&](size_t i) {
+      const size_t r = rows[i];
+      std::vector<MultiLsmView> v;
+      for (int k = 0; k < K; ++k)
+        if (t.seen(r, k)) {
+          MultiLsmView mv;
+          mv.image = k;
+          mv.xy = t.point(r, k);
+          v.push_back(mv);
+        }
+      const MultiLsmResult res = refine_track_views(im, v, so, -1);
+      if (!res.ok) return;
+      const MultiLsmView& tv = res.views[static_cast<size_t>(res.template_view)];
+      for (const auto& w : res.views) {
+        if (w.status != MultiLsmViewStatus::Ok) continue;
+        try {
+          const ViewGeometry g = linearise(im[static_cast<size_t>(tv.image)], tv.xy, res.llh.z(), im[static_cast<size_t>(w.image)]);
+          const double en = g.e.norm();
+          if (!(en > 0)) continue;
+          const Vec2 d = w.xy - g.q0;
+          across[i].push_back({static_cast<double>(tv.image), static_cast<double>(w.image), (d.x() * g.e.y() - d.y() * g.e.x()) / en});
+        } catch (const NumericalError&) {
+        }
+      }
+    });
+    // the spread about each image pair's median: what the models and biases still get wrong across the
+    // epipolar lines is mostly an offset per image pair, common to every candidate, and left out
+    std::map<std::pair<int, int>, std::vector<double>> by_pair;
+    for (const auto& a : across)
+      for (const auto& v : a) by_pair[{static_cast<int>(v[0]), static_cast<int>(v[1])}].push_back(v[2]);
+    std::vector<double> all;
+    for (auto& bp : by_pair) {
+      if (bp.second.size() < 5) continue;
+      const double m = median(bp.second);
+      for (double d : bp.second) all.push_back(std::abs(d - m));
+    }
+    return all.size() < 20 ? std::numeric_limits<double>::quiet_NaN() : median(all);
+  };
+  HighpassChoice c = choose_highpass(spread, candidates, kTrackHighpassGain, kTrackHighpassGain);
+  c.samples = static_cast<long>(rows.size());
+  return c;
+}
+
+std::string describe_track_highpass(const HighpassChoice& h, bool given) {
+  auto px = [](double v) { return std::isfinite(v) ? format_number(std::round(v * 1e4) / 1e4) + " px" : std::string("undefined"); };
+  std::string s = h.sigma > 0 ? "local mean (Gaussian of " + format_number(h.sigma) + " px) subtracted from every image before refinement"
+                              : std::string("none");
+  if (given) return s + " (--highpass)";
+  s += " (estimated on " + std::to_string(h.samples) + " sampled tracks: spread of their views across the models' epipolar directions " +
+       px(h.spread_none) + " unfiltered";
+  for (size_t k = 0; k < h.tried.size(); ++k) s += ", " + px(h.tried_spread[k]) + " at " + format_number(h.tried[k]) + " px";
+  return s + ")";
 }
 
 }  // namespace tpkit

@@ -51,7 +51,8 @@ double epipolar_spread(const Eigen::MatrixX4d& xy) {
   return median_of(e);
 }
 
-HighpassChoice choose_highpass(const std::function<double(double)>& spread, const std::vector<double>& candidates, double min_gain) {
+HighpassChoice choose_highpass(const std::function<double(double)>& spread, const std::vector<double>& candidates, double min_gain,
+                               double next_gain) {
   HighpassChoice c;
   c.spread_none = spread(0.0);
   c.spread = c.spread_none;
@@ -61,7 +62,7 @@ HighpassChoice choose_highpass(const std::function<double(double)>& spread, cons
     c.tried.push_back(s);
     c.tried_spread.push_back(v);
     if (!(std::isfinite(v) && v < best)) break;  // no better than the last: larger sigmas are not tried
-    best = v;
+    best = v * (1 - next_gain);
     c.sigma = s;
     c.spread = v;
   }

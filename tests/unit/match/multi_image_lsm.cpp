@@ -4,7 +4,8 @@
 //  - views started 0.3 px off the truth (random directions) end closer to it than they started;
 //  - the template is the nadir view of the plain tri-stereo, and view 1 when views 2 and 3 are blurred;
 //  - a view started 3 px off converges onto the truth or is dropped, never accepted elsewhere;
-//  - biases estimated from the tracks make the RPCs with biases injected (tp-synth --rpc-bias) fit the truth.
+//  - biases estimated from the tracks make the RPCs with biases injected (tp-synth --rpc-bias) fit the truth;
+//  - the extension adds a two-view track's view in the third image, on the truth.
 #include "tpkit/match/multi_image_lsm.hpp"
 
 #include <gtest/gtest.h>
@@ -106,6 +107,47 @@ TEST(MultiImageLsm, ViewsStartedOffTheTruthEndCloserToIt) {
   EXPECT_NEAR(median(before), 0.3, 1e-9);
   EXPECT_LT(median(after), 0.05) << "after " << after.size() << " views";
   std::printf("views started 0.3 px off: %ld of %ld kept, median error %.4f px after\n", accepted, 2 * tried, median(after));
+  fs::remove_all(s.dir);
+}
+
+TEST(MultiImageLsm, ExtensionFindsTheViewsATrackLacks) {
+  // tracks of views 1 and 2 only (view 2 started 0.3 px off): refine_tracks with the extension finds each
+  // track's view 3 where its ground point projects, on the truth; without it the tracks keep two views
+  const Scene s = make_scene("extend", "--relief 20");
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> angle(0, 2 * M_PI);
+  Tracks t;
+  t.images = s.truth.images;
+  const std::vector<size_t> rows = inner_tracks(s);
+  t.xy = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(rows.size()), 6, NAN);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const Eigen::Index r = static_cast<Eigen::Index>(i);
+    const double a = angle(rng);
+    const Eigen::Vector2d p2 = s.truth.point(rows[i], 1) + 0.3 * Eigen::Vector2d(std::cos(a), std::sin(a));
+    t.xy.row(r) << s.truth.point(rows[i], 0).transpose(), p2.transpose(), NAN, NAN;
+    t.id.push_back(static_cast<long long>(i));
+  }
+  MultiLsmOptions o;
+  o.template_image = 0;  // view 1 at the truth: the others must come onto it
+  MultiLsmStats plain, extended;
+  const Tracks a = refine_tracks(t, s.images, o, 2, &plain);
+  o.extend = true;
+  const Tracks b = refine_tracks(t, s.images, o, 2, &extended);
+  EXPECT_EQ(plain.views_added, 0);
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_FALSE(a.seen(i, 2));
+  ASSERT_GT(rows.size(), 50u);
+  EXPECT_GT(extended.views_added, static_cast<long>(rows.size() * 8 / 10));
+  std::vector<double> e3;
+  for (size_t i = 0; i < b.size(); ++i) {
+    if (!b.seen(i, 2)) continue;
+    e3.push_back((b.point(i, 2) - s.truth.point(rows[static_cast<size_t>(b.id[i])], 2)).norm());
+  }
+  EXPECT_EQ(static_cast<long>(e3.size()), extended.views_added);
+  EXPECT_LT(median(e3), 0.05);
+  std::sort(e3.begin(), e3.end());
+  EXPECT_LT(e3.back(), 0.5);  // none accepted elsewhere
+  std::printf("extension: %ld views 3 added to %zu two-view tracks, median error %.4f px, largest %.4f px\n", extended.views_added,
+              rows.size(), median(e3), e3.back());
   fs::remove_all(s.dir);
 }
 

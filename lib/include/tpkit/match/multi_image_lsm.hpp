@@ -29,7 +29,7 @@
 // bicubic interpolation (lsm_refine.hpp's bicubic) and the Gaussian taper exp(-|d|^2 / (2 taper^2)) as
 // weights, robust by iteratively reweighted least squares (Huber, k = 2 sigma0, after two plain iterations).
 // Precision: covariance sigma0^2 N^-1 (N with the prior), sigma0^2 = sum(w r^2) / (n - P); a view's
-// sigma = sqrt((var x + var y) / 2) of q_k(0). The template view's position is the track's definition: its
+// sigma = sigma_scale x sqrt((var x + var y) / 2) of q_k(0). The template view's position is the track's definition: its
 // sigma is written as the smallest of the other views' (its error relative to them is no larger).
 // Acceptance per view: converged (a solve that does not converge loses the view whose position moved the
 // most in its last iteration), correlation >= min_corr, moved at most max_shift from its input, sigma
@@ -43,6 +43,7 @@
 
 #include "tpkit/core/formats.hpp"
 #include "tpkit/core/image_io.hpp"
+#include "tpkit/match/radiometric_highpass.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_model.hpp"
 
@@ -66,10 +67,18 @@ struct MultiLsmOptions {
   int max_iterations = 30;
   double tolerance = 2e-3;    // pixels, on the update of every view's position
   double max_shift = 1.5;     // pixels from the view's input position
-  double max_sigma = 0.15;    // pixels
+  // The sigma written and tested (max_sigma): sigma_scale times the covariance's, which counts the
+  // solve's image noise as independent pixels (neighbours of a sampled, interpolated image are not) and
+  // no model error. On tp-synth's default scene the RMS error of the views that move was 2.47 times the
+  // covariance's RMS sigma; scaled, the ratio is 0.83-1.36 in every decile of sigma over the errors below
+  // 1 px (bench_match_accuracy --synth DIR --multi --sigma-deciles).
+  double sigma_scale = 2.5;
+  double max_sigma = 0.375;   // pixels (0.15 of the covariance's own)
   double min_corr = 0.5;
   int relinearise = 2;        // linearisations of the geometry (the second at the first's height)
   int template_image = -1;    // refine_tracks: this image (0-based) is the template where the track has it
+  // refine_tracks: also the track's views in the images it lacks where they pass on their own evidence
+  bool extend = false;
 };
 
 // One image of the block: its grey levels (a region; NaN = invalid), model and bias.
@@ -123,6 +132,7 @@ std::vector<ImageBias> estimate_track_biases(const Tracks& t, const std::vector<
 struct MultiLsmStats {
   long tracks = 0, tracks_written = 0, tracks_dropped = 0;
   long views = 0, views_refined = 0, views_dropped = 0;
+  long views_added = 0;                       // of views_refined: in images the input track lacked (extend)
   long by_status[kMultiLsmStatusCount] = {};  // over the views dropped
   std::vector<long> template_count;           // per image: tracks whose template it is
 };
@@ -132,5 +142,27 @@ struct MultiLsmStats {
 // than 2 views left out; columns sigma1 ... sigmaK (replaced when present) and `template` (1-based image).
 Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
                      MultiLsmStats* stats = nullptr);
+
+// The local-mean high-pass (radiometric_highpass.hpp) for the refinement of a block's tracks, chosen as
+// tp-match chooses it for a pair: `samples` tracks spread over the file are refined (without extension)
+// on images filtered by each candidate, their views held to the models only loosely (model sigma
+// kHighpassModelSigma: across its epipolar direction a view then sits where its image puts it), and the
+// candidate whose accepted views scatter least across the models' epipolar directions from the template
+// (the median absolute deviation of their signed distances across them from each image pair's median,
+// pixels: the models' own error, mostly an offset per image pair, is common to every candidate and left
+// out) wins by choose_highpass's rule, each candidate gaining at least kTrackHighpassGain on the best before it.
+// images: unfiltered rasters. Spreads seen, unfiltered and at 1 px: one date (tp-synth's default scene,
+// the Marseille triplet, a biased tp-synth triplet) 0.011 / 0.021, 0.058 / 0.085, 0.027 / 0.033 px;
+// the Jacksonville crops of other dates, twelve 0.139 / 0.112 and four 0.118 / 0.107 px (9%: at tp-match's
+// 10% those four would keep none, and their ground points would lie 0.61 m NMAD from the lidar instead
+// of 0.40 m; their 0.106 px at 2 px, 1.6% below 1 px's, gave 0.45 m).
+constexpr double kHighpassModelSigma = 1.0;  // pixels
+constexpr double kTrackHighpassGain = 0.05;
+HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
+                                     const std::vector<double>& candidates = {1.0, 2.0}, size_t samples = 1000);
+
+// The "# highpass:" header value of refined tracks: the sigma used and, when chosen (given = false), the
+// spreads the choice saw.
+std::string describe_track_highpass(const HighpassChoice& h, bool given);
 
 }  // namespace tpkit

@@ -41,9 +41,9 @@ struct HighpassChoice {
 };
 
 // Evaluates spread(0), then the candidates in order (increasing sigma) while each improves on the best
-// so far, the first by more than min_gain (relative): the last that did is chosen, 0 when none did. A
-// NaN spread stops the search. A same-date pair so costs two evaluations.
+// so far, the first by more than min_gain (relative), the others by more than next_gain: the last that did
+// is chosen, 0 when none did. A NaN spread stops the search. A same-date pair so costs two evaluations.
 HighpassChoice choose_highpass(const std::function<double(double)>& spread, const std::vector<double>& candidates = {1.0, 2.0},
-                               double min_gain = 0.1);
+                               double min_gain = 0.1, double next_gain = 0);
 
 }  // namespace tpkit
