@@ -14,10 +14,12 @@
 # COLMAP's matches and RMS / median over all of them; and whether the issue's bars hold (refined share
 # >= 90%, tpkit's count >= COLMAP's, tpkit's refined RMS <= half COLMAP's). Times: tp-match's sum over the
 # pairs, COLMAP's extraction + matching.
-# Block: tp-plan + make (pairs, tp-match, tp-chain, rpc-adjust with the lidar as a height prior at default
-# settings, JAX_068_004 fixed, tp-ground), then tp-ground --compare against the lidar with the adjusted
-# models: tracks by length, rpc-adjust's RMS before/after and flagged share, dz = h - lidar by slope class
-# (count, median, NMAD). The lidar is first-return and not of the images' dates: slopes under 5 degrees are
+# Block: tp-plan + make (pairs, tp-match, tp-chain --unrefined, tp-refine, rpc-adjust with the lidar as a
+# height prior at default settings, JAX_068_004 fixed, tp-ground), then tp-ground --compare against the
+# lidar with the adjusted models: tracks by length, rpc-adjust's RMS before/after and flagged share, dz =
+# h - lidar by slope class (count, median, NMAD); and the same for the pairwise product (the plan's pairs
+# chained as tp-plan --no-refine chains them, adjusted alike). tp-refine holds its views to the models
+# within about 0.05 px, so rpc-adjust's RMS over refined tracks is small by construction: the lidar is the check. The lidar is first-return and not of the images' dates: slopes under 5 degrees are
 # where it is a fair truth.
 # COLMAP is a benchmark peer only (never a build or CI dependency): installed here from Debian if missing.
 set -euo pipefail
@@ -27,7 +29,7 @@ data=$(cd "$here/../shared/data/wv3-jacksonville" && pwd)
 work=${2:-$(mktemp -d /tmp/tpkit-multidate.XXXXXX)}
 threads=${THREADS:-2}
 bin=$build/bin
-for t in tp-match tp-chain tp-plan tp-ground tp-convert rpc-adjust bench_epipolar_distance; do
+for t in tp-match tp-chain tp-plan tp-refine tp-ground tp-convert rpc-adjust bench_epipolar_distance; do
   [ -x "$bin/$t" ] || { echo "missing $bin/$t: build with -DTPKIT_BENCH=ON first" >&2; exit 1; }
 done
 mkdir -p "$work"
@@ -95,24 +97,38 @@ if [ "${PAIRS:-1}" != 0 ]; then
 fi
 
 if [ "${BLOCK:-1}" != 0 ]; then
-  rm -rf block && lidar=$data/lidar_dsm_utm17n.tif
+  rm -rf block block-pairwise && lidar=$data/lidar_dsm_utm17n.tif
   fixed=$data/JAX_068_004_RGB.tif
-  "$bin/tp-plan" -o block "${images[@]}" --fixed "$fixed" --adjust-options "--iterations 400 --dem $lidar" -q
+  adjust_options=(--iterations 400 --dem "$lidar")
+  "$bin/tp-plan" -o block "${images[@]}" --fixed "$fixed" --adjust-options "${adjust_options[*]}" -q
   start=$(date +%s.%N)
   PATH=$bin:$PATH make -s -C block -f plan.mk -j"$threads" > block/make.log 2>&1 || { tail -20 block/make.log >&2; exit 1; }
   block_s=$(awk -v s="$start" -v e="$(date +%s.%N)" 'BEGIN {printf "%.0f", e - s}')
-  rpc=()
-  for f in "${images[@]}"; do rpc+=(--rpc "$f=block/adjusted/$(basename "$f" .tif)_rpc.txt"); done
-  "$bin/tp-ground" "${images[@]}" --tracks block/tracks.tracks "${rpc[@]}" --compare "$lidar" --dz block.dz \
-    -o block-ground.points 2> block/compare.log
-  echo "== block: $n images, pairs + tp-match + tp-chain + rpc-adjust (lidar prior, defaults) + tp-ground in $block_s s"
-  grep -m1 '^# tracks_by_views' block/tracks.tracks
-  awk '/^# (rms_before_px|rms_after_px|rms_after_unflagged_px|flagged_tracks|tracks|dem_prior[a-z_]*):/' block/adjusted/rpc.residuals
-  tracks=$(grep -vc '^#' block/tracks.tracks)
-  flagged=$(awk '/^# flagged_tracks:/ {print $3}' block/adjusted/rpc.residuals)
-  echo "flagged share: $(awk -v f="${flagged:-0}" -v t="$tracks" 'BEGIN {printf "%.2f%%", 100 * f / t}') of $tracks tracks"
+  # the pairwise product beside it: the same pairs chained as tp-plan --no-refine chains them (refined
+  # matches only), adjusted the same way
+  mkdir -p block-pairwise
+  "$bin/tp-chain" -q --rpc-check 1 --threads "$threads" --images "${images[@]}" -o block-pairwise/tracks.tracks block/pairs/*.matches
+  "$bin/rpc-adjust" "${images[@]}" --tracks block-pairwise/tracks.tracks --model affine --fixed "$fixed" --threads "$threads" \
+    "${adjust_options[@]}" -o block-pairwise/adjusted 2> block-pairwise/adjust.log
+  # one block's figures: TRACKS ADJUSTED_DIR LABEL
+  score_block() {
+    local rpc=() f tracks flagged
+    for f in "${images[@]}"; do rpc+=(--rpc "$f=$2/$(basename "$f" .tif)_rpc.txt"); done
+    "$bin/tp-ground" "${images[@]}" --tracks "$1" "${rpc[@]}" --compare "$lidar" --dz "$2/../block.dz" \
+      -o "$2/../block-ground.points" 2> "$2/../compare.log"
+    echo "== $3"
+    grep -m1 '^# tracks_by_views' "$1"
+    awk '/^# (rms_before_px|rms_after_px|rms_after_unflagged_px|flagged_tracks|tracks|dem_prior[a-z_]*):/' "$2/rpc.residuals"
+    tracks=$(grep -vc '^#' "$1")
+    flagged=$(awk '/^# flagged_tracks:/ {print $3}' "$2/rpc.residuals")
+    echo "flagged share: $(awk -v f="${flagged:-0}" -v t="$tracks" 'BEGIN {printf "%.2f%%", 100 * f / t}') of $tracks tracks"
+    echo "dz = h - lidar (m), adjusted models, unflagged tracks:"
+    grep -vE '^# (written-by|tpkit)' "$2/../block.dz"
+  }
+  score_block block/refined.tracks block/adjusted \
+    "block: $n images, pairs + tp-match + tp-chain --unrefined + tp-refine + rpc-adjust (lidar prior, defaults) + tp-ground in $block_s s"
   grep -iE 'contradict|prior|warning' block/make.log | head -5 || true
-  echo "dz = h - lidar (m), adjusted models, unflagged tracks:"
-  grep -vE '^# (written-by|tpkit)' block.dz
+  grep -m1 '^# highpass' block/refined.tracks || true
+  score_block block-pairwise/tracks.tracks block-pairwise/adjusted "the pairwise product (tp-plan --no-refine's chain: refined matches only), adjusted the same way"
 fi
 echo "work folder: $work"

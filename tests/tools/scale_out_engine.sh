@@ -2,15 +2,19 @@
 # A tiled tp-match run through a real scheduler, checked against a single-process run.
 #   scale_out_engine.sh ENGINE BIN      ENGINE: slurm | parallel | make; BIN: the folder of the tools
 # Makes a tp-synth scene (3 views) whose RPCs of views 2 and 3 carry an injected bias (--rpc-bias),
-# plans it (tp-plan: 3 pairs x 4 regions, then rpc-adjust with view 1 fixed and tp-ground), runs the
+# plans it (tp-plan: 3 pairs x 4 regions, then tp-refine, rpc-adjust with view 1 fixed and tp-ground), runs the
 # plan with the engine, and compares it with single-process runs:
-# - tracks: with those of whole-pair tp-match runs chained by tp-chain: at least 98% of the
-#   single-process tracks must come out of the tiled run with the same keypoint id and the same
-#   positions (1e-6 px), and the tiled run may not invent more than 2% others;
-# - adjustment: rpc-adjust and tp-ground run in one process each, with the plan's options, on the plan's
-#   tracks give byte-identical adjusted models (every NAME_rpc.txt and NAME.RPB), rpc.bias and ground
-#   points (the records; the header names other model files); and the whole single-process pipeline
-#   (whole-pair tp-match, tp-chain, rpc-adjust) gives models that project the plan's ground points to
+# - tracks: with those of whole-pair tp-match runs chained by tp-chain as the plan chains them: at least
+#   98% of the single-process tracks must come out of the tiled run with the same keypoint id and the
+#   same positions within 0.01 px, and the tiled run may not invent more than 2% others (the scene's
+#   relief gets the quadratic window model, which bends along each run's own epipolar geometry: a
+#   region's differs from the whole pair's in the last digits, and so do the positions, by 1e-4 px
+#   typically; with the affine model they are the same to the last digit);
+# - refinement and adjustment: tp-refine, rpc-adjust and tp-ground run in one process each, with the plan's
+#   options, on the plan's tracks give byte-identical refined tracks (the records), adjusted models (every
+#   NAME_rpc.txt and NAME.RPB), rpc.bias and ground points (the records; the header names other model
+#   files); and the whole single-process pipeline (whole-pair tp-match, tp-chain, tp-refine, rpc-adjust)
+#   gives models that project the plan's ground points to
 #   the same pixels within 0.01 px (its tracks differ from the tiled run's by a few: the coefficients
 #   cannot agree to the last digit; measured: 7e-4 px with one track of 2911 missing);
 # - the adjustment does something: the injected shifts of views 2 and 3 are recovered within 0.5 px.
@@ -50,7 +54,7 @@ run_plan() {
       n=$(ls "$T/work/logs" | wc -l)
       echo "slurm: $n job logs"
       local jobs
-      jobs=$(cat "$T"/work/jobs/{geometry,detect,tiles,merge,chain,adjust,ground}.jobs | wc -l)
+      jobs=$(cat "$T"/work/jobs/{geometry,detect,tiles,merge,chain,refine,adjust,ground}.jobs | wc -l)
       [ "$n" -eq "$jobs" ] || { echo "FAIL: $n job logs in $T/work/logs for $jobs jobs" >&2; exit 1; }
       ;;
     parallel)
@@ -76,9 +80,10 @@ mkdir -p "$T/whole"
 "$BIN/tp-match" -q --threads 2 --tile 512 "${V[0]}" "${V[1]}" -o "$T/whole/12.matches"
 "$BIN/tp-match" -q --threads 2 --tile 512 "${V[0]}" "${V[2]}" -o "$T/whole/13.matches"
 "$BIN/tp-match" -q --threads 2 --tile 512 "${V[1]}" "${V[2]}" -o "$T/whole/23.matches"
-"$BIN/tp-chain" -q --images "${V[@]}" -o "$T/whole.tracks" "$T/whole/12.matches" "$T/whole/13.matches" "$T/whole/23.matches"
+"$BIN/tp-chain" -q --unrefined --rpc-check 1 --images "${V[@]}" -o "$T/whole.tracks" "$T/whole/12.matches" "$T/whole/13.matches" "$T/whole/23.matches"
+"$BIN/tp-refine" -q "${V[@]}" --tracks "$T/whole.tracks" --threads 1 -o "$T/whole-refined.tracks"
 ADJUST=(--model affine --fixed "${V[0]}" --threads 1 --loss 0.5)
-"$BIN/rpc-adjust" "${V[@]}" --tracks "$T/whole.tracks" "${ADJUST[@]}" -o "$T/whole-adjusted" 2>/dev/null
+"$BIN/rpc-adjust" "${V[@]}" --tracks "$T/whole-refined.tracks" "${ADJUST[@]}" -o "$T/whole-adjusted" 2>/dev/null
 
 "$BIN/tp-plan" -q -o "$T/work" --tile 512 --detect-tile 512 --bin "$BIN" --adjust-model affine --fixed "${V[0]}" \
   --adjust-options "--loss 0.5" "${V[@]}"
@@ -101,7 +106,7 @@ echo "$engine: $reports detection tiles in the reports, $detected detected, $ent
   { echo "FAIL: detection tiles not detected exactly once by the detect stage" >&2; exit 1; }
 
 # compare: tracks by reference keypoint (columns kp and ref, found by name in the header), positions
-# (x1 y1 .. y3) within 1e-6 px
+# (x1 y1 .. y3) within 0.01 px
 awk -v engine="$engine" '
   FNR == 1 { f++ }
   /^# columns:/ { for (i = 3; i <= NF; i++) col[$i] = i - 2; next }
@@ -110,7 +115,7 @@ awk -v engine="$engine" '
   f == 1 { w[key] = $0; nw++; next }
   f == 2 { nt++; if (key in w) { split(w[key], a); same = 1
              for (v = 1; v <= 3; v++) for (c = 0; c <= 1; c++) {
-               i = col[(c ? "y" : "x") v]; d = a[i] - $i; if (d < 0) d = -d; if (d > 1e-6) same = 0 }
+               i = col[(c ? "y" : "x") v]; d = a[i] - $i; if (d < 0) d = -d; if (d > 1e-2) same = 0 }
              if (same) ns++ } }
   END {
     printf "%s: whole-run tracks %d, tiled %d, identical %d (%.2f%%)\n", engine, nw, nt, ns, 100 * ns / nw
@@ -119,15 +124,20 @@ awk -v engine="$engine" '
     if (nt > 1.02 * nw) { print "FAIL: more than 2% extra tracks"; exit 1 }
   }' "$T/whole.tracks" "$T/work/tracks.tracks"
 
-# the adjustment: WORK/adjusted and WORK/ground.points are there, made after the chain
-[ -s "$T/work/adjusted/rpc.bias" ] && [ -s "$T/work/ground.points" ] || { echo "FAIL: the $engine run did not adjust" >&2; exit 1; }
-[ "$T/work/adjusted/rpc.bias" -nt "$T/work/tracks.tracks" ] && [ ! "$T/work/adjusted/rpc.bias" -nt "$T/work/ground.points" ] ||
-  { echo "FAIL: the $engine run did not run chain, adjust, ground in that order" >&2; exit 1; }
+# the refinement and the adjustment: WORK/refined.tracks, WORK/adjusted and WORK/ground.points are there,
+# made after the chain, in that order
+[ -s "$T/work/refined.tracks" ] && [ -s "$T/work/adjusted/rpc.bias" ] && [ -s "$T/work/ground.points" ] || { echo "FAIL: the $engine run did not refine and adjust" >&2; exit 1; }
+[ ! "$T/work/tracks.tracks" -nt "$T/work/refined.tracks" ] && [ ! "$T/work/refined.tracks" -nt "$T/work/adjusted/rpc.bias" ] &&
+  [ ! "$T/work/adjusted/rpc.bias" -nt "$T/work/ground.points" ] ||
+  { echo "FAIL: the $engine run did not run chain, refine, adjust, ground in that order" >&2; exit 1; }
 # the same in one process each, on the plan's tracks: byte-identical
-"$BIN/rpc-adjust" "${V[@]}" --tracks "$T/work/tracks.tracks" "${ADJUST[@]}" -o "$T/one-adjusted" 2>/dev/null
+"$BIN/tp-refine" -q "${V[@]}" --tracks "$T/work/tracks.tracks" --threads 1 -o "$T/one-refined.tracks"
+cmp <(grep -v '^#' "$T/one-refined.tracks") <(grep -v '^#' "$T/work/refined.tracks") ||
+  { echo "FAIL: $engine: refined.tracks differs from the one-process tp-refine's" >&2; exit 1; }
+"$BIN/rpc-adjust" "${V[@]}" --tracks "$T/work/refined.tracks" "${ADJUST[@]}" -o "$T/one-adjusted" 2>/dev/null
 rpcs=()
 for v in "${V[@]}"; do rpcs+=(--rpc "$v=$T/one-adjusted/$(basename "${v%.*}")_rpc.txt"); done
-"$BIN/tp-ground" "${V[@]}" --tracks "$T/work/tracks.tracks" "${rpcs[@]}" --threads 1 -o "$T/one.points" 2>/dev/null
+"$BIN/tp-ground" "${V[@]}" --tracks "$T/work/refined.tracks" "${rpcs[@]}" --threads 1 -o "$T/one.points" 2>/dev/null
 identical=0
 for k in 1 2 3; do
   for f in "view ${k}_rpc.txt" "view $k.RPB"; do
@@ -139,7 +149,7 @@ cmp "$T/one-adjusted/rpc.bias" "$T/work/adjusted/rpc.bias" || { echo "FAIL: $eng
 cmp <(grep -v '^#' "$T/one.points") <(grep -v '^#' "$T/work/ground.points") ||
   { echo "FAIL: $engine: ground.points differs from the one-process tp-ground's" >&2; exit 1; }
 points=$(grep -vc '^#' "$T/work/ground.points")
-echo "$engine: $identical adjusted model files and rpc.bias byte-identical to one-process rpc-adjust; $points ground points identical"
+echo "$engine: refined tracks, $identical adjusted model files and rpc.bias byte-identical to one-process tp-refine and rpc-adjust; $points ground points identical"
 # against the whole single-process pipeline: the plan's ground points projected through both models
 grep -v '^#' "$T/work/ground.points" | awk '{ print $2, $3, $4 }' > "$T/ground.lonlath"
 worst=0

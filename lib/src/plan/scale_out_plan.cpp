@@ -243,17 +243,28 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
     warn(reason + "; the plan ends with the chain (tracks.tracks), without the adjust and ground stages");
     return;
   }
-  const std::string tracks = in_work(o, "tracks.tracks"), threads = " --threads " + std::to_string(o.threads);
+  const std::string threads = " --threads " + std::to_string(o.threads);
   std::string imgs;
   for (size_t i : chained) imgs += " " + shell_quote(images[i].path);
-  PlanJob adjust{"adjusted/rpc.bias", {"tracks.tracks"}, {},
+  // the refine stage: every view of a track refined together (and the views it lacks); the chain then
+  // keeps the matches the pairs could not refine, which tp-refine refines or drops
+  const std::string tracks_target = o.refine ? "refined.tracks" : "tracks.tracks";
+  if (o.refine) {
+    p.chain.back().command.insert(p.chain.back().command.find(" --images"), " --unrefined");
+    PlanJob refine{tracks_target, {"tracks.tracks"}, {}, tool(o, "tp-refine") + " -q" + imgs + " --tracks " + in_work(o, "tracks.tracks") + threads};
+    for (const auto& a : o.refine_args) refine.command += " " + shell_quote(a);
+    refine.command += " -o " + in_work(o, tracks_target);
+    p.refine.push_back(refine);
+  }
+  const std::string tracks = in_work(o, tracks_target);
+  PlanJob adjust{"adjusted/rpc.bias", {tracks_target}, {},
                  tool(o, "rpc-adjust") + imgs + " --tracks " + tracks + " --model " + o.adjust_model};
   for (size_t i : fixed) adjust.command += " --fixed " + shell_quote(images[i].path);
   adjust.command += threads;
   for (const auto& a : o.adjust_args) adjust.command += " " + shell_quote(a);
   adjust.command += " -o " + in_work(o, "adjusted");
   p.adjust.push_back(adjust);
-  PlanJob ground{"ground.points", {"adjusted/rpc.bias", "tracks.tracks"}, {}, tool(o, "tp-ground") + imgs + " --tracks " + tracks};
+  PlanJob ground{"ground.points", {"adjusted/rpc.bias", tracks_target}, {}, tool(o, "tp-ground") + imgs + " --tracks " + tracks};
   for (size_t i : chained)
     ground.command += " --rpc " + shell_quote(images[i].path + "=" + (fs::path(o.work) / "adjusted" / (fs::path(images[i].path).stem().string() + "_rpc.txt")).string());
   ground.command += threads;
@@ -356,7 +367,7 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
 std::vector<PlanStage> plan_stages(const Plan& p) {
   std::vector<PlanStage> out;
   for (const PlanStage& s : std::initializer_list<PlanStage>{{"geometry", &p.geometry}, {"detect", &p.detect}, {"tiles", &p.tiles},
-                                                             {"merge", &p.merge}, {"chain", &p.chain}, {"adjust", &p.adjust},
+                                                             {"merge", &p.merge}, {"chain", &p.chain}, {"refine", &p.refine}, {"adjust", &p.adjust},
                                                              {"ground", &p.ground}, {"ortho", &p.ortho}})
     if (!s.jobs->empty()) out.push_back(s);
   return out;
@@ -365,7 +376,7 @@ std::vector<PlanStage> plan_stages(const Plan& p) {
 std::string plan_result(const Plan& p) { return p.ground.empty() ? "tracks.tracks" : p.ground.back().target; }
 
 std::vector<std::string> plan_tool_args(const std::string& text, const std::string& which, const std::string& option_name) {
-  const bool adjust = which == "rpc-adjust", ortho = which == "tp-ortho";
+  const bool adjust = which == "rpc-adjust", ortho = which == "tp-ortho", refine = which == "tp-refine";
   std::vector<std::string> refused = {"-o", "--out", "--output", "--tracks", "--threads", "--rpc"};
   if (adjust) refused.insert(refused.end(), {"--model", "--fixed"});
   if (ortho) refused.insert(refused.end(), {"--compare", "--tile"});
@@ -383,6 +394,7 @@ std::vector<std::string> plan_tool_args(const std::string& text, const std::stri
   // each, or (--check) files until the next option
   const std::vector<std::string> one_file = adjust  ? std::vector<std::string>{"--dem", "--gcp"}
                                            : ortho ? std::vector<std::string>{"--dem", "--like"}
+                                           : refine ? std::vector<std::string>{"--reference"}
                                                    : std::vector<std::string>{"--compare", "--align", "--dz", "--models"};
   const std::string many_files = adjust ? "--check" : "";
   std::vector<std::string> out;
@@ -527,7 +539,7 @@ void check_work_folder(const fs::path& W, const std::string& makefile) {
     throw UsageError(W.string() + ": holds another plan (its plan.mk differs: other images, another order or other "
                                   "options), whose outputs would stand for other pairs: plan into a new folder, or empty this one");
   }
-  for (const char* d : {"geometry", "detect", "tiles", "pairs", "tracks.tracks", "adjusted", "ground.points", "orthos"}) {
+  for (const char* d : {"geometry", "detect", "tiles", "pairs", "tracks.tracks", "refined.tracks", "adjusted", "ground.points", "orthos"}) {
     const fs::path sub = W / d;
     bool used = fs::is_regular_file(sub, ec);
     if (fs::is_directory(sub, ec))

@@ -120,9 +120,10 @@ TEST(ScaleOutPlan, DetectionTilesOnce) {
   }
 }
 
-// Issue 24: the plan ends in the adjustment. After the chain, one rpc-adjust job on the chain's images
-// and tracks, then one tp-ground job through the adjusted models rpc-adjust writes (NAME_rpc.txt), in
-// every engine's files, in that order.
+// Issue 24: the plan ends in the adjustment. After the chain (with the unrefined matches), one tp-refine
+// job on the chain's images and tracks (issue 52), one rpc-adjust job on the refined tracks, then one
+// tp-ground job through the adjusted models rpc-adjust writes (NAME_rpc.txt), in every engine's files,
+// in that order; without the refine stage the adjustment reads the chain's tracks.
 namespace {
 PlanImage with_model(const std::string& path, std::optional<Footprint> f = std::nullopt) {
   PlanImage im{path, 300, 300, std::move(f)};
@@ -147,39 +148,64 @@ TEST(ScaleOutPlan, AdjustAndGroundJobs) {
   o.fixed = {"/i/a.tif"};
   o.adjust_args = {"--dem", "/x/dem.tif"};
   o.ground_args = {"--crs", "utm"};
+  o.refine_args = {"--highpass", "1"};
   const Plan p = make_plan({a, b, c}, o);
-  EXPECT_EQ(stage_names(p), (std::vector<std::string>{"geometry", "detect", "tiles", "merge", "chain", "adjust", "ground"}));
+  EXPECT_EQ(stage_names(p), (std::vector<std::string>{"geometry", "detect", "tiles", "merge", "chain", "refine", "adjust", "ground"}));
+  ASSERT_EQ(p.chain.size(), 1u);
+  EXPECT_EQ(p.chain[0].command.rfind("tp-chain -q --rpc-check 1 --threads 3 --unrefined --images '/i/a.tif' '/i/b 2.tif' -o '/w d/tracks.tracks' ", 0), 0u)
+      << p.chain[0].command;
+  ASSERT_EQ(p.refine.size(), 1u);
   ASSERT_EQ(p.adjust.size(), 1u);
   ASSERT_EQ(p.ground.size(), 1u);
+  EXPECT_EQ(p.refine[0].target, "refined.tracks");
+  EXPECT_EQ(p.refine[0].depends, (std::vector<std::string>{"tracks.tracks"}));
+  EXPECT_EQ(p.refine[0].command,
+            "tp-refine -q '/i/a.tif' '/i/b 2.tif' --tracks '/w d/tracks.tracks' --threads 3 '--highpass' '1' -o '/w d/refined.tracks'");
   EXPECT_EQ(p.adjust[0].target, "adjusted/rpc.bias");
-  EXPECT_EQ(p.adjust[0].depends, (std::vector<std::string>{"tracks.tracks"}));
+  EXPECT_EQ(p.adjust[0].depends, (std::vector<std::string>{"refined.tracks"}));
   EXPECT_EQ(p.adjust[0].command,
-            "rpc-adjust '/i/a.tif' '/i/b 2.tif' --tracks '/w d/tracks.tracks' --model drift --fixed '/i/a.tif' --threads 3 "
+            "rpc-adjust '/i/a.tif' '/i/b 2.tif' --tracks '/w d/refined.tracks' --model drift --fixed '/i/a.tif' --threads 3 "
             "'--dem' '/x/dem.tif' -o '/w d/adjusted'");
   EXPECT_EQ(p.ground[0].target, "ground.points");
-  EXPECT_EQ(p.ground[0].depends, (std::vector<std::string>{"adjusted/rpc.bias", "tracks.tracks"}));
+  EXPECT_EQ(p.ground[0].depends, (std::vector<std::string>{"adjusted/rpc.bias", "refined.tracks"}));
   EXPECT_EQ(p.ground[0].command,
-            "tp-ground '/i/a.tif' '/i/b 2.tif' --tracks '/w d/tracks.tracks' --rpc '/i/a.tif=/w d/adjusted/a_rpc.txt' "
+            "tp-ground '/i/a.tif' '/i/b 2.tif' --tracks '/w d/refined.tracks' --rpc '/i/a.tif=/w d/adjusted/a_rpc.txt' "
             "--rpc '/i/b 2.tif=/w d/adjusted/b 2_rpc.txt' --threads 3 '--crs' 'utm' -o '/w d/ground.points'");
   EXPECT_EQ(plan_result(p), "ground.points");
 
   const std::string mk = plan_makefile(p);
   EXPECT_NE(mk.find("tpkit-all: ground.points\n"), std::string::npos);
-  EXPECT_NE(mk.find("\nadjusted/rpc.bias: tracks.tracks\n\trpc-adjust "), std::string::npos);
-  EXPECT_NE(mk.find("\nground.points: adjusted/rpc.bias tracks.tracks\n\ttp-ground "), std::string::npos);
+  EXPECT_NE(mk.find("\nrefined.tracks: tracks.tracks\n\ttp-refine "), std::string::npos);
+  EXPECT_NE(mk.find("\nadjusted/rpc.bias: refined.tracks\n\trpc-adjust "), std::string::npos);
+  EXPECT_NE(mk.find("\nground.points: adjusted/rpc.bias refined.tracks\n\ttp-ground "), std::string::npos);
   EXPECT_EQ(plan_job_file(p.adjust), p.adjust[0].command + "\n");
-  // Slurm: adjust after chain, ground after adjust (each submit takes the previous job's id as its
-  // afterok dependency), --wait on the last
+  // Slurm: refine after chain, adjust after refine, ground after adjust (each submit takes the previous
+  // job's id as its afterok dependency), --wait on the last
   const std::string sub = plan_slurm_submit(p, o);
-  const size_t chain = sub.find("\nsubmit chain 1\n"), adjust = sub.find("\nsubmit adjust 1\n"),
+  const size_t chain = sub.find("\nsubmit chain 1\n"), refine = sub.find("\nsubmit refine 1\n"), adjust = sub.find("\nsubmit adjust 1\n"),
                ground = sub.find("\nsubmit ground 1 \"${wait[@]}\"\n");
   ASSERT_NE(chain, std::string::npos) << sub;
+  ASSERT_NE(refine, std::string::npos) << sub;
   ASSERT_NE(adjust, std::string::npos) << sub;
   ASSERT_NE(ground, std::string::npos) << sub;
-  EXPECT_LT(chain, adjust);
+  EXPECT_LT(chain, refine);
+  EXPECT_LT(refine, adjust);
   EXPECT_LT(adjust, ground);
   EXPECT_NE(sub.find("--cpus-per-task=3 "), std::string::npos);
-  EXPECT_NE(plan_parallel_runner(p, o).find("for s in geometry detect tiles merge chain adjust ground; do\n"), std::string::npos);
+  EXPECT_NE(plan_parallel_runner(p, o).find("for s in geometry detect tiles merge chain refine adjust ground; do\n"), std::string::npos);
+
+  // without the refine stage: the chain keeps refined matches only, the adjustment reads its tracks
+  o.refine = false;
+  o.refine_args.clear();
+  const Plan q = make_plan({a, b, c}, o);
+  EXPECT_EQ(stage_names(q), (std::vector<std::string>{"geometry", "detect", "tiles", "merge", "chain", "adjust", "ground"}));
+  EXPECT_EQ(q.chain[0].command.find("--unrefined"), std::string::npos);
+  EXPECT_EQ(q.adjust[0].depends, (std::vector<std::string>{"tracks.tracks"}));
+  EXPECT_EQ(q.adjust[0].command,
+            "rpc-adjust '/i/a.tif' '/i/b 2.tif' --tracks '/w d/tracks.tracks' --model drift --fixed '/i/a.tif' --threads 3 "
+            "'--dem' '/x/dem.tif' -o '/w d/adjusted'");
+  EXPECT_EQ(q.ground[0].depends, (std::vector<std::string>{"adjusted/rpc.bias", "tracks.tracks"}));
+  EXPECT_NE(plan_parallel_runner(q, o).find("for s in geometry detect tiles merge chain adjust ground; do\n"), std::string::npos);
 }
 
 TEST(ScaleOutPlan, AdjustmentThatCannotBeMade) {
@@ -223,7 +249,7 @@ TEST(ScaleOutPlan, AdjustmentThatCannotBeMade) {
   o.fixed = {"/i/b.tif"};
   const Plan p = make_plan({a1, b1, far}, o);
   ASSERT_EQ(p.adjust.size(), 1u);
-  EXPECT_EQ(p.adjust[0].command, "rpc-adjust '/i/a.tif' '/i/b.tif' --tracks '/w/tracks.tracks' --model shift --fixed '/i/b.tif' --threads 1 -o '/w/adjusted'");
+  EXPECT_EQ(p.adjust[0].command, "rpc-adjust '/i/a.tif' '/i/b.tif' --tracks '/w/refined.tracks' --model shift --fixed '/i/b.tif' --threads 1 -o '/w/adjusted'");
 }
 
 TEST(ScaleOutPlan, AdjustAndGroundOptions) {
@@ -249,6 +275,11 @@ TEST(ScaleOutPlan, AdjustAndGroundOptions) {
             (std::vector<std::string>{"--align", cwd + "/ref.tif", "--dz", cwd + "/dz.txt", "--models=" + cwd + "/m", "--crs", "utm"}));
   EXPECT_EQ(plan_tool_args("--compare d/ref.tif --dz -", "tp-ground", "--ground-options"),
             (std::vector<std::string>{"--compare", cwd + "/d/ref.tif", "--dz", "-"}));
+  // tp-refine: its image option made absolute, the plan's own refused
+  EXPECT_EQ(plan_tool_args("--highpass 1 --reference a.tif --model-sigma 0.1", "tp-refine", "--refine-options"),
+            (std::vector<std::string>{"--highpass", "1", "--reference", cwd + "/a.tif", "--model-sigma", "0.1"}));
+  for (const char* refused : {"-o x", "--tracks t", "--threads 4", "--rpc a=b"})
+    EXPECT_THROW(plan_tool_args(refused, "tp-refine", "--refine-options"), UsageError) << refused;
   try {
     plan_tool_args("--fixed a.tif", "rpc-adjust", "--adjust-options");
   } catch (const UsageError& e) {

@@ -13,10 +13,16 @@
 //                         -o WORK/tiles/pair-I-J/tile-K.matches IMG_I IMG_J (keypoints from the cache)
 //   merge     per pair:   tp-merge -o WORK/pairs/pair-I-J.matches WORK/tiles/pair-I-J/tile-*.matches
 //   chain     once:       tp-chain --images IMG... -o WORK/tracks.tracks WORK/pairs/*.matches
-//   adjust    once:       rpc-adjust IMG... --tracks WORK/tracks.tracks --model M [--fixed IMG]...
+//                         (with the refine stage also --unrefined: tp-refine refines what the pairs could not)
+//   refine    once, with the adjustment unless PlanOptions::refine is off:
+//                         tp-refine -q IMG... --tracks WORK/tracks.tracks --threads T [REFINE OPTIONS]
+//                         -o WORK/refined.tracks   (multi-image LSM: every view of a track against one
+//                         template, and the views in the images each track lacks)
+//   adjust    once:       rpc-adjust IMG... --tracks WORK/TRACKS --model M [--fixed IMG]...
 //                         --threads T [ADJUST OPTIONS] -o WORK/adjusted   (target WORK/adjusted/rpc.bias)
-//   ground    once:       tp-ground IMG... --tracks WORK/tracks.tracks --rpc IMG=WORK/adjusted/STEM_rpc.txt...
+//   ground    once:       tp-ground IMG... --tracks WORK/TRACKS --rpc IMG=WORK/adjusted/STEM_rpc.txt...
 //                         --threads T [GROUND OPTIONS] -o WORK/ground.points
+//                         (TRACKS: refined.tracks with the refine stage, else tracks.tracks)
 //   ortho     once, with ortho_args (tp-plan --ortho-options): tp-ortho -q IMG... --rpc IMG=WORK/adjusted/STEM_rpc.txt...
 //                         --threads T ORTHO OPTIONS -o WORK/orthos   (target WORK/orthos/STEM_1.ortho.tif: the
 //                         orthos of every image through its adjusted model, on one grid)
@@ -88,6 +94,8 @@ struct PlanOptions {
   std::vector<std::string> adjust_args;   // more rpc-adjust arguments (relative file names already made absolute)
   std::vector<std::string> ground_args;   // more tp-ground arguments (the same)
   std::vector<std::string> ortho_args;    // tp-ortho arguments (the same; --dem or --height among them): non-empty adds the ortho stage
+  bool refine = true;                     // the refine stage (tp-refine) between the chain and the adjustment
+  std::vector<std::string> refine_args;   // more tp-refine arguments
 };
 
 struct PlanJob {
@@ -100,22 +108,22 @@ struct PlanJob {
 struct Plan {
   std::vector<std::array<size_t, 2>> pairs;  // 0-based image indices
   long pairs_below_overlap = 0;              // pairs whose footprints meet, by less than min_overlap
-  std::vector<PlanJob> geometry, detect, tiles, merge, chain, adjust, ground, ortho;  // adjust, ground, ortho: empty without the adjustment
+  std::vector<PlanJob> geometry, detect, tiles, merge, chain, refine, adjust, ground, ortho;  // refine, adjust, ground, ortho: empty without the adjustment
   std::vector<std::vector<std::string>> image_detections;  // per image: the targets of its detection jobs
 };
 
 struct PlanStage {
-  std::string name;                  // geometry, detect, tiles, merge, chain, adjust, ground, ortho
+  std::string name;                  // geometry, detect, tiles, merge, chain, refine, adjust, ground, ortho
   const std::vector<PlanJob>* jobs;  // into the plan
 };
-// The stages of the plan that have jobs, in the order they run (adjust and ground only with the adjustment).
+// The stages of the plan that have jobs, in the order they run (refine, adjust and ground only with the adjustment).
 std::vector<PlanStage> plan_stages(const Plan& p);
 // The final target of the plan: ground.points with the adjustment, else tracks.tracks.
 std::string plan_result(const Plan& p);
 
-// More arguments of rpc-adjust (which = "rpc-adjust"), tp-ground (which = "tp-ground") or tp-ortho (which =
-// "tp-ortho", whose --dem and --like name files; --compare and --tile are refused too) from the text of
-// --adjust-options / --ground-options, split at white space: the options tp-plan sets itself are
+// More arguments of rpc-adjust (which = "rpc-adjust"), tp-ground (which = "tp-ground"), tp-refine (which =
+// "tp-refine") or tp-ortho (which = "tp-ortho", whose --dem and --like name files; --compare and --tile are
+// refused too) from the text of --adjust-options / --ground-options / --refine-options, split at white space: the options tp-plan sets itself are
 // refused (UsageError naming option_name: -o, --tracks, --threads, --rpc (the models are those found
 // beside the images, as for the footprints and tp-match), and for rpc-adjust --model and --fixed), and the
 // file names made absolute (the jobs run in other folders): rpc-adjust's --dem, --gcp and --check,
@@ -175,8 +183,8 @@ std::string plan_parallel_runner(const Plan& p, const PlanOptions& o);
 // A work folder already used is taken only for the same plan (plan.mk the same: same images in the
 // same order, same options), whose outputs it may then resume; the outputs of another plan would stand
 // for other pairs, images or regions (make would call them up to date), so such a folder is refused
-// (UsageError), as is one that holds outputs (geometry, detect, tiles, pairs, tracks.tracks, adjusted,
-// ground.points) but no plan.
+// (UsageError), as is one that holds outputs (geometry, detect, tiles, pairs, tracks.tracks, refined.tracks,
+// adjusted, ground.points) but no plan.
 void write_plan(const Plan& p, const PlanOptions& o);
 
 }  // namespace tpkit
