@@ -423,6 +423,9 @@ MultiLsmResult extend_track(const std::vector<MultiLsmImage>& images, const std:
   if (kept.size() == own || kept.size() < 2) return res;
   MultiLsmResult joint = refine_track_views(images, kept, o, t);
   if (!joint.ok) return res;
+  // the track's own views that failed stay in the result, with their reasons (refine_tracks counts them)
+  for (const auto& v : res.views)
+    if (std::none_of(joint.views.begin(), joint.views.end(), [&](const MultiLsmView& w) { return w.image == v.image; })) joint.views.push_back(v);
   return joint;
 }
 }  // namespace
