@@ -680,15 +680,8 @@ std::string search_description(const PairMatchStats& st, const PairMatchOptions&
 
 // The "# highpass:" header value: what the refinement used and, when chosen here, the spreads it saw.
 std::string describe_highpass(const HighpassChoice& h, const PairMatchOptions& o) {
-  auto px = [](double v) { return std::isfinite(v) ? format_number(std::round(v * 1e4) / 1e4) + " px" : std::string("undefined"); };
-  std::string s = h.sigma > 0 ? "local mean (Gaussian of " + format_number(h.sigma) + " px) subtracted from both images before refinement"
-                              : std::string("none");
-  if (o.highpass) return s + " (--highpass)";
-  if (h.samples == 0) return s + " (not estimated: fewer than 50 verified matches or no epipolar geometry)";
-  s += " (estimated on " + std::to_string(h.samples) + " sampled matches: spread about their epipolar lines " + px(h.spread_none) +
-       " unfiltered";
-  for (size_t k = 0; k < h.tried.size(); ++k) s += ", " + px(h.tried_spread[k]) + " at " + format_number(h.tried[k]) + " px";
-  return s + ")";
+  return describe_highpass_choice(h, "both images", o.highpass.has_value(), "sampled matches", "spread about their epipolar lines",
+                                  "(not estimated: fewer than 50 verified matches or no epipolar geometry)");
 }
 
 // The "# shape:" header value: the window's model and, when chosen here, what the sample showed.

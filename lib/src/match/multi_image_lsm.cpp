@@ -11,7 +11,6 @@
 
 #include "tpkit/core/error.hpp"
 #include "tpkit/core/parallel_for.hpp"
-#include "tpkit/core/text_table.hpp"
 #include "tpkit/match/lsm_refine.hpp"
 #include "tpkit/match/radiometric_highpass.hpp"
 #include "tpkit/rpc/rpc_ground.hpp"
@@ -370,6 +369,19 @@ double median(std::vector<double> v) {
 // two-view solve started at the projection: it stands on its own evidence), and the views accepted
 // there are solved together with the track's own. The joint solve replaces the track's when it keeps
 // the template; otherwise the track stays as it was.
+// The views a track of `t` has (its row r), in image order.
+std::vector<MultiLsmView> track_views(const Tracks& t, size_t r) {
+  std::vector<MultiLsmView> v;
+  for (int k = 0; k < t.views(); ++k)
+    if (t.seen(r, k)) {
+      MultiLsmView mv;
+      mv.image = k;
+      mv.xy = t.point(r, k);
+      v.push_back(mv);
+    }
+  return v;
+}
+
 MultiLsmResult extend_track(const std::vector<MultiLsmImage>& images, const std::vector<MultiLsmView>& input, const MultiLsmResult& res,
                             const MultiLsmOptions& o) {
   const int K = static_cast<int>(images.size());
@@ -665,14 +677,7 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
   if (static_cast<int>(images.size()) != K) throw UsageError("refine_tracks: one image per column pair of the tracks");
   std::vector<MultiLsmResult> res(t.size());
   parallel_for(t.size(), threads, [&](size_t r) {
-    std::vector<MultiLsmView> v;
-    for (int k = 0; k < K; ++k)
-      if (t.seen(r, k)) {
-        MultiLsmView mv;
-        mv.image = k;
-        mv.xy = t.point(r, k);
-        v.push_back(mv);
-      }
+    const std::vector<MultiLsmView> v = track_views(t, r);
     int tv = -1;
     for (size_t i = 0; i < v.size(); ++i)
       if (v[i].image == o.template_image) tv = static_cast<int>(i);
@@ -767,7 +772,7 @@ HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsm
   auto spread = [&](double sigma) {
     std::vector<Raster> filtered(static_cast<size_t>(K));
     std::vector<MultiLsmImage> im = images;
-    for (int k = 0; k < K; ++k) {
+    for (int k = 0; k < K && sigma > 0; ++k) {  // unfiltered: the images as they are
       filtered[static_cast<size_t>(k)] = *images[static_cast<size_t>(k)].raster;
       highpass_raster(filtered[static_cast<size_t>(k)], sigma);
       im[static_cast<size_t>(k)].raster = &filtered[static_cast<size_t>(k)];
@@ -776,14 +781,7 @@ HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsm
     std::vector<std::vector<std::array<double, 3>>> across(rows.size());
     parallel_for(rows.size(), threads, [&](size_t i) {
       const size_t r = rows[i];
-      std::vector<MultiLsmView> v;
-      for (int k = 0; k < K; ++k)
-        if (t.seen(r, k)) {
-          MultiLsmView mv;
-          mv.image = k;
-          mv.xy = t.point(r, k);
-          v.push_back(mv);
-        }
+      const std::vector<MultiLsmView> v = track_views(t, r);
       const MultiLsmResult res = refine_track_views(im, v, so, -1);
       if (!res.ok) return;
       const MultiLsmView& tv = res.views[static_cast<size_t>(res.template_view)];
@@ -818,14 +816,8 @@ HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsm
 }
 
 std::string describe_track_highpass(const HighpassChoice& h, bool given) {
-  auto px = [](double v) { return std::isfinite(v) ? format_number(std::round(v * 1e4) / 1e4) + " px" : std::string("undefined"); };
-  std::string s = h.sigma > 0 ? "local mean (Gaussian of " + format_number(h.sigma) + " px) subtracted from every image before refinement"
-                              : std::string("none");
-  if (given) return s + " (--highpass)";
-  s += " (estimated on " + std::to_string(h.samples) + " sampled tracks: spread of their views across the models' epipolar directions " +
-       px(h.spread_none) + " unfiltered";
-  for (size_t k = 0; k < h.tried.size(); ++k) s += ", " + px(h.tried_spread[k]) + " at " + format_number(h.tried[k]) + " px";
-  return s + ")";
+  return describe_highpass_choice(h, "every image", given, "sampled tracks", "spread of their views across the models' epipolar directions",
+                                  "(not estimated: no tracks to sample)");
 }
 
 }  // namespace tpkit

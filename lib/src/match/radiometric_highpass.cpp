@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "tpkit/core/text_table.hpp"
 #include "tpkit/match/affine_fundamental.hpp"
 #include "tpkit/match/relative_blur.hpp"
 
@@ -67,6 +68,18 @@ HighpassChoice choose_highpass(const std::function<double(double)>& spread, cons
     c.spread = v;
   }
   return c;
+}
+
+std::string describe_highpass_choice(const HighpassChoice& h, const std::string& images, bool given, const std::string& sampled,
+                                     const std::string& measure, const std::string& not_estimated) {
+  auto px = [](double v) { return std::isfinite(v) ? format_number(std::round(v * 1e4) / 1e4) + " px" : std::string("undefined"); };
+  std::string s = h.sigma > 0 ? "local mean (Gaussian of " + format_number(h.sigma) + " px) subtracted from " + images + " before refinement"
+                              : std::string("none");
+  if (given) return s + " (--highpass)";
+  if (h.samples == 0) return s + " " + not_estimated;
+  s += " (estimated on " + std::to_string(h.samples) + " " + sampled + ": " + measure + " " + px(h.spread_none) + " unfiltered";
+  for (size_t k = 0; k < h.tried.size(); ++k) s += ", " + px(h.tried_spread[k]) + " at " + format_number(h.tried[k]) + " px";
+  return s + ")";
 }
 
 }  // namespace tpkit

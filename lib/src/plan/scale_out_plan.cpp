@@ -246,11 +246,11 @@ void add_adjustment(Plan& p, const std::vector<PlanImage>& images, const std::ve
   const std::string threads = " --threads " + std::to_string(o.threads);
   std::string imgs;
   for (size_t i : chained) imgs += " " + shell_quote(images[i].path);
-  // the refine stage: every view of a track refined together (and the views it lacks); the chain then
-  // keeps the matches the pairs could not refine, which tp-refine refines or drops
+  // the refine stage: every view of a track refined together (and the views it lacks); the chain (made
+  // after this, by make_plan) then keeps the matches the pairs could not refine, which tp-refine refines
+  // or drops
   const std::string tracks_target = o.refine ? "refined.tracks" : "tracks.tracks";
   if (o.refine) {
-    p.chain.back().command.insert(p.chain.back().command.find(" --images"), " --unrefined");
     PlanJob refine{tracks_target, {"tracks.tracks"}, {}, tool(o, "tp-refine") + " -q" + imgs + " --tracks " + in_work(o, "tracks.tracks") + threads};
     for (const auto& a : o.refine_args) refine.command += " " + shell_quote(a);
     refine.command += " -o " + in_work(o, tracks_target);
@@ -353,14 +353,16 @@ Plan make_plan(const std::vector<PlanImage>& images, const PlanOptions& o) {
   bool all_models = true;
   for (size_t i = 0; i < images.size(); ++i)
     if (paired[i] && !images[i].rpc) all_models = false;
+  // the stages after the chain first: with the refine stage the chain also keeps the unrefined matches
+  add_adjustment(p, images, paired, o);
   PlanJob chain{"tracks.tracks", pair_files, {},
-                tool(o, "tp-chain") + quiet + (all_models ? " --rpc-check 1 --threads " + std::to_string(o.threads) : "") + " --images"};
+                tool(o, "tp-chain") + quiet + (all_models ? " --rpc-check 1 --threads " + std::to_string(o.threads) : "") +
+                    (p.refine.empty() ? "" : " --unrefined") + " --images"};
   for (size_t i = 0; i < images.size(); ++i)
     if (paired[i]) chain.command += " " + shell_quote(images[i].path);
   chain.command += " -o " + in_work(o, "tracks.tracks");
   for (const auto& f : pair_files) chain.command += " " + in_work(o, f);
   p.chain.push_back(chain);
-  add_adjustment(p, images, paired, o);
   return p;
 }
 

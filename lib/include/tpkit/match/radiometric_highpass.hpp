@@ -15,6 +15,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "tpkit/core/image_io.hpp"
@@ -45,5 +46,11 @@ struct HighpassChoice {
 // is chosen, 0 when none did. A NaN spread stops the search. A same-date pair so costs two evaluations.
 HighpassChoice choose_highpass(const std::function<double(double)>& spread, const std::vector<double>& candidates = {1.0, 2.0},
                                double min_gain = 0.1, double next_gain = 0);
+
+// A "# highpass:" header value: the filter as applied to `images` ("both images", "every image"), then
+// "(--highpass)" when given, `not_estimated` when no sample was measured, else "(estimated on N <sampled>:
+// <measure> S0 px unfiltered, S1 px at 1 px, ...)".
+std::string describe_highpass_choice(const HighpassChoice& h, const std::string& images, bool given, const std::string& sampled,
+                                     const std::string& measure, const std::string& not_estimated);
 
 }  // namespace tpkit
