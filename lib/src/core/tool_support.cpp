@@ -40,11 +40,30 @@ std::string one_line(const std::string& text) {
 }
 
 std::string strip_fonts(std::string s) {
-  // \fB \fI \fR \fP font changes, \- and \(em escapes, \e backslash
+  // \fB \fI \fR \fP font changes, \- and \(em escapes, \e backslash, \[uXXXX] and \['e] characters
   std::string out;
   for (size_t i = 0; i < s.size(); ++i) {
     if (s[i] == '\\' && i + 1 < s.size()) {
       char c = s[i + 1];
+      const size_t close = c == '[' ? s.find(']', i + 2) : std::string::npos;
+      if (close != std::string::npos) {
+        const std::string name = s.substr(i + 2, close - i - 2);
+        char* end = nullptr;
+        const unsigned long cp = name.size() > 1 && name[0] == 'u' ? std::strtoul(name.c_str() + 1, &end, 16) : 0;
+        if (cp > 0 && end && *end == '\0' && cp < 0x10000) {  // UTF-8 of a code point of the basic plane
+          if (cp < 0x80) out += static_cast<char>(cp);
+          else if (cp < 0x800) out += static_cast<char>(0xC0 | (cp >> 6)), out += static_cast<char>(0x80 | (cp & 0x3F));
+          else
+            out += static_cast<char>(0xE0 | (cp >> 12)), out += static_cast<char>(0x80 | ((cp >> 6) & 0x3F)),
+                out += static_cast<char>(0x80 | (cp & 0x3F));
+        } else if (name == "'e") {
+          out += "\u00e9";
+        } else {
+          out += name;
+        }
+        i = close;
+        continue;
+      }
       if (c == 'f' && i + 2 < s.size()) {
         i += 2;
         continue;
