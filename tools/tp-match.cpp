@@ -36,6 +36,7 @@ struct Opts {
   bool no_refine = false, drop_unrefined = false, no_mutual = false, global = false, l2 = false, quiet = false;
   tpkit::PairMatchOptions p;
   std::string retry_windows;  // --retry-windows W,W... | none
+  std::optional<double> taper; // --taper (unset: auto)
   std::string shape = "auto";  // --shape
   bool quadratic = false;      // --quadratic (= --shape quadratic)
   std::vector<long> region;  // --region X0 Y0 W H
@@ -178,7 +179,7 @@ int main(int argc, char** argv) {
         app.add_option("--grid", o->p.grid, "grid cells per side for even spread (0 = off)")->check(tpkit::NonNegative);
         app.add_option("--per-cell", o->p.per_cell, "matches kept per grid cell")->check(tpkit::Positive);
         app.add_flag("--no-refine", o->no_refine, "keep raw SIFT positions");
-        app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd)")->check(CLI::Range(5, 101));
+        CLI::Option* window = app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd; given, the size is not chosen)")->check(CLI::Range(5, 101));
         app.add_option("--retry-windows", o->retry_windows, "LSM windows, pixels, tried in turn where --window's refinement failed on its content (default 15,31,41; none: no retry)");
         app.add_option("--max-shift", o->p.lsm.max_shift, "reject refinements farther from SIFT, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->p.lsm.max_sigma, "reject refinements whose sigma is larger, pixels")->check(tpkit::Positive);
@@ -198,8 +199,9 @@ int main(int argc, char** argv) {
         app.add_option("--highpass", tpkit::auto_or_pixels(o->p.highpass, "--highpass", 0, 10),
                        "local mean subtracted from both images before refinement: auto (default), 0 none, Gaussian sigma in pixels")
             ->type_name("auto|SIGMA");
-        app.add_option("--taper", o->p.lsm.taper, "Gaussian weight of the LSM window, sigma in pixels (0 = flat)")
-            ->check(tpkit::NonNegative);
+        app.add_option("--taper", tpkit::auto_or_pixels(o->taper, "--taper", 0, 30),
+                       "Gaussian weight of the LSM window: auto (default: the size chosen on a sample of the pair's matches), sigma in pixels (0 = flat)")
+            ->type_name("auto|PX");
         app.add_flag("--l2", o->l2, "plain least squares instead of robust L1");
         app.add_option("--shape", o->shape, "LSM window model: auto (default: chosen on a sample of the pair's matches), affine, or quadratic (the map bends along the epipolar lines)")
             ->check(CLI::IsMember({"auto", "affine", "quadratic"}));
@@ -237,10 +239,13 @@ int main(int argc, char** argv) {
                        "RPC-guided search: widest margin tried (4-fold steps) while the models' bias needs it, pixels")
             ->check(tpkit::NonNegative);
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
-        return [o]() {
+        return [o, window]() {
           if (o->p.sift.stretch_lo < 0 || o->p.sift.stretch_hi > 100 || !(o->p.sift.stretch_lo < o->p.sift.stretch_hi))
             throw tpkit::UsageError("--stretch needs 0 <= LOW < HIGH <= 100");
           if (o->p.lsm.window % 2 == 0) throw tpkit::UsageError("--window must be odd");
+          // a size given (--window, or --taper with a number) is used as given
+          if (o->taper) o->p.lsm.taper = *o->taper;
+          o->p.choose_size = !o->taper && window->count() == 0;
           if (o->quadratic && o->shape == "affine") throw tpkit::UsageError("--quadratic contradicts --shape affine");
           o->p.shape = o->quadratic || o->shape == "quadratic" ? tpkit::PairMatchOptions::Shape::quadratic
                        : o->shape == "affine"                   ? tpkit::PairMatchOptions::Shape::affine

@@ -167,6 +167,7 @@ struct Rec {
   bool ok;           // (x2, y2) is the accepted LSM position (or there was no refinement)
   LsmStatus status;  // why not, when refined
   bool retried = false;  // refined at one of PairMatchOptions::retry_windows after the first window failed
+  bool at_base = false;  // refined at the base size after the chosen size failed (PairMatchOptions::choose_size)
   double curvature_chi2 = NAN;  // LsmResult::curvature_chi2 (the shape estimate's sample)
 };
 
@@ -268,6 +269,8 @@ RefineGroup refine_group(std::vector<size_t> js, const std::vector<Rec>& recs, c
                          const PairMatchOptions& o, double e1, double e2) {
   int widest = o.lsm.window;
   for (int w : o.retry_windows) widest = std::max(widest, w);
+  if (o.choose_size)
+    for (const WindowSize& w : window_size_candidates()) widest = std::max(widest, w.window);
   const int h = widest / 2;
   double ax0 = 1e300, ay0 = 1e300, ax1 = -1e300, ay1 = -1e300, bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
   for (size_t j : js) {
@@ -287,6 +290,12 @@ RefineGroup refine_group(std::vector<size_t> js, const std::vector<Rec>& recs, c
   return {std::move(js), rect(ax0, ay0, ax1, ay1), rect(bx0, by0, bx1, by1)};
 }
 
+// A refinement that failed on what the window holds (not on where it lies: out of the image, nodata).
+bool failed_on_content(LsmStatus s) {
+  return s == LsmStatus::Drifted || s == LsmStatus::LowCorrelation || s == LsmStatus::Imprecise || s == LsmStatus::NotConverged ||
+         s == LsmStatus::Diverged || s == LsmStatus::OffEpipolar;
+}
+
 // 5. Least-squares matching of every record, image 1 in bands of refine_tile rows, one after the
 // other: each band's region of image 1 and the region of image 2 its windows reach are read once (a
 // strip-stored file is decoded about once in all), and the band's points are refined in parallel while
@@ -298,9 +307,12 @@ RefineGroup refine_group(std::vector<size_t> js, const std::vector<Rec>& recs, c
 // holds each record's initial local map (keypoint_affine). With `F`, a refined position farther than
 // `max_residual` pixels (R^4) from the verified pair model is rejected (OffEpipolar): the keypoint
 // match passed that test, so the refinement moved it off the geometry.
+// With `base` (a larger size chosen: choose_pair_size), a record whose refinement at lsm's size fails on
+// its content is refined again at base's (a change between the dates inside the larger window).
 void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                     const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual,
-                    double blur, double highpass, bool progress, bool per_record = false, double retry_max_sigma = 0) {
+                    double blur, double highpass, bool progress, bool per_record = false, double retry_max_sigma = 0,
+                    const LsmOptions* base = nullptr) {
   const bool retry = retry_max_sigma > 0;
   // the blur's and the local mean's support (3 sigma) join the regions so that the windows see full kernels
   const double eh = highpass > 0 ? std::ceil(3 * highpass) : 0;
@@ -312,11 +324,12 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
     for (size_t q = q0; q < q1; ++q) {
       Rec& r = recs[G.js[q]];
       // one attempt with a window of `win` pixels (the taper in proportion), held to the verified pair model
-      auto attempt = [&](int win) {
-        LsmOptions opt = lsm;
-        if (win != lsm.window) {
+      auto attempt = [&](int win, const LsmOptions* other = nullptr) {
+        const LsmOptions& size = other ? *other : lsm;
+        LsmOptions opt = size;
+        if (win != size.window) {
           opt.window = win;
-          opt.taper = lsm.taper * win / lsm.window;
+          opt.taper = size.taper * win / size.window;
         }
         LsmResult L = lsm_refine(R.first, R.second, {r.x1, r.y1}, {r.kx2, r.ky2}, A0[G.js[q]], opt);
         if (L.ok() && F && !(std::abs(F->residual(r.x1, r.y1, L.p2.x(), L.p2.y())) <= max_residual)) L.status = LsmStatus::OffEpipolar;
@@ -345,6 +358,10 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
         for (int win : {15, 11}) {
           if (!(L.status == LsmStatus::OutOfImage || L.status == LsmStatus::Invalid) || win >= lsm.window) continue;
           L = attempt(win);
+        }
+        if (base && failed_on_content(L.status)) {
+          const LsmResult Lb = attempt(base->window, base);
+          if (Lb.ok()) L = Lb, r.at_base = true;
         }
       }
       r.ok = L.ok();
@@ -433,7 +450,8 @@ std::vector<size_t> sample_indices(size_t n, size_t want) {
   for (size_t k = 0; k < m; ++k) idx.push_back(k * n / m);
   return idx;
 }
-constexpr size_t kBlurSample = 200, kHighpassSample = 300;
+// the size's sample is larger: the ratio of two robust spreads over n records varies by about 2 / sqrt(n)
+constexpr size_t kBlurSample = 200, kHighpassSample = 300, kSizeSample = 1000;
 
 // A sample of the records, with their initial maps.
 struct RecordSample {
@@ -449,14 +467,18 @@ RecordSample sample_records(const std::vector<Rec>& recs, const std::vector<Eige
   return s;
 }
 
-// The pixels of both estimates' samples where px does not hold them (none when it does, or when neither
+// The pixels of the estimates' samples where px does not hold them (none when it does, or when no
 // estimate runs): the windows of their records (refine_group with the widest filter supports), read
-// once for both.
+// once for all.
 std::optional<RefinePixels> estimate_pixels(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                                             const PairMatchOptions& o) {
-  if (px.held() || (o.blur && o.highpass) || recs.size() < 50) return std::nullopt;
-  std::vector<size_t> idx = sample_indices(recs.size(), kBlurSample), more = sample_indices(recs.size(), kHighpassSample);
-  idx.insert(idx.end(), more.begin(), more.end());
+  const bool none = o.blur && o.highpass && o.shape != PairMatchOptions::Shape::automatic && !o.choose_size;
+  if (px.held() || none || recs.size() < 50) return std::nullopt;
+  std::vector<size_t> idx = sample_indices(recs.size(), kBlurSample);
+  for (size_t want : {kHighpassSample, kSizeSample}) {
+    const std::vector<size_t> more = sample_indices(recs.size(), want);
+    idx.insert(idx.end(), more.begin(), more.end());
+  }
   std::sort(idx.begin(), idx.end());
   idx.erase(std::unique(idx.begin(), idx.end()), idx.end());
   std::vector<PixelRect> rects[2];
@@ -488,9 +510,7 @@ void retry_failed_records(const RefinePixels& px, std::vector<Rec>& recs, const 
       sig.push_back(r.sigma);
       continue;
     }
-    if (r.status == LsmStatus::Drifted || r.status == LsmStatus::LowCorrelation || r.status == LsmStatus::Imprecise ||
-        r.status == LsmStatus::NotConverged || r.status == LsmStatus::Diverged || r.status == LsmStatus::OffEpipolar)
-      failed.push_back(k);
+    if (failed_on_content(r.status)) failed.push_back(k);
   }
   if (failed.empty() || sig.size() < 10) return;
   const size_t q = sig.size() / 2;
@@ -542,6 +562,44 @@ ShapeChoice choose_pair_shape(const RefinePixels& px, const std::vector<Rec>& re
   sc.samples = static_cast<long>(c.size());
   sc.quadratic = sc.median_chi2 > kQuadraticChi2;
   return sc;
+}
+
+// 5d. The window's size (PairMatchOptions::choose_size, window_size.hpp): the high-pass estimate's sample
+// refined at lsm's size and at the larger candidates, the differences compared along and across the
+// verified epipolar geometry's lines. Only for the affine model: the quadratic one is chosen where the map
+// curves within the base window already, and it sizes its own last stage (lsm_refine.hpp, adaptive).
+// Figures (tp-synth truth, triplets' views 2+3 median / p90 px; real pairs, RMS distance to the RPC
+// epipolar curves with an affine bias per image removed, px): relief 15 m 0.0212 / 0.0557 -> 0.0156 /
+// 0.0382 (taper 5) or 0.0153 / 0.0377 (taper 7); buildings (ratio 1.44 and 1.67) 0.034 / 0.154 at the base,
+// 0.048 / 0.236 at taper 5; La Reunion 0.230 -> 0.149 (ratio 0.94 at taper 7); Marseille 1-3 0.159 ->
+// 0.107 (1.22 at taper 5).
+WindowSizeChoice choose_pair_size(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
+                                  const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double blur,
+                                  double highpass) {
+  WindowSizeChoice c;
+  c.size = {lsm.taper, lsm.window, lsm.quadratic};
+  if (!o.choose_size || lsm.quadratic || !F || lsm.epipolar_dir.isZero() || recs.size() < 50) return c;
+  const RecordSample sample = sample_records(recs, A0, kSizeSample);
+  std::vector<WindowSize> candidates;
+  for (const WindowSize& w : window_size_candidates())
+    if (!(w.quadratic && o.shape == PairMatchOptions::Shape::affine)) candidates.push_back(w);  // --shape affine: affine only
+  c = choose_window_size(
+      [&](const WindowSize& w) {
+        LsmOptions l = lsm;
+        l.taper = w.taper, l.window = w.window, l.quadratic = w.quadratic;
+        std::vector<Rec> s = sample.recs;
+        refine_records(px, s, sample.A0, l, o, F, o.ransac_threshold, blur, highpass, false, /*per_record=*/true);
+        WindowSizeSample out;
+        out.xy.resize(static_cast<Eigen::Index>(s.size()), 4);
+        for (size_t k = 0; k < s.size(); ++k) {
+          out.ok.push_back(s[k].ok);
+          out.xy.row(static_cast<Eigen::Index>(k)) << s[k].x1, s[k].y1, s[k].x2, s[k].y2;
+        }
+        return out;
+      },
+      c.size, candidates, lsm.epipolar_dir);
+  c.samples = static_cast<long>(sample.recs.size());
+  return c;
 }
 
 // 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
@@ -608,7 +666,7 @@ Matches assemble_matches(const std::vector<Rec>& recs, const PairMatchOptions& o
   size_t nout = 0;
   long nref = 0;
   for (const Rec& r : recs) {
-    if (r.ok) ++nref, st.retried += r.retried;
+    if (r.ok) ++nref, st.retried += r.retried, st.at_base_size += r.at_base;
     else if (o.keep_unrefined) st.unrefined[static_cast<int>(r.status)]++;
     else st.dropped[static_cast<int>(r.status)]++;
     if (r.ok || o.keep_unrefined) ++nout;
@@ -685,9 +743,10 @@ std::string describe_highpass(const HighpassChoice& h, const PairMatchOptions& o
 }
 
 // The "# shape:" header value: the window's model and, when chosen here, what the sample showed.
-std::string describe_shape(const ShapeChoice& c, const PairMatchOptions& o) {
+std::string describe_shape(const ShapeChoice& c, const WindowSize& used, const PairMatchOptions& o) {
   std::string s = c.quadratic ? "quadratic (the map bends along the epipolar lines within the window)" : "affine";
   if (o.shape != PairMatchOptions::Shape::automatic) return s + " (--shape)";
+  if (used.quadratic && !c.quadratic) s = "quadratic with the larger window (# size:); at the base window affine";
   if (c.samples == 0) return s + " (not estimated: fewer than 50 verified matches)";
   return s + " (estimated on " + std::to_string(c.samples) + " sampled matches: median significance of the curvature, chi-square, " +
          format_number(std::round(c.median_chi2 * 100) / 100) + ", quadratic above " + format_number(kQuadraticChi2) + ")";
@@ -712,13 +771,14 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
                                    " px, seed " + std::to_string(o.seed) + ", inlier rms " + format_number(std::round(st.ransac_rms * 1e4) / 1e4) + " px)");
   if (o.grid > 0) meta_set(M.meta, "grid", std::to_string(o.grid) + "x" + std::to_string(o.grid) + ", " + std::to_string(o.per_cell) + " per cell: " + std::to_string(st.gridded));
   if (o.refine) {
-    meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (o.lsm.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") + " taper " + format_number(o.lsm.taper) +
+    meta_set(M.meta, "refinement", "lsm window " + std::to_string(2 * (st.size.size.window / 2) + 1) + (o.lsm.l1 ? " L1" : " L2") + " taper " + format_number(st.size.size.taper) +
                                        " max_shift " + format_number(o.lsm.max_shift) + " max_sigma " + format_number(o.lsm.max_sigma) +
                                        " min_corr " + format_number(o.lsm.min_corr) +
                                        (o.lsm.mask_k > 0 ? " residual mask " + format_number(o.lsm.mask_k) + " (min_inliers " + format_number(o.lsm.min_inliers) + ")" : "") +
-                                       " sigma " + format_number(o.lsm.sigma_scale * (st.shape.quadratic ? o.lsm.quadratic_sigma_ratio : 1.0)) + " x fit (+) " + format_number(o.lsm.sigma_floor) + " px" +
-                                       (st.shape.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
+                                       " sigma " + format_number(o.lsm.sigma_scale * (st.size.size.quadratic ? o.lsm.quadratic_sigma_ratio : 1.0)) + " x fit (+) " + format_number(o.lsm.sigma_floor) + " px" +
+                                       (st.size.size.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
                                        ": " + std::to_string(st.refined) + " converged" +
+                                       (st.at_base_size > 0 ? " (" + std::to_string(st.at_base_size) + " at the base size, taper " + format_number(o.lsm.taper) + " px, window " + std::to_string(o.lsm.window) + " px)" : "") +
                                        (st.retried > 0 ? " (" + std::to_string(st.retried) + " at a retry window: " + retry_list(o.retry_windows) + " px)" : ""));
     long nu = 0, nd = 0;
     for (int k = 0; k < kLsmStatusCount; ++k) nu += st.unrefined[k], nd += st.dropped[k];
@@ -735,7 +795,10 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
       blur += " (--blur)";
     meta_set(M.meta, "blur", blur);
     meta_set(M.meta, "highpass", describe_highpass(st.highpass, o));
-    meta_set(M.meta, "shape", describe_shape(st.shape, o));
+    meta_set(M.meta, "shape", describe_shape(st.shape, st.size.size, o));
+    meta_set(M.meta, "size", describe_window_size(st.size, !o.choose_size,
+                                                  st.shape.quadratic ? "(the quadratic model: its last stage sizes its own taper)"
+                                                                     : "(not estimated: fewer than 50 verified matches or no epipolar geometry)"));
   } else
     meta_set(M.meta, "refinement", "none (raw SIFT positions)");
   meta_set(M.meta, "positions", o.refine ? "x1 y1 keypoint of image1 (fixed template); x2 y2 refined in image2 (refined 1) or its keypoint (refined 0); kx2 ky2 keypoint of image2"
@@ -750,6 +813,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
   // this pair (match_every_pair: live_threads set), whose next image reuses them.
   if (!o.live_threads) release_large_blocks();
   PairMatchStats st;
+  st.size.size = {o.lsm.taper, o.lsm.window, o.lsm.quadratic};
   auto clock = std::chrono::steady_clock::now();
   auto lap = [&clock](double& out) {
     auto now = std::chrono::steady_clock::now();
@@ -808,7 +872,13 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     st.highpass = choose_pair_highpass(epx, recs, A0, lsm, o, F, st.blur.sigma);
     st.shape = choose_pair_shape(epx, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
     lsm.quadratic = st.shape.quadratic;
-    refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress);
+    st.size = choose_pair_size(epx, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
+    const LsmOptions base = lsm;
+    lsm.taper = st.size.size.taper, lsm.window = st.size.size.window;
+    const bool larger = lsm.window != base.window || lsm.taper != base.taper;
+    lsm.quadratic = st.size.size.quadratic;
+    refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress, false, 0,
+                   larger ? &base : nullptr);
     retry_failed_records(px, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
   }
   lap(st.seconds[3]);

@@ -32,6 +32,7 @@
 #include "tpkit/match/match_descriptors.hpp"
 #include "tpkit/match/rpc_guided_matching.hpp"
 #include "tpkit/match/sift_tiles.hpp"
+#include "tpkit/match/window_size.hpp"
 
 namespace tpkit {
 
@@ -80,6 +81,11 @@ struct PairMatchOptions {
   // lsm.quadratic is set from it (a value set there by hand is overridden).
   enum class Shape { automatic, affine, quadratic };
   Shape shape = Shape::automatic;
+  // The window's size: chosen (window_size.hpp: lsm.taper and lsm.window are the base, larger sizes from
+  // window_size_candidates() are tried on a sample of the pair's matches, only with the affine model and
+  // a verified epipolar geometry), or lsm's as given. With a larger size chosen, a record whose
+  // refinement fails on its content there is refined again at the base size (the same acceptance).
+  bool choose_size = true;
   // Windows (odd, pixels) tried in turn where lsm.window's refinement failed on its content (drifted, low
   // correlation, imprecise, not converged, diverged, off the pair model); the first accepted with a sigma
   // within the median of the pair's first-window sigmas is kept. Empty:
@@ -135,6 +141,8 @@ struct PairMatchStats {
   RelativeBlur blur;                           // the relative blur the refinement used (relative_blur.hpp)
   HighpassChoice highpass;                     // the high-pass it used (radiometric_highpass.hpp)
   ShapeChoice shape;                           // the window's shape model it used (choose_pair_shape)
+  WindowSizeChoice size;                       // the window's size it used (choose_pair_size)
+  long at_base_size = 0;                       // of the refined: at the base size after the chosen one failed
   bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
   bool overlap = true;                         // false: too few verified matches, zero records
 };
