@@ -195,7 +195,7 @@ void print_sigma_deciles(std::vector<std::pair<double, double>> sig_err, const c
 // The triplets refined by multi-image LSM, their errors against the truth before and after (the same
 // tracks: those the refinement kept).
 void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpkit::ImageSource* src, const tpkit::Tracks& t,
-                 int threads, bool template1, double model_sigma, bool no_curvature, double highpass, bool deciles) {
+                 int threads, bool template1, double model_sigma, bool no_curvature, double highpass, double taper, bool deciles) {
   std::vector<tpkit::RpcModel> models(3);
   std::vector<tpkit::Raster> rasters(3);
   std::vector<const tpkit::RpcModel*> mp;
@@ -219,6 +219,15 @@ void multi_image(const tpkit::SynthScene& scene, const std::string* v, const tpk
   else hc = tpkit::choose_track_highpass(t, images, o, threads);
   for (auto& ras : rasters) tpkit::highpass_raster(ras, hc.sigma);
   std::printf("multi-image LSM highpass: %s\n", tpkit::describe_track_highpass(hc, highpass >= 0).c_str());
+  // tp-refine's window size: chosen on a sample of the tracks, or given (that size alone)
+  if (taper >= 0) {
+    o.taper = taper, o.window = std::max(21, 2 * static_cast<int>(std::round(2.75 * taper)) + 1), o.fallback_window = 0;
+    std::printf("multi-image LSM size: taper %g px, window %d px (--multi-taper)\n", o.taper, o.window);
+  } else {
+    const tpkit::WindowSizeChoice size = tpkit::choose_track_size(t, images, o, threads);
+    tpkit::use_track_size(size, o);
+    std::printf("multi-image LSM size: %s\n", tpkit::describe_window_size(size, false, "", "sampled tracks").c_str());
+  }
   tpkit::MultiLsmStats st;
   const tpkit::Tracks r = tpkit::refine_tracks(t, images, o, threads, &st);
   const double dt = secs(t0);
@@ -281,6 +290,7 @@ int main(int argc, char** argv) {
     int window = 21;
     double taper = 3;
     bool l2 = false, global = false, no_retry = false;
+    bool size_given = false;  // --window / --taper: that size (tp-match's choice off)
     std::string dump;
     int quad = -1;
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
@@ -293,9 +303,10 @@ int main(int argc, char** argv) {
     std::string score;
     bool multi = false, multi_t1 = false, no_curv = false;
     double model_sigma = -1, multi_highpass = -1;  // multi_highpass < 0: auto
+    double multi_taper = -1;  // < 0: auto (tp-refine's choice); else that taper alone (3: window 21, 5: 29)
     int score_a = 1, score_b = 2;
     const char* usage =
-        "usage: bench_match_accuracy --synth DIR [--check MED P90] [--no-retry] [--multi | --multi-template1 [--model-sigma PX] [--no-curvature] [--multi-highpass auto|SIGMA]] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
+        "usage: bench_match_accuracy --synth DIR [--check MED P90] [--no-retry] [--multi | --multi-template1 [--model-sigma PX] [--no-curvature] [--multi-highpass auto|SIGMA] [--multi-taper auto|3|5]] | --tracks FILE [--check-rmse R] | --render8 IN OUT\n";
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       auto need = [&](int k) {
@@ -319,8 +330,8 @@ int main(int argc, char** argv) {
       else if (a == "--check") need(2), cmed = num(), cp90 = num();
       else if (a == "--check-rmse") need(1), crmse = num();
       else if (a == "--threads") need(1), threads = whole();
-      else if (a == "--window") need(1), window = whole();
-      else if (a == "--taper") need(1), taper = num();
+      else if (a == "--window") need(1), window = whole(), size_given = true;
+      else if (a == "--taper") need(1), taper = num(), size_given = true;
       else if (a == "--l2") l2 = true;
       else if (a == "--global") global = true;
       else if (a == "--no-retry") no_retry = true;
@@ -351,6 +362,7 @@ int main(int argc, char** argv) {
       else if (a == "--model-sigma") need(1), model_sigma = num();
       else if (a == "--no-curvature") no_curv = true;
       else if (a == "--multi-highpass") need(1), multi_highpass = std::string(argv[i + 1]) == "auto" ? (++i, -1.0) : num();
+      else if (a == "--multi-taper") need(1), multi_taper = std::string(argv[i + 1]) == "auto" ? (++i, -1.0) : num();
       else if (a == "--score") need(3), score = argv[++i], score_a = whole(), score_b = whole();
       else {
         std::fputs(usage, a == "--help" || a == "-h" ? stdout : stderr);
@@ -413,6 +425,7 @@ int main(int argc, char** argv) {
       po.threads = threads;
       po.lsm.window = window;
       po.lsm.taper = taper;
+      po.choose_size = !size_given;
       po.lsm.l1 = !l2;
       po.guided = !global;
       if (no_retry) po.retry_windows.clear();
@@ -580,7 +593,7 @@ int main(int argc, char** argv) {
         }
         print("consistency, views 2+3", dist(c23));
       }
-      if (multi) multi_image(scene, v, src, t, threads, multi_t1, model_sigma, no_curv, multi_highpass, deciles);
+      if (multi) multi_image(scene, v, src, t, threads, multi_t1, model_sigma, no_curv, multi_highpass, multi_taper, deciles);
       if (cmed > 0 && !(da.n > 0 && da.med <= cmed && da.p90 <= cp90)) {
         std::printf("FAIL: triplet median %.4f / p90 %.4f above %.4f / %.4f\n", da.med, da.p90, cmed, cp90);
         fail = true;

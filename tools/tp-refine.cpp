@@ -85,11 +85,24 @@ int run(const Opts& o) {
   if (o.highpass) hp.sigma = *o.highpass;
   else hp = choose_track_highpass(t, images, lo, o.threads);
   for (auto& r : rasters) highpass_raster(r, hp.sigma);
+  // the window's size: the larger (with the fallback) where a sample of the tracks shows no bias from it
+  WindowSizeChoice size;
+  size.size = {lo.taper, lo.window, false};
+  size.shapes = false;
+  if (lo.fallback_window > 0) {
+    size = choose_track_size(t, images, lo, o.threads);
+    use_track_size(size, lo);
+  }
   MultiLsmStats st;
   Tracks out = refine_tracks(t, images, lo, o.threads, &st);
   if (out.size() == 0) throw InputError(o.tracks, 0, "no track kept a second view after the refinement");
-  out.meta.push_back({"refined", "tp-refine multi-image LSM (bias " + o.bias + ", model sigma " + o.model_sigma + (lo.extend ? ", extended to the images each track lacks" : "") + ")"});
+  out.meta.push_back({"refined", "tp-refine multi-image LSM (bias " + o.bias + ", model sigma " + o.model_sigma + (lo.extend ? ", extended to the images each track lacks" : "") +
+                          ", window " + std::to_string(lo.window) + " px taper " + format_number(lo.taper) + " px" +
+                          (lo.fallback_window > 0 ? " (" + std::to_string(lo.fallback_window) + " px taper " + format_number(lo.fallback_taper) + " px for the " +
+                                                        std::to_string(st.tracks_at_fallback) + " tracks that kept more views there)"
+                                                  : std::string()) + ")"});
   out.meta.push_back({"highpass", describe_track_highpass(hp, o.highpass.has_value())});
+  out.meta.push_back({"size", describe_window_size(size, size.tried.empty(), "", "sampled tracks")});
   AtomicOutput f(o.out);
   write_tracks(f.stream(), out);
   f.commit();
@@ -97,6 +110,9 @@ int run(const Opts& o) {
     std::ostringstream s;
     s << st.tracks << " tracks, " << st.views << " views: " << st.tracks_written << " tracks written, " << st.tracks_dropped
       << " dropped (fewer than 2 views left); views refined " << st.views_refined << " (" << st.views_added << " of them added), dropped " << st.views_dropped;
+    if (lo.fallback_window > 0)
+      s << "; window " << lo.window << " px (taper " << format_number(lo.taper) << "), " << st.tracks_at_fallback << " tracks at " << lo.fallback_window
+        << " px (taper " << format_number(lo.fallback_taper) << ")";
     std::string sep = " (";
     for (int i = 0; i < kMultiLsmStatusCount; ++i)
       if (st.by_status[i] > 0) s << sep << to_string(static_cast<MultiLsmViewStatus>(i)) << " " << st.by_status[i], sep = ", ";
@@ -122,8 +138,8 @@ int main(int argc, char** argv) {
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--bias", o->bias, "bias of each image estimated from the tracks: shift, drift or affine");
         app.add_option("--reference", o->reference, "image whose bias is zero (default: the tracks' first)");
-        app.add_option("--window", o->lsm.window, "template block, pixels (odd)");
-        app.add_option("--taper", o->lsm.taper, "Gaussian weight of the window's pixels, pixels")->check(tpkit::Positive);
+        CLI::Option* window = app.add_option("--window", o->lsm.window, "template block, pixels (odd; default 29, 21 where a track loses views)");
+        CLI::Option* taper = app.add_option("--taper", o->lsm.taper, "Gaussian weight of the window's pixels, pixels (default 5, 3 where a track loses views)")->check(tpkit::Positive);
         app.add_option("--model-sigma", o->model_sigma, "prior deviation of a view from the models, pixels (0: hard constraint; auto: each image's bias fit residual)");
         app.add_flag("--no-extend", o->no_extend, "refine only the views each track has (default: also those in the images it lacks, where its ground point projects inside them)");
         app.add_flag("--no-curvature", o->no_curvature, "a planar surface under each window (3 unknowns, not 6)");
@@ -134,7 +150,11 @@ int main(int argc, char** argv) {
         app.add_option("--threads", o->threads, "threads");
         app.add_option("-o,--output", o->out, "refined tracks file (- = stdout)");
         app.add_flag("-q,--quiet", o->quiet, "no summary on stderr");
-        return [o]() { return run(*o); };
+        return [o, window, taper]() {
+          // a size given is used alone
+          if (window->count() > 0 || taper->count() > 0) o->lsm.fallback_window = 0;
+          return run(*o);
+        };
       },
       tpkit_man_page);
 }

@@ -676,13 +676,31 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
   const int K = t.views();
   if (static_cast<int>(images.size()) != K) throw UsageError("refine_tracks: one image per column pair of the tracks");
   std::vector<MultiLsmResult> res(t.size());
+  std::vector<char> at_fallback(t.size(), 0);
+  MultiLsmOptions of = o;  // the fallback size
+  of.window = o.fallback_window, of.taper = o.fallback_taper, of.fallback_window = 0;
+  // views accepted in a result (0 when the track failed), and of them the track's own
+  auto accepted = [](const MultiLsmResult& x, const std::vector<MultiLsmView>* own) {
+    int n = 0;
+    for (const auto& w : x.views)
+      if (x.ok && (w.status == MultiLsmViewStatus::Ok || w.status == MultiLsmViewStatus::Template))
+        n += !own || std::any_of(own->begin(), own->end(), [&](const MultiLsmView& u) { return u.image == w.image; });
+    return n;
+  };
   parallel_for(t.size(), threads, [&](size_t r) {
     const std::vector<MultiLsmView> v = track_views(t, r);
     int tv = -1;
     for (size_t i = 0; i < v.size(); ++i)
       if (v[i].image == o.template_image) tv = static_cast<int>(i);
-    res[r] = refine_track_views(images, v, o, tv);
-    if (o.extend) res[r] = extend_track(images, v, res[r], o);
+    auto solve = [&](const MultiLsmOptions& oo) {
+      MultiLsmResult x = refine_track_views(images, v, oo, tv);
+      return oo.extend ? extend_track(images, v, x, oo) : x;
+    };
+    res[r] = solve(o);
+    if (o.fallback_window > 0 && accepted(res[r], &v) < static_cast<int>(v.size())) {
+      MultiLsmResult b = solve(of);
+      if (accepted(b, nullptr) > accepted(res[r], nullptr)) res[r] = std::move(b), at_fallback[r] = 1;
+    }
   });
   MultiLsmStats st;
   st.template_count.assign(K, 0);
@@ -719,6 +737,7 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
       rows.push_back(r);
       st.views_refined += ok - 1;
       st.views_added += added;
+      st.tracks_at_fallback += at_fallback[r];
       ++st.template_count[res[r].views[res[r].template_view].image];
     } else {
       ++st.tracks_dropped;
@@ -758,17 +777,70 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
   return out;
 }
 
+namespace {
+// A sample of tracks refined with the model sigma kHighpassModelSigma (across its epipolar direction a
+// view then sits where its image puts it): per sampled track and accepted non-template view, the template
+// and view images, the view's position and its epipolar direction (unit) from the template. Tracks spread
+// evenly over the file.
+struct SampledView {
+  int tpl = 0, image = 0;
+  Vec2 xy = Vec2::Zero(), q0 = Vec2::Zero(), e = Vec2::Zero();
+};
+std::vector<size_t> sample_rows(const Tracks& t, size_t samples) {
+  std::vector<size_t> rows;
+  const size_t n = t.size(), want = std::min(n, samples);
+  for (size_t i = 0; i < want; ++i) rows.push_back(i * n / want);
+  return rows;
+}
+std::vector<std::vector<SampledView>> refine_sample(const Tracks& t, const std::vector<MultiLsmImage>& im, const std::vector<size_t>& rows,
+                                                    const MultiLsmOptions& o, int threads) {
+  MultiLsmOptions so = o;
+  so.extend = false;
+  so.model_sigma = kHighpassModelSigma;  // loose: the views may leave the models across their epipolar lines
+  std::vector<std::vector<SampledView>> out(rows.size());
+  parallel_for(rows.size(), threads, [&](size_t i) {
+    const MultiLsmResult res = refine_track_views(im, track_views(t, rows[i]), so, -1);
+    if (!res.ok) return;
+    const MultiLsmView& tv = res.views[static_cast<size_t>(res.template_view)];
+    for (const auto& w : res.views) {
+      if (w.status != MultiLsmViewStatus::Ok) continue;
+      try {
+        const ViewGeometry g = linearise(im[static_cast<size_t>(tv.image)], tv.xy, res.llh.z(), im[static_cast<size_t>(w.image)]);
+        if (!(g.e.norm() > 0)) continue;
+        out[i].push_back({tv.image, w.image, w.xy, g.q0, g.e.normalized()});
+      } catch (const NumericalError&) {
+      }
+    }
+  });
+  return out;
+}
+// The spread of the sampled views across their epipolar directions about each image pair's median: what
+// the models and biases still get wrong across the epipolar lines is mostly an offset per image pair,
+// common to every candidate, and left out. NaN with fewer than 20 views in pairs of at least 5.
+double across_spread(const std::vector<std::vector<SampledView>>& sample) {
+  std::map<std::pair<int, int>, std::vector<double>> by_pair;
+  for (const auto& a : sample)
+    for (const SampledView& v : a) {
+      const Vec2 d = v.xy - v.q0;
+      by_pair[{v.tpl, v.image}].push_back(d.x() * v.e.y() - d.y() * v.e.x());
+    }
+  std::vector<double> all;
+  for (auto& bp : by_pair) {
+    if (bp.second.size() < 5) continue;
+    const double m = median(bp.second);
+    for (double d : bp.second) all.push_back(std::abs(d - m));
+  }
+  return all.size() < 20 ? std::numeric_limits<double>::quiet_NaN() : median(all);
+}
+}  // namespace
+
 HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
                                      const std::vector<double>& candidates, size_t samples) {
   const int K = t.views();
   if (static_cast<int>(images.size()) != K) throw UsageError("choose_track_highpass: one image per column pair of the tracks");
-  // the sample: tracks spread evenly over the file
-  std::vector<size_t> rows;
-  const size_t n = t.size(), want = std::min(n, samples);
-  for (size_t i = 0; i < want; ++i) rows.push_back(i * n / want);
-  MultiLsmOptions so = o;
-  so.extend = false;
-  so.model_sigma = kHighpassModelSigma;  // loose: the views may leave the models across their epipolar lines
+  const std::vector<size_t> rows = sample_rows(t, samples);
+  MultiLsmOptions ob = o;  // at the base size: the window's size is chosen after the high-pass, on its images
+  if (o.fallback_window > 0) ob.window = o.fallback_window, ob.taper = o.fallback_taper;
   auto spread = [&](double sigma) {
     std::vector<Raster> filtered(static_cast<size_t>(K));
     std::vector<MultiLsmImage> im = images;
@@ -777,42 +849,56 @@ HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsm
       highpass_raster(filtered[static_cast<size_t>(k)], sigma);
       im[static_cast<size_t>(k)].raster = &filtered[static_cast<size_t>(k)];
     }
-    // per sampled track: (template image, view image, signed distance across the epipolar direction)
-    std::vector<std::vector<std::array<double, 3>>> across(rows.size());
-    parallel_for(rows.size(), threads, [&](size_t i) {
-      const size_t r = rows[i];
-      const std::vector<MultiLsmView> v = track_views(t, r);
-      const MultiLsmResult res = refine_track_views(im, v, so, -1);
-      if (!res.ok) return;
-      const MultiLsmView& tv = res.views[static_cast<size_t>(res.template_view)];
-      for (const auto& w : res.views) {
-        if (w.status != MultiLsmViewStatus::Ok) continue;
-        try {
-          const ViewGeometry g = linearise(im[static_cast<size_t>(tv.image)], tv.xy, res.llh.z(), im[static_cast<size_t>(w.image)]);
-          const double en = g.e.norm();
-          if (!(en > 0)) continue;
-          const Vec2 d = w.xy - g.q0;
-          across[i].push_back({static_cast<double>(tv.image), static_cast<double>(w.image), (d.x() * g.e.y() - d.y() * g.e.x()) / en});
-        } catch (const NumericalError&) {
-        }
-      }
-    });
-    // the spread about each image pair's median: what the models and biases still get wrong across the
-    // epipolar lines is mostly an offset per image pair, common to every candidate, and left out
-    std::map<std::pair<int, int>, std::vector<double>> by_pair;
-    for (const auto& a : across)
-      for (const auto& v : a) by_pair[{static_cast<int>(v[0]), static_cast<int>(v[1])}].push_back(v[2]);
-    std::vector<double> all;
-    for (auto& bp : by_pair) {
-      if (bp.second.size() < 5) continue;
-      const double m = median(bp.second);
-      for (double d : bp.second) all.push_back(std::abs(d - m));
-    }
-    return all.size() < 20 ? std::numeric_limits<double>::quiet_NaN() : median(all);
+    return across_spread(refine_sample(t, im, rows, ob, threads));
   };
   HighpassChoice c = choose_highpass(spread, candidates, kTrackHighpassGain, kTrackHighpassGain);
   c.samples = static_cast<long>(rows.size());
   return c;
+}
+
+WindowSizeChoice choose_track_size(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
+                                   size_t samples) {
+  if (static_cast<int>(images.size()) != t.views()) throw UsageError("choose_track_size: one image per column pair of the tracks");
+  const std::vector<size_t> rows = sample_rows(t, samples);
+  const WindowSize base{o.fallback_taper, o.fallback_window, false}, large{o.taper, o.window, false};
+  MultiLsmOptions ob = o, ol = o;
+  ob.taper = base.taper, ob.window = base.window;
+  const std::vector<std::vector<SampledView>> sb = refine_sample(t, images, rows, ob, threads), sl = refine_sample(t, images, rows, ol, threads);
+  WindowSizeChoice c;
+  c.size = base;
+  c.samples = static_cast<long>(rows.size());
+  c.shapes = false;  // the surface model is the same at both sizes
+  WindowSizeChoice::Tried tr;
+  tr.size = large;
+  // the views refined at both sizes against the same template: their differences along and across
+  std::vector<double> along, across;
+  std::vector<std::vector<SampledView>> cb(rows.size()), cl(rows.size());
+  for (size_t i = 0; i < rows.size(); ++i)
+    for (const SampledView& a : sb[i])
+      for (const SampledView& b : sl[i])
+        if (a.tpl == b.tpl && a.image == b.image) {
+          const Vec2 d = b.xy - a.xy;
+          along.push_back(d.dot(a.e));
+          across.push_back(d.x() * a.e.y() - d.y() * a.e.x());
+          cb[i].push_back(a), cl[i].push_back(b);
+        }
+  tr.common = static_cast<long>(along.size());
+  if (along.size() >= 20) {
+    const double sa = robust_spread(along), sc = robust_spread(across);
+    tr.ratio = sc > 0 ? sa / sc : std::numeric_limits<double>::quiet_NaN();
+  }
+  tr.spread_before = across_spread(cb);
+  tr.spread = across_spread(cl);
+  tr.kept = tr.ratio <= kWindowSizeMaxRatio && tr.spread <= (1 - kWindowSizeMinGain) * tr.spread_before;
+  c.tried.push_back(tr);
+  if (tr.kept) c.size = large;
+  return c;
+}
+
+void use_track_size(const WindowSizeChoice& c, MultiLsmOptions& o) {
+  if (c.size.window == o.window && c.size.taper == o.taper) return;
+  o.window = c.size.window, o.taper = c.size.taper;
+  o.fallback_window = 0;
 }
 
 std::string describe_track_highpass(const HighpassChoice& h, bool given) {

@@ -44,14 +44,20 @@
 #include "tpkit/core/formats.hpp"
 #include "tpkit/core/image_io.hpp"
 #include "tpkit/match/radiometric_highpass.hpp"
+#include "tpkit/match/window_size.hpp"
 #include "tpkit/rpc/rpc_bias.hpp"
 #include "tpkit/rpc/rpc_model.hpp"
 
 namespace tpkit {
 
 struct MultiLsmOptions {
-  int window = 21;            // template block, pixels (odd)
-  double taper = 3;           // Gaussian weight of the pixels, pixels
+  // The window: taper 5 px (a block of 29), and where a track loses views there, taper 3 px (21; the
+  // fallback below), where choose_track_size finds no bias from the larger one; else taper 3 alone.
+  // Jacksonville block (tp-plan, rpc-adjust with the lidar prior, tp-ground against the lidar, slopes
+  // under 5 degrees / all): taper 3 alone NMAD 0.279 / 0.482 m over 5686 / 10017 points, taper 5 alone
+  // 0.253 / 0.425 m over 5491 / 9661, taper 5 with the fallback 0.261 / 0.458 m over 5767 / 10206.
+  int window = 29;            // template block, pixels (odd)
+  double taper = 5;           // Gaussian weight of the pixels, pixels
   double support = 3;         // only pixels within support x taper of the centre pixel
   bool curvature = true;      // the surface's second-order terms (3 more unknowns)
   // pixels: prior deviation of each view from the models (0: hard constraint); negative: each image's own
@@ -79,6 +85,12 @@ struct MultiLsmOptions {
   int template_image = -1;    // refine_tracks: this image (0-based) is the template where the track has it
   // refine_tracks: also the track's views in the images it lacks where they pass on their own evidence
   bool extend = false;
+  // refine_tracks, > 0: a track that loses any of its own views at window / taper is solved again at
+  // fallback_window / fallback_taper, and the result with more views accepted is kept (a tie: the first).
+  // The larger window is the more precise, but a change between the dates inside it (a shadow, a car)
+  // fails views that the smaller one keeps.
+  int fallback_window = 21;
+  double fallback_taper = 3;
 };
 
 // One image of the block: its grey levels (a region; NaN = invalid), model and bias.
@@ -133,6 +145,7 @@ struct MultiLsmStats {
   long tracks = 0, tracks_written = 0, tracks_dropped = 0;
   long views = 0, views_refined = 0, views_dropped = 0;
   long views_added = 0;                       // of views_refined: in images the input track lacked (extend)
+  long tracks_at_fallback = 0;                // of tracks_written: at the fallback size (fallback_window)
   long by_status[kMultiLsmStatusCount] = {};  // over the views dropped
   std::vector<long> template_count;           // per image: tracks whose template it is
 };
@@ -156,10 +169,28 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
 // the Jacksonville crops of other dates, twelve 0.139 / 0.112 and four 0.118 / 0.107 px (9%: at tp-match's
 // 10% those four would keep none, and their ground points would lie 0.61 m NMAD from the lidar instead
 // of 0.40 m; their 0.106 px at 2 px, 1.6% below 1 px's, gave 0.45 m).
+// The sample is refined at the base size (o.fallback_window / fallback_taper when set: choose_track_size
+// then chooses the window on the filtered images).
 constexpr double kHighpassModelSigma = 1.0;  // pixels
 constexpr double kTrackHighpassGain = 0.05;
 HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
                                      const std::vector<double>& candidates = {1.0, 2.0}, size_t samples = 1000);
+
+// The window's size for a block (window_size.hpp's test, on tracks): a sample of the tracks (spread evenly
+// over the file, as choose_track_highpass's, with its loose model sigma) refined at the fallback size
+// (o.fallback_taper, o.fallback_window: the base) and at o's (the larger); over the non-template views
+// refined at both against the same template, the differences of their positions along their epipolar
+// direction (the height, where a window too large for curved terrain biases it) against those across
+// it. The larger size is chosen (size, with the fallback) where that ratio is at most kWindowSizeMaxRatio
+// and its views scatter across the epipolar directions (as choose_track_highpass measures it)
+// kWindowSizeMinGain less than the base's; else the base alone. Seen (tp-synth truth, triplets' views 2+3
+// median px, taper 3 -> 5): relief 15 m ratio 1.00, 0.0128 -> 0.0105 (kept); relief 150 m 2.04, 0.020 ->
+// 0.031 and buildings 1.46, 0.022 -> 0.031 (refused); the Jacksonville block 1.37 (refused, though its
+// ground points are nearer the lidar at taper 5 with the fallback: flat-ground NMAD 0.279 -> 0.261 m).
+WindowSizeChoice choose_track_size(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
+                                   size_t samples = 1000);
+// o's window and taper set to the choice's size; the base chosen, no fallback left.
+void use_track_size(const WindowSizeChoice& c, MultiLsmOptions& o);
 
 // The "# highpass:" header value of refined tracks: the sigma used and, when chosen (given = false), the
 // spreads the choice saw.
