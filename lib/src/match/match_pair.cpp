@@ -573,9 +573,15 @@ ShapeChoice choose_pair_shape(const RefinePixels& px, const std::vector<Rec>& re
 // 0.0382 (taper 5) or 0.0153 / 0.0377 (taper 7); buildings (ratio 1.44 and 1.67) 0.034 / 0.154 at the base,
 // 0.048 / 0.236 at taper 5; La Reunion 0.230 -> 0.149 (ratio 0.94 at taper 7); Marseille 1-3 0.159 ->
 // 0.107 (1.22 at taper 5).
+// The sample's refinements at the size chosen and at the base, kept for the refinement of every record
+// (refine_pair_records): on a pair of at most kSizeSample matches the choice has refined them all already.
+struct SizeSampleRuns {
+  std::vector<size_t> idx;  // the sampled records
+  std::vector<Rec> chosen, base;
+};
 WindowSizeChoice choose_pair_size(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                                   const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double blur,
-                                  double highpass) {
+                                  double highpass, SizeSampleRuns& runs) {
   WindowSizeChoice c;
   c.size = {lsm.taper, lsm.window, lsm.quadratic};
   if (!o.choose_size || lsm.quadratic || !F || lsm.epipolar_dir.isZero() || recs.size() < 50) return c;
@@ -583,12 +589,14 @@ WindowSizeChoice choose_pair_size(const RefinePixels& px, const std::vector<Rec>
   std::vector<WindowSize> candidates;
   for (const WindowSize& w : window_size_candidates())
     if (!(w.quadratic && o.shape == PairMatchOptions::Shape::affine)) candidates.push_back(w);  // --shape affine: affine only
+  std::vector<std::pair<WindowSize, std::vector<Rec>>> tried;  // the base first
   c = choose_window_size(
       [&](const WindowSize& w) {
         LsmOptions l = lsm;
         l.taper = w.taper, l.window = w.window, l.quadratic = w.quadratic;
         std::vector<Rec> s = sample.recs;
         refine_records(px, s, sample.A0, l, o, F, o.ransac_threshold, blur, highpass, false, /*per_record=*/true);
+        tried.emplace_back(w, s);
         WindowSizeSample out;
         out.xy.resize(static_cast<Eigen::Index>(s.size()), 4);
         for (size_t k = 0; k < s.size(); ++k) {
@@ -599,7 +607,41 @@ WindowSizeChoice choose_pair_size(const RefinePixels& px, const std::vector<Rec>
       },
       c.size, candidates, lsm.epipolar_dir);
   c.samples = static_cast<long>(sample.recs.size());
+  for (auto& t : tried)
+    if (t.first.same_size(c.size) && t.first.quadratic == c.size.quadratic) {
+      runs.idx = sample_indices(recs.size(), kSizeSample);
+      runs.chosen = std::move(t.second);
+      runs.base = tried.front().second;
+      break;
+    }
   return c;
+}
+
+// 5e. Every record refined at the chosen size (lsm), the sampled ones taken from the size's choice; with
+// `base` (a larger size chosen), a record that fails on its content there is refined at the base size.
+void refine_pair_records(const RefinePixels& px, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0, const LsmOptions& lsm,
+                         const PairMatchOptions& o, const AffineFundamental* F, double blur, double highpass, const LsmOptions* base,
+                         const SizeSampleRuns& runs) {
+  if (runs.idx.empty()) {
+    refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, blur, highpass, o.progress, false, 0, base);
+    return;
+  }
+  std::vector<char> sampled(recs.size(), 0);
+  for (size_t k = 0; k < runs.idx.size(); ++k) {
+    Rec r = runs.chosen[k];
+    if (base && failed_on_content(r.status) && runs.base[k].ok) r = runs.base[k], r.at_base = true;
+    recs[runs.idx[k]] = r;
+    sampled[runs.idx[k]] = 1;
+  }
+  std::vector<size_t> rest;
+  for (size_t j = 0; j < recs.size(); ++j)
+    if (!sampled[j]) rest.push_back(j);
+  if (rest.empty()) return;
+  std::vector<Rec> sub;
+  std::vector<Eigen::Matrix2d> subA;
+  for (size_t j : rest) sub.push_back(recs[j]), subA.push_back(A0[j]);
+  refine_records(px, sub, subA, lsm, o, F, o.ransac_threshold, blur, highpass, o.progress, false, 0, base);
+  for (size_t i = 0; i < rest.size(); ++i) recs[rest[i]] = sub[i];
 }
 
 // 5a. The relative blur of the two images (relative_blur.hpp): o.blur when given, else estimated on up to
@@ -872,13 +914,13 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     st.highpass = choose_pair_highpass(epx, recs, A0, lsm, o, F, st.blur.sigma);
     st.shape = choose_pair_shape(epx, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
     lsm.quadratic = st.shape.quadratic;
-    st.size = choose_pair_size(epx, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
+    SizeSampleRuns runs;
+    st.size = choose_pair_size(epx, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma, runs);
     const LsmOptions base = lsm;
     lsm.taper = st.size.size.taper, lsm.window = st.size.size.window;
     const bool larger = lsm.window != base.window || lsm.taper != base.taper;
     lsm.quadratic = st.size.size.quadratic;
-    refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, st.blur.sigma, st.highpass.sigma, o.progress, false, 0,
-                   larger ? &base : nullptr);
+    refine_pair_records(px, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma, larger ? &base : nullptr, runs);
     retry_failed_records(px, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
   }
   lap(st.seconds[3]);
