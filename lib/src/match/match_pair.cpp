@@ -564,21 +564,25 @@ ShapeChoice choose_pair_shape(const RefinePixels& px, const std::vector<Rec>& re
   return sc;
 }
 
-// 5d. The window's size (PairMatchOptions::choose_size, window_size.hpp): the high-pass estimate's sample
-// refined at lsm's size and at the larger candidates, the differences compared along and across the
-// verified epipolar geometry's lines. Only for the affine model: the quadratic one is chosen where the map
-// curves within the base window already, and it sizes its own last stage (lsm_refine.hpp, adaptive).
-// Figures (tp-synth truth, triplets' views 2+3 median / p90 px; real pairs, RMS distance to the RPC
-// epipolar curves with an affine bias per image removed, px): relief 15 m 0.0212 / 0.0557 -> 0.0156 /
-// 0.0382 (taper 5) or 0.0153 / 0.0377 (taper 7); buildings (ratio 1.44 and 1.67) 0.034 / 0.154 at the base,
-// 0.048 / 0.236 at taper 5; La Reunion 0.230 -> 0.149 (ratio 0.94 at taper 7); Marseille 1-3 0.159 ->
-// 0.107 (1.22 at taper 5).
 // The sample's refinements at the size chosen and at the base, kept for the refinement of every record
 // (refine_pair_records): on a pair of at most kSizeSample matches the choice has refined them all already.
 struct SizeSampleRuns {
   std::vector<size_t> idx;  // the sampled records
   std::vector<Rec> chosen, base;
 };
+
+// 5d. The window's size (PairMatchOptions::choose_size, window_size.hpp): up to kSizeSample records
+// refined at lsm's size and at the larger candidates (affine, then quadratic, at each size), the
+// differences compared along and across the verified epipolar geometry's lines. Only where the base
+// window is affine: the quadratic one is chosen where the map curves within the base window already, and
+// it sizes its own last stage (lsm_refine.hpp, adaptive). Figures (tp-synth truth, triplets' views 2+3
+// median / p90 px; real pairs, RMS distance to the RPC epipolar curves with an affine bias per image
+// removed, px): relief 15 m 0.0212 / 0.0557 -> 0.0156 / 0.0382 (taper 5 and 7 quadratic); the building
+// scene keeps the base (pairs at taper 5 affine: ratios 2.02, 1.34, 1.56, truth 0.066, 0.090, 0.062 px
+// against 0.041, 0.048, 0.039); La Reunion 0.230 -> 0.163 (taper 7 quadratic, ratio 0.95); Marseille's
+// triplet ML RMSE 0.119 -> 0.097. The Jacksonville block's ground points against the lidar are no
+// better for it (flat ground 0.335 -> 0.347 m from the pairwise tracks): the quadratic model's noise
+// along the epipolar lines, which the comparison with the noisier base does not show.
 WindowSizeChoice choose_pair_size(const RefinePixels& px, const std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                                   const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double blur,
                                   double highpass, SizeSampleRuns& runs) {
