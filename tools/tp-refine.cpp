@@ -138,8 +138,8 @@ int main(int argc, char** argv) {
         app.add_option("--rpc", o->rpc, "IMAGE=FILE: the RPC model of IMAGE from FILE (repeatable)");
         app.add_option("--bias", o->bias, "bias of each image estimated from the tracks: shift, drift or affine");
         app.add_option("--reference", o->reference, "image whose bias is zero (default: the tracks' first)");
-        CLI::Option* window = app.add_option("--window", o->lsm.window, "template block, pixels (odd; default 29, 21 where a track loses views)");
-        CLI::Option* taper = app.add_option("--taper", o->lsm.taper, "Gaussian weight of the window's pixels, pixels (default 5, 3 where a track loses views)")->check(tpkit::Positive);
+        CLI::Option* window = app.add_option("--window", o->lsm.window, "template block, pixels (odd; default: chosen on a sample of the tracks, 29 or 21; given, used alone)");
+        CLI::Option* taper = app.add_option("--taper", o->lsm.taper, "Gaussian weight of the window's pixels, pixels (default: chosen, 5 or 3; given, used alone)")->check(tpkit::Positive);
         app.add_option("--model-sigma", o->model_sigma, "prior deviation of a view from the models, pixels (0: hard constraint; auto: each image's bias fit residual)");
         app.add_flag("--no-extend", o->no_extend, "refine only the views each track has (default: also those in the images it lacks, where its ground point projects inside them)");
         app.add_flag("--no-curvature", o->no_curvature, "a planar surface under each window (3 unknowns, not 6)");
