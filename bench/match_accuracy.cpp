@@ -20,7 +20,7 @@
 //       whose error is below 1 px (a wrong match is an outlier, not an imprecise position: no sigma predicts it);
 //       with --multi also over the non-template views the multi-image LSM refined. --sigma-scale K, --sigma-floor F:
 //       the calibration of the sigma (LsmOptions; 1 and 0 print the normal equations' own);
-//       --mask K: the residual mask (LsmOptions::mask_k, 0 = off).
+//       --mask K: the residual mask (LsmOptions::mask_k, 0 = off); --mask-fit K: the fit's own (mask_fit_k, 0 = off).
 //       --dump FILE: one row per refined match with truth: pair, x1 y1, refined and raw error (x, y), and
 //       the true local map's Jacobian and Hessians (central differences, 1 px) for error analysis.
 //       --multi: then the triplets refined by multi-image LSM (tp-refine's library: multi_image_lsm.hpp,
@@ -297,7 +297,8 @@ int main(int argc, char** argv) {
     int adaptive = -1, sit = -1, epic = -1;
     double stol = -1, min_corr = -2, max_sigma = -1, contrast = -1;
     double sigma_scale = -1, sigma_floor = -1, mask_k = -1;
-    bool deciles = false, mask_fit = false;
+    bool deciles = false;
+    double mask_fit = -1;
     int sandwich = -1;
     std::optional<double> nodata;
     std::string score;
@@ -354,7 +355,7 @@ int main(int argc, char** argv) {
       else if (a == "--sigma-scale") need(1), sigma_scale = num();
       else if (a == "--sigma-floor") need(1), sigma_floor = num();
       else if (a == "--mask") need(1), mask_k = num();
-      else if (a == "--mask-fit") mask_fit = true;
+      else if (a == "--mask-fit") need(1), mask_fit = num();
       else if (a == "--sigma-sandwich") need(1), sandwich = whole();
       else if (a == "--nodata") need(1), nodata = num();
       else if (a == "--multi") multi = true;
@@ -445,7 +446,7 @@ int main(int argc, char** argv) {
       if (sigma_scale > 0) po.lsm.sigma_scale = sigma_scale;
       if (sigma_floor >= 0) po.lsm.sigma_floor = sigma_floor;
       if (mask_k >= 0) po.lsm.mask_k = mask_k;
-      po.lsm.mask_fit = mask_fit;
+      if (mask_fit >= 0) po.lsm.mask_fit_k = mask_fit;
       if (sandwich >= 0) po.lsm.sigma_sandwich = sandwich != 0;
       std::vector<std::pair<double, double>> sig_err;  // refined matches: (sigma, squared error per coordinate)
       const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};

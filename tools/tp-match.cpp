@@ -187,6 +187,9 @@ int main(int argc, char** argv) {
         app.add_option("--residual-mask", o->p.lsm.mask_k,
                        "LSM: pixels whose residual exceeds K robust sigmas are left out of the correlation (0 = off)")
             ->check(tpkit::NonNegative);
+        app.add_option("--fit-mask", o->p.lsm.mask_fit_k,
+                       "LSM: pixels whose residual exceeds K robust sigmas lose their weight in the fit (default 4; 0 = off)")
+            ->check(tpkit::NonNegative);
         app.add_option("--sigma-scale", o->p.lsm.sigma_scale, "LSM sigma calibration: factor on the normal equations' sigma")
             ->check(tpkit::Positive);
         app.add_option("--sigma-floor", o->p.lsm.sigma_floor, "LSM sigma calibration: floor added in quadrature, pixels")

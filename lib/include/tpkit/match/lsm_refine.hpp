@@ -37,7 +37,8 @@
 // pair_lsm_options: x 3.5, set on tp-synth truth). sigma_fit keeps the uncalibrated value.
 // Residual mask (mask_k > 0): the final correlation is also measured over the window's pixels whose
 // residual is within mask_k x 1.4826 x median |residual| (corr_inliers, inlier_share), and the
-// acceptance tests that one; with mask_fit the pixels beyond it also lose their weight in the fit.
+// acceptance tests that one. With mask_fit_k > 0 the pixels whose residual exceeds mask_fit_k x 1.4826 x
+// median |residual| lose their weight in the fit (from the first L1 iteration on).
 // Arithmetic: the iterations interpolate image 2 in single precision (4 taps at a time) and build the
 // affine normal matrix in single precision, 4 pixels at a time (the covariance inverts it in double);
 // positions, residuals and the right-hand side J^T W r (which fixes the solution) are double. Results do
@@ -88,17 +89,19 @@ struct LsmOptions {
   // The interpolation of image 2 in the x86-64 baseline code even where the CPU has AVX2 (whose code
   // interpolates two pixels at a time, cpu_dispatch.hpp): the same values; for the tests that compare them.
   bool baseline_code = false;
-  // Residual mask (images of different dates: shadows that moved, cars, vegetation): from the first L1
-  // iteration on, a pixel whose residual exceeds mask_k x 1.4826 x the median |residual| of the support
-  // gets no weight, so the window leaves out what changed instead of moving the position to explain it.
-  // 0 = off. The final correlation is then also measured over the pixels kept (corr_inliers), and a
-  // window that keeps less than min_inliers of its pixels is rejected as low-correlation.
+  // Residual mask (images of different dates: shadows that moved, cars, vegetation): the final
+  // correlation is also measured over the pixels whose final residual is within mask_k x 1.4826 x the
+  // median |residual| of the support (corr_inliers), and a window that keeps less than min_inliers of its
+  // pixels is rejected as low-correlation. 0 = off.
   double mask_k = 0;
   double min_inliers = 0.5;
-  // false: the mask only measures (corr_inliers, inlier_share) and the fit keeps its L1 weights, which
-  // already bound what one pixel can pull (on synthetic windows with moved shadows, zero weights beyond
-  // the threshold moved the position no closer to the truth than L1's 1/|r|).
-  bool mask_fit = false;
+  // The fit's own mask, > 0: from the first L1 iteration on, a pixel whose residual exceeds mask_fit_k x
+  // 1.4826 x the median |residual| of the support gets no weight, so the window leaves out what the map
+  // cannot follow (a wall's face seen from one side only, a roof edge's occlusion, a changed patch)
+  // instead of bending the position to explain it; L1's weights taper / |r| bound one pixel's pull but
+  // not a block's. 0 = off (the L1 weights alone). Too tight a threshold takes good texture out: its
+  // residuals are the largest where the gradient is (match_pair.hpp's pair_lsm_options: the figures).
+  double mask_fit_k = 0;
   // Sigma that predicts the error: sigma = sqrt((sigma_scale x s)^2 + sigma_floor^2), s the normal
   // equations' standard deviation (which counts the residuals as independent, while neighbouring
   // pixels of a sampled, interpolated image are not, and counts no model error). 1 and 0 = s itself.

@@ -38,15 +38,20 @@ namespace tpkit {
 
 // The refinement's settings for a pair (lsm_refine.hpp's defaults, and): the residual mask measures the
 // correlation over the pixels that did not change between the dates (3 robust sigmas, at least half the
-// window kept); the sigma is the sandwich covariance of the taper-weighted fit times 3.5, the factor that
-// makes it predict the error on tp-synth truth (default scene, every decile of sigma but the last, which
-// holds the wrong matches: error / sigma 0.79..1.17; La Reunion pair, distance to the RPC epipolar curves:
-// 0.77..1.27); a refinement is accepted where that sigma is at most 1 px: on the Jacksonville pair 001-004
+// window kept); the fit leaves out the pixels beyond 4 robust sigmas (tp-synth truth, triplets' views 2+3
+// median / p90: building scene 0.034 / 0.154 -> 0.032 / 0.143 px, default scene 0.030 / 0.087 -> 0.029 /
+// 0.082, relief 15 m 0.0156 / 0.0382 -> 0.0157 / 0.0392; Marseille's triplet ML fit 0.097 -> 0.087 px, its
+// pairs' medians to the RPC epipolar curves unchanged, at 3 the pair 1-3's grew by 9%); the sigma is the
+// sandwich covariance of the taper-weighted fit times 3.5, the factor that makes it predict the error on
+// tp-synth truth (default scene, every decile of sigma but the last, which holds the wrong matches:
+// error / sigma 0.79..1.17, with the fit's mask 0.77..1.01; La Reunion pair, distance to the RPC epipolar
+// curves: 0.77..1.27); a refinement is accepted where that sigma is at most 1 px: on the Jacksonville pair 001-004
 // the refinements with sigma 0.5..1 px lie 0.60 px RMS from the RPC epipolar curves, the verified
 // matches whose refinement fails 0.81 px: the refined position is still the better one.
 inline LsmOptions pair_lsm_options() {
   LsmOptions l;
   l.mask_k = 3;
+  l.mask_fit_k = 4;
   l.min_inliers = 0.5;
   l.sigma_sandwich = true;
   l.sigma_scale = 3.5;
