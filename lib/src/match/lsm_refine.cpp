@@ -452,7 +452,7 @@ Sandwich sandwich_cov_support(Scratch& s, int m, double r1, double qs, double ex
 
 // Residual mask: the threshold k x 1.4826 x median |r| over the first m pixels (a robust scale of the
 // residuals, which a minority of changed pixels does not inflate; infinite when k <= 0: no mask), and
-// zero weight beyond it.
+// (mask_residuals) zero weight beyond a threshold.
 double mask_threshold(const Scratch& s, int m, double k, std::vector<double>& buf) {
   if (!(k > 0) || m < 8) return std::numeric_limits<double>::infinity();
   buf.resize(static_cast<size_t>(m));
@@ -649,7 +649,6 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   };
   // the quadratic stages have their own budget beyond the affine stage's max_iterations
   const int cap = o.max_iterations + (o.quadratic ? o.stage_iterations * (o.adaptive ? 2 : 1) : 0);
-  double mask_thr = std::numeric_limits<double>::infinity();  // the residual mask's threshold (LsmOptions::mask_k), from the final residuals
   thread_local std::vector<double> mask_buf;
   // the fit's mask (LsmOptions::mask_fit_k): its threshold from the residuals of the first L1 iteration of
   // each stage, kept for the stage (the median's selection took a fifth of the refinement's time when done
@@ -657,7 +656,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   // same: default scene, triplets' views 2+3 median / p90 0.0288 / 0.0817 px on every iteration, 0.0286 /
   // 0.0819 once per stage)
   double fit_thr = std::numeric_limits<double>::infinity();
-  int fit_age = 0;
+  bool fit_thr_due = true;  // at the stage's first L1 iteration
   for (; it < cap; ++it) {
     if (stage == 0 && it >= o.max_iterations) break;
     if (stage > 0 && it - stage_start >= o.stage_iterations) {
@@ -676,7 +675,10 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     else
       for (int k = 0; k < m; ++k) s.wt[k] = s.tap[k];
     if (o.mask_fit_k > 0 && it >= 2) {
-      if (fit_age++ == 0) fit_thr = mask_threshold(s, m, o.mask_fit_k, mask_buf);  // the stage's first L1 iteration
+      if (fit_thr_due) {
+        fit_thr = mask_threshold(s, m, o.mask_fit_k, mask_buf);
+        fit_thr_due = false;
+      }
       mask_residuals(s, m, fit_thr);
     }
     bool ok;
@@ -734,7 +736,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
         if (o.measure_curvature) cov_affine = sandwich_cov(8, th_eval(7)).cov();
         stage = 1;
         stage_start = it + 1;
-        fit_age = 0;
+        fit_thr_due = true;
         P = PQ;
         th_affine = th;
         continue;
@@ -749,7 +751,7 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
         if (std::abs(sg - sigma_t) > 0.25) {
           set_taper(sg);
           stage_start = it + 1;
-          fit_age = 0;
+          fit_thr_due = true;
           continue;
         }
       }
@@ -827,14 +829,8 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
     res.corr = sgg > 0 ? stg / std::sqrt(sgg * stt) : 0;
     res.corr_inliers = res.corr;
     res.inlier_share = 1;
-    if (o.mask_k > 0) {
-      // the threshold from the support's final residuals
-      std::vector<double>& b = mask_buf;
-      b.assign(s.r.begin(), s.r.begin() + m);
-      for (double& v : b) v = std::abs(v);
-      std::nth_element(b.begin(), b.begin() + m / 2, b.end());
-      mask_thr = o.mask_k * 1.4826 * std::max(b[static_cast<size_t>(m / 2)], 1e-6);
-    }
+    // the residual mask's threshold from the support's final residuals (infinite without one)
+    const double mask_thr = mask_threshold(s, m, o.mask_k, mask_buf);
     if (std::isfinite(mask_thr)) {
       // the same over the pixels within the mask's threshold (the whole window's residuals at the model
       // the correlation is measured at)
