@@ -181,6 +181,10 @@ int main(int argc, char** argv) {
         app.add_flag("--no-refine", o->no_refine, "keep raw SIFT positions");
         CLI::Option* window = app.add_option("--window", o->p.lsm.window, "LSM window size, pixels (odd; given, the size is not chosen)")->check(CLI::Range(5, 101));
         app.add_option("--retry-windows", o->retry_windows, "LSM windows, pixels, tried in turn where --window's refinement failed on its content (default 15,31,41; none: no retry)");
+        app.add_option("--size-recheck", o->p.recheck_quantile,
+                       "with a larger window size chosen: matches whose sigma there is above this quantile of the pair's, and those it failed on, "
+                       "refined again at the smaller sizes, the lowest sigma kept (default 0.9; 1 = none)")
+            ->check(CLI::Range(0.0, 1.0));
         app.add_option("--max-shift", o->p.lsm.max_shift, "reject refinements farther from SIFT, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->p.lsm.max_sigma, "reject refinements whose sigma is larger, pixels")->check(tpkit::Positive);
         app.add_option("--min-corr", o->p.lsm.min_corr, "reject refinements with a lower final correlation")->check(CLI::Range(-1.0, 1.0));

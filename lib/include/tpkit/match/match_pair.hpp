@@ -91,6 +91,11 @@ struct PairMatchOptions {
   // a verified epipolar geometry), or lsm's as given. With a larger size chosen, a record whose
   // refinement fails on its content there is refined again at the base size (the same acceptance).
   bool choose_size = true;
+  // With a larger size chosen, the records whose sigma there lies above this quantile of the pair's
+  // sigmas, and those it failed on (refined at the base instead, or not at all), are refined at each
+  // smaller size of window_size_candidates() (the base's shape model) and keep the one with the lowest
+  // sigma (match_pair.cpp, step 5f). 1 or more: none (a failed record still falls back to the base).
+  double recheck_quantile = 0.9;
   // Windows (odd, pixels) tried in turn where lsm.window's refinement failed on its content (drifted, low
   // correlation, imprecise, not converged, diverged, off the pair model); the first accepted with a sigma
   // within the median of the pair's first-window sigmas is kept. Empty:
@@ -147,7 +152,10 @@ struct PairMatchStats {
   HighpassChoice highpass;                     // the high-pass it used (radiometric_highpass.hpp)
   ShapeChoice shape;                           // the window's shape model it used (choose_pair_shape)
   WindowSizeChoice size;                       // the window's size it used (choose_pair_size)
-  long at_base_size = 0;                       // of the refined: at the base size after the chosen one failed
+  std::vector<WindowSize> smaller_sizes;       // the sizes below the chosen one (the base first; recheck_smaller_sizes)
+  std::vector<long> at_smaller;                // of the refined: at each of them
+  long rechecked = 0;                          // of those: the chosen size's sigma above recheck_sigma
+  double recheck_quantile = 0, recheck_sigma = 0;  // that quantile of the chosen size's sigmas, and its value
   bool no_parallax = false;                    // verified by a 2-D affine map: the views have no parallax
   bool overlap = true;                         // false: too few verified matches, zero records
 };
