@@ -445,9 +445,7 @@ Sandwich sandwich_cov_p2(Scratch& s, int m, double r1, double qs, double ex, dou
 // default scene, 0.85..1.16 over them all).
 template <int P>
 Sandwich sandwich_cov_support(Scratch& s, int m, double r1, double qs, double ex, double ey) {
-  thread_local std::vector<double> keep;
-  keep.assign(s.tap.begin(), s.tap.begin() + m);
-  return sandwich_cov_p2<P>(s, m, r1, qs, ex, ey, keep);
+  return sandwich_cov_p2<P>(s, m, r1, qs, ex, ey, s.tap);
 }
 
 // Residual mask: the threshold k x 1.4826 x median |r| over the first m pixels (a robust scale of the

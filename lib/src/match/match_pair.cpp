@@ -795,10 +795,7 @@ Matches assemble_matches(const std::vector<Rec>& recs, const PairMatchOptions& o
   for (const Rec& r : recs) {
     if (r.ok) {
       ++nref, st.retried += r.retried, st.rechecked += r.rechecked;
-      if (r.smaller >= 0) {
-        if (st.at_smaller.size() <= static_cast<size_t>(r.smaller)) st.at_smaller.resize(static_cast<size_t>(r.smaller) + 1, 0);
-        ++st.at_smaller[static_cast<size_t>(r.smaller)];
-      }
+      if (r.smaller >= 0) ++st.at_smaller.at(static_cast<size_t>(r.smaller));
     }
     else if (o.keep_unrefined) st.unrefined[static_cast<int>(r.status)]++;
     else st.dropped[static_cast<int>(r.status)]++;
@@ -889,7 +886,7 @@ std::string describe_shape(const ShapeChoice& c, const WindowSize& used, const P
 std::string describe_smaller_sizes(const PairMatchStats& st) {
   long n = 0;
   std::string by;
-  for (size_t k = 0; k < st.at_smaller.size() && k < st.smaller_sizes.size(); ++k) {
+  for (size_t k = 0; k < st.at_smaller.size(); ++k) {
     if (st.at_smaller[k] == 0) continue;
     n += st.at_smaller[k];
     by += std::string(by.empty() ? "" : ", ") + std::to_string(st.at_smaller[k]) + " at taper " + format_number(st.smaller_sizes[k].taper) +
@@ -1041,6 +1038,7 @@ Matches match_keypoints(const ImageSource& a, const ImageSource& b, Keypoints K1
     refine_pair_records(px, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma, larger ? &base : nullptr, runs);
     const std::vector<LsmOptions> smaller = smaller_sizes(lsm, base);
     for (const LsmOptions& l : smaller) st.smaller_sizes.push_back({l.taper, l.window, l.quadratic});
+    st.at_smaller.assign(smaller.size(), 0);
     recheck_smaller_sizes(px, recs, A0, smaller, o, F, st.blur.sigma, st.highpass.sigma, st);
     retry_failed_records(px, recs, A0, lsm, o, F, st.blur.sigma, st.highpass.sigma);
   }
