@@ -11,7 +11,7 @@
 //       is above MED / P90.
 //       --score FILE A B: instead, score any program's matches file of views A and B (1-based; e.g. COLMAP's
 //       through tp-convert --from colmap) against the truth: matches, correct (< 1 px), error median/p90.
-//       --min-corr R, --max-sigma PX: the LSM acceptance (tp-match's options); --size-recheck Q: tp-match's; --contrast C: the SIFT
+//       --min-corr R, --max-sigma PX: the LSM acceptance (tp-match's options); --size-recheck Q, --edge-share S: tp-match's; --contrast C: the SIFT
 //       contrast threshold (tp-match --contrast); --nodata V: grey level of
 //       invalid pixels (tp-synth --nodata-band writes 0).
 //       --sigma-deciles: also print, over the refined matches of the three pairs, the RMS error (per
@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
     int quad = -1;
     double cut = -1, tol = -1, tmin = -1, tmax = -1, cref = -1;
     int adaptive = -1, sit = -1, epic = -1;
-    double stol = -1, min_corr = -2, max_sigma = -1, contrast = -1, recheck = -1;
+    double stol = -1, min_corr = -2, max_sigma = -1, contrast = -1, recheck = -1, edge_share = -1;
     double sigma_scale = -1, sigma_floor = -1, mask_k = -1;
     bool deciles = false;
     double mask_fit = -1;
@@ -351,6 +351,7 @@ int main(int argc, char** argv) {
       else if (a == "--min-corr") need(1), min_corr = num();
       else if (a == "--max-sigma") need(1), max_sigma = num();
       else if (a == "--size-recheck") need(1), recheck = num();
+      else if (a == "--edge-share") need(1), edge_share = num();
       else if (a == "--contrast") need(1), contrast = num();
       else if (a == "--sigma-deciles") deciles = true;
       else if (a == "--sigma-scale") need(1), sigma_scale = num();
@@ -445,6 +446,7 @@ int main(int argc, char** argv) {
       if (contrast > 0) po.sift.contrast = contrast;
       if (max_sigma > 0) po.lsm.max_sigma = max_sigma;
       if (recheck >= 0) po.recheck_quantile = recheck;
+      if (edge_share >= 0) po.edge_share = edge_share;
       if (sigma_scale > 0) po.lsm.sigma_scale = sigma_scale;
       if (sigma_floor >= 0) po.lsm.sigma_floor = sigma_floor;
       if (mask_k >= 0) po.lsm.mask_k = mask_k;

@@ -185,6 +185,10 @@ int main(int argc, char** argv) {
                        "with a larger window size chosen: matches whose sigma there is above this quantile of the pair's, and those it failed on, "
                        "refined again at the smaller sizes, the lowest sigma kept (default 0.9; 1 = none)")
             ->check(CLI::Range(0.0, 1.0));
+        app.add_option("--edge-share", o->p.edge_share,
+                       "a keypoint whose windows all leave the image: its window cut to the pixels inside both images where they hold at least "
+                       "this share of the taper's weight (default 0.4; 0 = never)")
+            ->check(CLI::Range(0.0, 1.0));
         app.add_option("--max-shift", o->p.lsm.max_shift, "reject refinements farther from SIFT, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->p.lsm.max_sigma, "reject refinements whose sigma is larger, pixels")->check(tpkit::Positive);
         app.add_option("--min-corr", o->p.lsm.min_corr, "reject refinements with a lower final correlation")->check(CLI::Range(-1.0, 1.0));

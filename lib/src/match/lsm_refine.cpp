@@ -211,6 +211,7 @@ constexpr int kMaxP = 14;  // p2 (2), A (4), r0, r1, quadratic terms (6)
 struct Scratch {
   int w = -1;
   std::vector<int> oi, oj, or2;  // integer offsets from the centre pixel, and their squared radius
+  std::vector<int> ci, cj, cidx;  // a window cut at an image's edge: its pixels' offsets, their indices in oi
   std::vector<double> du, dv, t, tap, g, gx, gy, r, wt;
   std::vector<double> qx, qy;  // image 2's positions under the model being evaluated, local pixels
   std::vector<double> taper_u, taper_v;  // the taper's factors along u and v, by integer offset + h
@@ -222,7 +223,7 @@ struct Scratch {
     for (int k = 0; k < n; ++k) idx[k] = k;
     auto r2 = [&](int k) { return (k % w - h) * (k % w - h) + (k / w - h) * (k / w - h); };
     std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) { return r2(a) < r2(b); });
-    oi.resize(n), oj.resize(n), or2.resize(n);
+    oi.resize(n), oj.resize(n), or2.resize(n), ci.resize(n), cj.resize(n), cidx.resize(n);
     for (int k = 0; k < n; ++k) oi[k] = idx[k] % w - h, oj[k] = idx[k] / w - h, or2[k] = r2(idx[k]);
     for (auto* v : {&du, &dv, &t, &tap, &g, &gx, &gy, &r, &wt, &qx, &qy}) v->resize(n);
     taper_u.resize(w), taper_v.resize(w);
@@ -462,6 +463,42 @@ void mask_residuals(Scratch& s, int m, double thr) {
   for (int i = 0; i < m; ++i)
     if (std::abs(s.r[i]) > thr) s.wt[i] = 0;
 }
+// A window at an image's edge (LsmOptions::edge_share): the window's pixels inside image 1 whose image-2
+// position under (p2, A0) lies at least max_shift + 1 px inside the interpolation's bounds, copied in
+// order of radius to s.ci, s.cj (their indices in s.oi to s.cidx). Returns how many: all of the window's
+// (w^2) when the whole window lies within both images (then nothing is cut), 0 when those kept hold less
+// than edge_share of the support's taper weight.
+int cut_window_at_edges(Scratch& s, const Raster& img1, const Raster& img2, long cx, long cy, double fx, double fy,
+                        const Eigen::Vector2d& p2, const Eigen::Matrix2d& A0, const LsmOptions& o) {
+  const int n = static_cast<int>(s.oi.size());
+  const double margin = o.max_shift + 1;
+  // bicubic_local reads 1 pixel before and 2 after the position's floor
+  const double x_lo = 1 + margin, y_lo = 1 + margin, x_hi = img2.width - 2 - margin, y_hi = img2.height - 2 - margin;
+  const double ox = p2.x() - img2.x0, oy = p2.y() - img2.y0;
+  const double sg = o.taper, support = o.quadratic ? o.quadratic_support : o.support;
+  const int m = sg > 0 && support > 0 ? std::min(n, s.within(support * sg)) : n;
+  const double den = sg > 0 ? 1.0 / (2 * sg * sg) : 0.0;
+  int kept = 0;
+  bool whole = true;  // the window within both images as the refinement reads them (no margin)
+  double all = 0, inside = 0;
+  for (int k = 0; k < n; ++k) {
+    const long lx = cx + s.oi[k] - img1.x0, ly = cy + s.oj[k] - img1.y0;
+    const double u = s.oi[k] + fx, v = s.oj[k] + fy;
+    const double qx = ox + A0(0, 0) * u + A0(0, 1) * v, qy = oy + A0(1, 0) * u + A0(1, 1) * v;
+    const bool in1 = lx >= 0 && ly >= 0 && lx < img1.width && ly < img1.height;
+    const bool in = in1 && qx >= x_lo && qy >= y_lo && qx < x_hi && qy < y_hi;
+    whole = whole && in1 && qx >= 1 && qy >= 1 && qx < img2.width - 2 && qy < img2.height - 2;
+    if (k < m) {
+      const double t = std::exp(-(u * u + v * v) * den);
+      all += t;
+      inside += in ? t : 0.0;
+    }
+    if (in) s.ci[kept] = s.oi[k], s.cj[kept] = s.oj[k], s.cidx[kept] = k, ++kept;
+  }
+  if (kept == n || whole) return n;
+  return kept > 0 && inside >= o.edge_share * all ? kept : 0;
+}
+
 }  // namespace
 
 double lsm_curvature(const Eigen::Matrix<double, 6, 1>& H) {
@@ -479,21 +516,42 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   LsmResult res;
   res.p2 = p2;
   res.A = A0;
-  const int h = o.window / 2, w = 2 * h + 1, n = w * w;
+  const int h = o.window / 2, w = 2 * h + 1;
   thread_local Scratch s;
   s.prepare(w);
-  // template (fixed): image 1's own pixels around p1, no resampling; offsets d from p1 are fractional
   const long cx = std::lround(p1.x()), cy = std::lround(p1.y());
   const double fx = cx - p1.x(), fy = cy - p1.y();
+  // the window's pixels (n, in order of radius; oi oj their offsets, cidx their indices in s.oi when cut)
+  int n = w * w;
+  const int* oi = s.oi.data();
+  const int* oj = s.oj.data();
+  bool cut = false;
+  if (o.edge_share > 0) {
+    const int kept = cut_window_at_edges(s, img1, img2, cx, cy, fx, fy, p2, A0, o);
+    if (kept == 0) {
+      res.status = LsmStatus::OutOfImage;
+      return res;
+    }
+    if (kept < n) {
+      n = kept, cut = true;
+      oi = s.ci.data(), oj = s.cj.data();
+    }
+  }
+  // the number of the window's pixels within `radius` of its centre pixel
+  auto within = [&](double radius) {
+    const int k = s.within(radius);
+    return cut ? static_cast<int>(std::lower_bound(s.cidx.begin(), s.cidx.begin() + n, k) - s.cidx.begin()) : k;
+  };
+  // template (fixed): image 1's own pixels around p1, no resampling; offsets d from p1 are fractional
   for (int k = 0; k < n; ++k) {
-    const long X = cx + s.oi[k], Y = cy + s.oj[k];
+    const long X = cx + oi[k], Y = cy + oj[k];
     const long lx = X - img1.x0, ly = Y - img1.y0;
     if (lx < 0 || ly < 0 || lx >= img1.width || ly >= img1.height) {
       res.status = LsmStatus::OutOfImage;
       return res;
     }
-    s.du[k] = s.oi[k] + fx;
-    s.dv[k] = s.oj[k] + fy;
+    s.du[k] = oi[k] + fx;
+    s.dv[k] = oj[k] + fy;
     s.t[k] = img1.at(lx, ly);
     if (std::isnan(s.t[k])) {
       res.status = LsmStatus::Invalid;
@@ -514,14 +572,14 @@ LsmResult lsm_refine(const Raster& img1, const Raster& img2, const Eigen::Vector
   auto set_taper = [&](double sg) {
     sigma_t = sg;
     const double support = o.quadratic ? o.quadratic_support : o.support;
-    m = sg > 0 && support > 0 ? std::min(n, s.within(support * sg)) : n;
+    m = sg > 0 && support > 0 ? std::min(n, within(support * sg)) : n;
     const double den = sg > 0 ? 1.0 / (2 * sg * sg) : 0.0;
     // the Gaussian is separable: 2 w exponentials instead of one a pixel
     for (int i = -h; i <= h; ++i) {
       s.taper_u[i + h] = sg > 0 ? std::exp(-(i + fx) * (i + fx) * den) : 1.0;
       s.taper_v[i + h] = sg > 0 ? std::exp(-(i + fy) * (i + fy) * den) : 1.0;
     }
-    for (int k = 0; k < m; ++k) s.tap[k] = s.taper_u[s.oi[k] + h] * s.taper_v[s.oj[k] + h];
+    for (int k = 0; k < m; ++k) s.tap[k] = s.taper_u[oi[k] + h] * s.taper_v[oj[k] + h];
   };
   set_taper(o.taper);
 

@@ -172,6 +172,7 @@ struct Rec {
   // pair's upper tail (recheck_smaller_sizes)
   int smaller = -1;
   bool rechecked = false;  // of those: the pair's size had been accepted, with a sigma in the upper tail
+  bool at_edge = false;    // refined with its window cut at an image's edge (PairMatchOptions::edge_share)
   double curvature_chi2 = NAN;  // LsmResult::curvature_chi2 (the shape estimate's sample)
 };
 
@@ -312,11 +313,13 @@ bool failed_on_content(LsmStatus s) {
 // `max_residual` pixels (R^4) from the verified pair model is rejected (OffEpipolar): the keypoint
 // match passed that test, so the refinement moved it off the geometry.
 // With `base` (a larger size chosen: choose_pair_size), a record whose refinement at lsm's size fails on
-// its content is refined again at base's (a change between the dates inside the larger window).
+// its content is refined again at base's (a change between the dates inside the larger window). With
+// `cut_edges` (the final pass, not the estimates' samples), a record whose windows all leave the image
+// gets lsm's window cut to its pixels inside both images (PairMatchOptions::edge_share).
 void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::vector<Eigen::Matrix2d>& A0,
                     const LsmOptions& lsm, const PairMatchOptions& o, const AffineFundamental* F, double max_residual,
                     double blur, double highpass, bool progress, bool per_record = false, double retry_max_sigma = 0,
-                    const LsmOptions* base = nullptr) {
+                    const LsmOptions* base = nullptr, bool cut_edges = false) {
   const bool retry = retry_max_sigma > 0;
   // the blur's and the local mean's support (3 sigma) join the regions so that the windows see full kernels
   const double eh = highpass > 0 ? std::ceil(3 * highpass) : 0;
@@ -363,6 +366,18 @@ void refine_records(const RefinePixels& px, std::vector<Rec>& recs, const std::v
           if (!(L.status == LsmStatus::OutOfImage || L.status == LsmStatus::Invalid) || win >= lsm.window) continue;
           L = attempt(win);
         }
+        // a keypoint within a few pixels of an edge: the pair's window cut to its pixels inside both images,
+        // then, where it failed and a larger size was chosen, the base's
+        if (L.status == LsmStatus::OutOfImage && cut_edges && o.edge_share > 0)
+          for (const LsmOptions* size : {&lsm, base}) {
+            if (!size || (size == base && L.ok())) continue;
+            LsmOptions cut = *size;
+            cut.edge_share = o.edge_share;
+            const LsmResult Lc = attempt(size->window, &cut);
+            if (Lc.status == LsmStatus::OutOfImage) continue;
+            L = Lc, r.at_edge = Lc.ok();
+            if (Lc.ok() && size == base) r.smaller = 0;
+          }
         if (base && failed_on_content(L.status)) {
           const LsmResult Lb = attempt(base->window, base);
           if (Lb.ok()) L = Lb, r.smaller = 0;
@@ -570,7 +585,7 @@ void recheck_smaller_sizes(const RefinePixels& px, std::vector<Rec>& recs, const
   if (sizes.empty() || !(o.recheck_quantile < 1)) return;
   std::vector<double> sig;
   for (const Rec& r : recs)
-    if (r.ok && r.smaller < 0 && !r.retried) sig.push_back(r.sigma);
+    if (r.ok && r.smaller < 0 && !r.retried && !r.at_edge) sig.push_back(r.sigma);
   double thr = INFINITY;  // too few to take a quantile: only the failed records
   if (sig.size() >= 10) {
     const size_t k = std::min(sig.size() - 1, static_cast<size_t>(o.recheck_quantile * static_cast<double>(sig.size())));
@@ -583,7 +598,7 @@ void recheck_smaller_sizes(const RefinePixels& px, std::vector<Rec>& recs, const
   std::vector<size_t> from;
   for (size_t j = 0; j < recs.size(); ++j) {
     const Rec& r = recs[j];
-    if (r.retried) continue;
+    if (r.retried || r.at_edge) continue;
     if (r.ok && r.smaller < 0 && r.sigma > thr) idx.push_back(j), from.push_back(0);
     else if ((r.ok && r.smaller == 0) || (!r.ok && failed_on_content(r.status))) idx.push_back(j), from.push_back(1);
   }
@@ -708,12 +723,13 @@ void refine_pair_records(const RefinePixels& px, std::vector<Rec>& recs, const s
                          const PairMatchOptions& o, const AffineFundamental* F, double blur, double highpass, const LsmOptions* base,
                          const SizeSampleRuns& runs) {
   if (runs.idx.empty()) {
-    refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, blur, highpass, o.progress, false, 0, base);
+    refine_records(px, recs, A0, lsm, o, F, o.ransac_threshold, blur, highpass, o.progress, false, 0, base, true);
     return;
   }
   std::vector<char> sampled(recs.size(), 0);
   for (size_t k = 0; k < runs.idx.size(); ++k) {
     Rec r = runs.chosen[k];
+    if (r.status == LsmStatus::OutOfImage) continue;  // refined below, its window cut at the edge
     if (base && failed_on_content(r.status) && runs.base[k].ok) r = runs.base[k], r.smaller = 0;
     recs[runs.idx[k]] = r;
     sampled[runs.idx[k]] = 1;
@@ -725,7 +741,7 @@ void refine_pair_records(const RefinePixels& px, std::vector<Rec>& recs, const s
   std::vector<Rec> sub;
   std::vector<Eigen::Matrix2d> subA;
   for (size_t j : rest) sub.push_back(recs[j]), subA.push_back(A0[j]);
-  refine_records(px, sub, subA, lsm, o, F, o.ransac_threshold, blur, highpass, o.progress, false, 0, base);
+  refine_records(px, sub, subA, lsm, o, F, o.ransac_threshold, blur, highpass, o.progress, false, 0, base, true);
   for (size_t i = 0; i < rest.size(); ++i) recs[rest[i]] = sub[i];
 }
 
@@ -794,7 +810,7 @@ Matches assemble_matches(const std::vector<Rec>& recs, const PairMatchOptions& o
   long nref = 0;
   for (const Rec& r : recs) {
     if (r.ok) {
-      ++nref, st.retried += r.retried, st.rechecked += r.rechecked;
+      ++nref, st.retried += r.retried, st.rechecked += r.rechecked, st.at_edge += r.at_edge;
       if (r.smaller >= 0) ++st.at_smaller.at(static_cast<size_t>(r.smaller));
     }
     else if (o.keep_unrefined) st.unrefined[static_cast<int>(r.status)]++;
@@ -927,7 +943,10 @@ void describe_run(Matches& M, const ImageSource& a, const ImageSource& b, const 
                                        (st.size.size.quadratic ? std::string(" quadratic") + (lsm_epipolar ? " (along the epipolar lines)" : "") : "") +
                                        ": " + std::to_string(st.refined) + " converged" +
                                        describe_smaller_sizes(st) +
-                                       (st.retried > 0 ? " (" + std::to_string(st.retried) + " at a retry window: " + retry_list(o.retry_windows) + " px)" : ""));
+                                       (st.retried > 0 ? " (" + std::to_string(st.retried) + " at a retry window: " + retry_list(o.retry_windows) + " px)" : "") +
+                                       (st.at_edge > 0 ? " (" + std::to_string(st.at_edge) + " at an image's edge, the window cut to its pixels inside: edge share " +
+                                                             format_number(o.edge_share) + ")"
+                                                       : ""));
     long nu = 0, nd = 0;
     for (int k = 0; k < kLsmStatusCount; ++k) nu += st.unrefined[k], nd += st.dropped[k];
     meta_set(M.meta, "unrefined", std::to_string(nu) + " kept at the keypoint position, refined 0, sigma " +

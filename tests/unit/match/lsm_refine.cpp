@@ -498,3 +498,60 @@ TEST(Lsm, SandwichSigmaFollowsTheError) {
     EXPECT_GT(sw.second, irls.second);
   }
 }
+
+// A keypoint within a few pixels of an image's edge (LsmOptions::edge_share): the window cut to its
+// pixels inside both images still recovers the true position; its sigma says that fewer pixels gave
+// it; a window inside both images is refined exactly as without the option; a corner, where less than
+// the share remains, is still out of the image.
+TEST(Lsm, WindowCutAtTheImageEdge) {
+  Texture tex(17);
+  const long S = 160;
+  const Eigen::Vector2d c(80, 80);
+  Eigen::Matrix2d B;
+  B << 1.03, 0.04, -0.02, 0.98;
+  const Eigen::Vector2d tshift(-6.4, -5.2);  // image 2's content moved: its edges are not image 1's
+  const Raster I1 = render(tex, S, Eigen::Matrix2d::Identity(), c, 300, 1000, 3.0, 1);
+  const Raster I2 = render(tex, S, B.inverse(), c + tshift, 260, 800, 3.0, 2);
+  LsmOptions plain;  // 21 px, taper 3
+  LsmOptions cut = plain;
+  cut.edge_share = 0.4;
+  auto truth_of = [&](const Eigen::Vector2d& p1) { return Eigen::Vector2d(c + tshift + B * (p1 - c)); };
+  auto start_of = [&](const Eigen::Vector2d& p1) { return Eigen::Vector2d(truth_of(p1) + Eigen::Vector2d(0.4, -0.3)); };
+  // 1 to 4 px from image 1's right and bottom edges, and from image 2's left and top edges
+  const std::vector<Eigen::Vector2d> edge = {{156.8, 60.4}, {157.6, 120.2}, {155.2, 30.9}, {100.3, 157.2},
+                                             {130.4, 158.1}, {11.9, 90.3}, {80.2, 7.9}, {40.5, 7.6}};
+  std::vector<double> err, sig_edge;
+  for (const Eigen::Vector2d& p1 : edge) {
+    const Eigen::Vector2d p2 = truth_of(p1);
+    ASSERT_LT(std::min({p1.minCoeff(), S - 1 - p1.maxCoeff(), p2.minCoeff(), S - 1 - p2.maxCoeff()}), 5.0) << p1.transpose();
+    ASSERT_GT(std::min({p1.minCoeff(), S - 1 - p1.maxCoeff(), p2.minCoeff(), S - 1 - p2.maxCoeff()}), 0.5) << p1.transpose();
+    EXPECT_EQ(lsm_refine(I1, I2, p1, start_of(p1), Eigen::Matrix2d::Identity(), plain).status, LsmStatus::OutOfImage);
+    const LsmResult r = lsm_refine(I1, I2, p1, start_of(p1), Eigen::Matrix2d::Identity(), cut);
+    ASSERT_TRUE(r.ok()) << p1.transpose() << ": " << to_string(r.status);
+    err.push_back((r.p2 - truth_of(p1)).norm());
+    sig_edge.push_back(r.sigma);
+  }
+  std::vector<double> sig_inside;
+  for (double px : {40.3, 80.6, 120.2})
+    for (double py : {40.7, 80.2, 120.5}) {
+      const Eigen::Vector2d p1(px, py);
+      const LsmResult a = lsm_refine(I1, I2, p1, start_of(p1), Eigen::Matrix2d::Identity(), plain);
+      const LsmResult b = lsm_refine(I1, I2, p1, start_of(p1), Eigen::Matrix2d::Identity(), cut);
+      ASSERT_TRUE(a.ok());
+      EXPECT_EQ(a.p2, b.p2);
+      EXPECT_EQ(a.sigma, b.sigma);
+      EXPECT_EQ(a.corr, b.corr);
+      sig_inside.push_back(a.sigma);
+    }
+  std::sort(err.begin(), err.end());
+  EXPECT_LT(err[err.size() / 2], 0.03);
+  EXPECT_LT(err.back(), 0.08);
+  std::sort(sig_edge.begin(), sig_edge.end());
+  std::sort(sig_inside.begin(), sig_inside.end());
+  std::printf("window cut at the edge: error median %.4f max %.4f px; median sigma %.4f, inside %.4f px\n", err[err.size() / 2], err.back(),
+              sig_edge[sig_edge.size() / 2], sig_inside[sig_inside.size() / 2]);
+  EXPECT_GT(sig_edge[sig_edge.size() / 2], 1.2 * sig_inside[sig_inside.size() / 2]);
+  // a corner keeps about a quarter of the taper's weight: below the share
+  const Eigen::Vector2d corner(158.6, 158.7);
+  EXPECT_EQ(lsm_refine(I1, I2, corner, start_of(corner), Eigen::Matrix2d::Identity(), cut).status, LsmStatus::OutOfImage);
+}

@@ -73,6 +73,12 @@ struct LsmOptions {
   // 0.0480 below).
   double support = 2.75;
   double quadratic_support = 3;
+  // A window that leaves an image (a match near its edge), > 0: the window is cut to its pixels inside
+  // both images (image 2's under the initial model A0, at least max_shift + 1 px inside its edge, so that
+  // the fit's moves keep them in) when those hold at least this share of the support's taper weight; the
+  // fit, its sigma and the correlation use them alone, and the sigma says what the fewer pixels give.
+  // 0: such a window fails as out-of-image. A window inside both images is refined the same either way.
+  double edge_share = 0;
   bool quadratic = false;   // second stage with a quadratic geometric model (after the affine converges)
   bool adaptive = true;     // third stage: quadratic with the taper chosen from the second stage's curvature
   // With quadratic: measure how significant the curvature is (LsmResult::curvature_chi2), when the first

@@ -101,6 +101,10 @@ struct PairMatchOptions {
   // within the median of the pair's first-window sigmas is kept. Empty:
   // none. Not where the window left the image (smaller windows 15 and 11 then, always).
   std::vector<int> retry_windows = {15, 31, 41};
+  // A keypoint so near an image's edge that even the 11 px window leaves the image: the pair's window cut
+  // to its pixels inside both images, where they hold at least this share of its taper's weight
+  // (LsmOptions::edge_share; 0 = never, the match stays unrefined as out-of-image).
+  double edge_share = 0.4;
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
   double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
   // Relative blur of the images before refinement (relative_blur.hpp: > 0 blurs image 1, < 0 image 2,
@@ -136,6 +140,7 @@ struct ShapeChoice {
 struct PairMatchStats {
   long keypoints1 = 0, keypoints2 = 0, putative = 0, verified = 0, gridded = 0, refined = 0;
   long retried = 0;  // of the refined: at a retry window (PairMatchOptions::retry_windows)
+  long at_edge = 0;  // of the refined: with the window cut at an image's edge (PairMatchOptions::edge_share)
   long in_window = 0;                          // of the gridded ones, those in PairMatchOptions::window (all without one)
   double ransac_rms = 0;
   bool cached1 = false, cached2 = false;       // keypoints read from the cache
