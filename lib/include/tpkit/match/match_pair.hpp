@@ -103,8 +103,12 @@ struct PairMatchOptions {
   std::vector<int> retry_windows = {15, 31, 41};
   // A keypoint so near an image's edge that even the 11 px window leaves the image: the pair's window cut
   // to its pixels inside both images, where they hold at least this share of its taper's weight
-  // (LsmOptions::edge_share; 0 = never, the match stays unrefined as out-of-image).
-  double edge_share = 0.4;
+  // (LsmOptions::edge_share; 0 = never, the match stays unrefined as out-of-image). Off by default: the
+  // pairs gain refined matches nearer the truth (tp-match(1)), but through tp-plan's block (tp-chain,
+  // tp-refine, rpc-adjust) the synthetic 12-view block's ground points lay 0.077 m NMAD from the true
+  // terrain at 0.4, 0.034 m without (docs/blocks.md's block; the edge views tp-refine cannot refine keep
+  // their pairwise positions at the pairs' small sigmas).
+  double edge_share = 0;
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
   double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
   // Relative blur of the images before refinement (relative_blur.hpp: > 0 blurs image 1, < 0 image 2,
