@@ -106,8 +106,8 @@ struct PairMatchOptions {
   // (LsmOptions::edge_share; 0 = never, the match stays unrefined as out-of-image). Off by default: the
   // pairs gain refined matches nearer the truth (tp-match(1)), but through tp-plan's block (tp-chain,
   // tp-refine, rpc-adjust) the synthetic 12-view block's ground points lay 0.077 m NMAD from the true
-  // terrain at 0.4, 0.034 m without (docs/blocks.md's block; the edge views tp-refine cannot refine keep
-  // their pairwise positions at the pairs' small sigmas).
+  // terrain at 0.4, 0.034 m without (docs/blocks.md's block). Not yet isolated; a likely cause: tp-refine's
+  // windows are not cut, so the edge views it cannot refine keep their pairwise positions.
   double edge_share = 0;
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
   double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
