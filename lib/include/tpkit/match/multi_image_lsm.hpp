@@ -163,8 +163,15 @@ Tracks refine_tracks(const Tracks& t, const std::vector<MultiLsmImage>& images, 
 // candidate whose accepted views scatter least across the models' epipolar directions from the template
 // (the median absolute deviation of their signed distances across them from each image pair's median,
 // pixels: the models' own error, mostly an offset per image pair, is common to every candidate and left
-// out) wins by choose_highpass's rule, each candidate gaining at least kTrackHighpassGain on the best before it.
-// images: unfiltered rasters. Spreads seen, unfiltered and at 1 px: one date (tp-synth's default scene,
+// out) wins when it scatters at least kTrackHighpassGain less than the best before it over the views both
+// runs accepted (same track, template and image): over the views each run accepted, the synthetic block
+// of docs/blocks.md went from 0.173 to 0.1645 px at 1 px (none chosen) and, with a few tracks more, from
+// 0.1741 to 0.1651 px (1 px chosen, its ground points then 0.077 m NMAD from the true terrain instead of
+// 0.034 m); over the views both accepted, 0.1406 -> 0.142 and 0.1403 -> 0.1423 px: no gain at all, the
+// difference was which views each run kept. The four Jacksonville crops of that page: 0.1104 -> 0.0919 px
+// at 1 px over 745 views, 0.0945 -> 0.0982 px at 2 px (1 px chosen, as before).
+// images: unfiltered rasters. Spreads seen earlier, each over the views its own run accepted, unfiltered
+// and at 1 px: one date (tp-synth's default scene,
 // the Marseille triplet, a biased tp-synth triplet) 0.011 / 0.021, 0.058 / 0.085, 0.027 / 0.033 px;
 // the Jacksonville crops of other dates, twelve 0.139 / 0.112 and four 0.118 / 0.107 px (9%: at tp-match's
 // 10% those four would keep none, and their ground points would lie 0.61 m NMAD from the lidar instead

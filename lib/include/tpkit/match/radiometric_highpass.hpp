@@ -38,6 +38,10 @@ struct HighpassChoice {
   double spread_none = 0;    // the spread without the high-pass
   std::vector<double> tried; // candidates evaluated besides 0, in order, and their spreads
   std::vector<double> tried_spread;
+  // where a candidate is compared with the best before it over the views both accepted
+  // (choose_track_highpass): that one's spread over them, and how many (empty otherwise)
+  std::vector<double> tried_reference;
+  std::vector<long> tried_common;
   long samples = 0;          // matches in the sample (set by the caller)
 };
 
