@@ -64,7 +64,7 @@ if [ "${PAIRS:-1}" != 0 ]; then
   colmap_time=$(awk -v a="$(seconds colmap/extract.time)" -v b="$(seconds colmap/match.time)" 'BEGIN {print a + b}')
   # COLMAP's image names are the files' names; tp-convert needs the images in the same order
   "$bin/tp-convert" --from colmap colmap.db --images "${images[@]}" -o colmap/matches -q
-  echo "== pairs: tp-match $tp_time s for $((n * (n - 1) / 2)) pairs; COLMAP $(colmap -h 2>&1 | grep -om1 'COLMAP [0-9.]*' || echo colmap) $colmap_time s (extraction + exhaustive matching), $threads threads"
+  echo "== pairs: tp-match $tp_time s for $((n * (n - 1) / 2)) pairs; COLMAP $({ colmap -h 2>&1 || true; } | grep -om1 'COLMAP [0-9.]*' || echo colmap) $colmap_time s (extraction + exhaustive matching), $threads threads"
   printf '%-8s %9s %8s %9s %9s | %8s %9s %9s | %s\n' pair verified refined rms_px med_px colmap rms_px med_px bars
   pass=0 total=0 sum_n=0 sum_ref=0 sum_c=0 min_share=100
   for ((i = 0; i < n; ++i)); do

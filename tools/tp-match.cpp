@@ -187,7 +187,7 @@ int main(int argc, char** argv) {
             ->check(CLI::Range(0.0, 1.0));
         app.add_option("--edge-share", o->p.edge_share,
                        "a keypoint whose windows all leave the image: its window cut to the pixels inside both images where they hold at least "
-                       "this share of the taper's weight (e.g. 0.4; default 0 = never)")
+                       "this share of the taper's weight (default 0.4; 0 = never)")
             ->check(CLI::Range(0.0, 1.0));
         app.add_option("--max-shift", o->p.lsm.max_shift, "reject refinements farther from SIFT, pixels")->check(tpkit::Positive);
         app.add_option("--max-sigma", o->p.lsm.max_sigma, "reject refinements whose sigma is larger, pixels")->check(tpkit::Positive);

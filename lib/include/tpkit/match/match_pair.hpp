@@ -103,14 +103,12 @@ struct PairMatchOptions {
   std::vector<int> retry_windows = {15, 31, 41};
   // A keypoint so near an image's edge that even the 11 px window leaves the image: the pair's window cut
   // to its pixels inside both images, where they hold at least this share of its taper's weight
-  // (LsmOptions::edge_share; 0 = never, the match stays unrefined as out-of-image). Off by default: the
-  // pairs gain refined matches nearer the truth (tp-match(1)), but through tp-plan's block the synthetic
-  // 12-view block of docs/blocks.md put its ground points 0.077 m NMAD from the true terrain at 0.4,
-  // 0.034 m without. The edge views are not what did it: the changed tracks moved tp-refine's high-pass
-  // estimate across its 5% rule (multi_image_lsm.hpp, kTrackHighpassGain: 0.173 -> 0.1645 px, none;
-  // 0.1741 -> 0.1651 px, 1 px), and with tp-refine --highpass 0 the block is level (0.0344 m, rpc-adjust
-  // 0.0554 px against 0.0551). Until that estimate stands on more than a 5% margin, off.
-  double edge_share = 0;
+  // (LsmOptions::edge_share; 0 = never, the match stays unrefined as out-of-image). Through tp-plan's
+  // block the synthetic 12-view block of docs/blocks.md keeps its accuracy against the true terrain
+  // (0.0344 m NMAD either way) once tp-refine's high-pass estimate compares its candidates over the same
+  // views (multi_image_lsm.hpp): over each run's own views, the changed tracks had moved it to 1 px and
+  // the block to 0.077 m.
+  double edge_share = 0.4;
   bool keep_unrefined = true;     // a verified match whose refinement is rejected stays at its keypoint position
   double unrefined_sigma = 0.5;   // pixels: the least sigma given to such a match
   // Relative blur of the images before refinement (relative_blur.hpp: > 0 blurs image 1, < 0 image 2,
