@@ -832,6 +832,22 @@ double across_spread(const std::vector<std::vector<SampledView>>& sample) {
   }
   return all.size() < 20 ? std::numeric_limits<double>::quiet_NaN() : median(all);
 }
+// The views two runs over the same sampled tracks both accepted (same track, template and image), as
+// two samples of the same shape: a's views and b's.
+std::pair<std::vector<std::vector<SampledView>>, std::vector<std::vector<SampledView>>> common_views(
+    const std::vector<std::vector<SampledView>>& a, const std::vector<std::vector<SampledView>>& b) {
+  std::vector<std::vector<SampledView>> ca(a.size()), cb(a.size());
+  for (size_t i = 0; i < a.size(); ++i)
+    for (const SampledView& u : a[i])
+      for (const SampledView& v : b[i])
+        if (u.tpl == v.tpl && u.image == v.image) ca[i].push_back(u), cb[i].push_back(v);
+  return {std::move(ca), std::move(cb)};
+}
+long count_views(const std::vector<std::vector<SampledView>>& s) {
+  long n = 0;
+  for (const auto& a : s) n += static_cast<long>(a.size());
+  return n;
+}
 }  // namespace
 
 HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsmImage>& images, const MultiLsmOptions& o, int threads,
@@ -858,21 +874,17 @@ HighpassChoice choose_track_highpass(const Tracks& t, const std::vector<MultiLsm
   // -> 0.077 m NMAD from the true terrain).
   HighpassChoice c;
   c.samples = static_cast<long>(rows.size());
+  c.paired_gain = kTrackHighpassGain;
   std::vector<std::vector<SampledView>> best = sample_at(0.0);
   c.spread_none = c.spread = across_spread(best);
   for (double sg : candidates) {
     const std::vector<std::vector<SampledView>> cand = sample_at(sg);
-    std::vector<std::vector<SampledView>> ca(rows.size()), cb(rows.size());
-    long common = 0;
-    for (size_t i = 0; i < rows.size(); ++i)
-      for (const SampledView& a : best[i])
-        for (const SampledView& b : cand[i])
-          if (a.tpl == b.tpl && a.image == b.image) ca[i].push_back(a), cb[i].push_back(b), ++common;
+    const auto [ca, cb] = common_views(best, cand);
     const double before = across_spread(ca), after = across_spread(cb);
     c.tried.push_back(sg);
     c.tried_spread.push_back(after);
     c.tried_reference.push_back(before);
-    c.tried_common.push_back(common);
+    c.tried_common.push_back(count_views(ca));
     if (!(std::isfinite(before) && std::isfinite(after) && after < (1 - kTrackHighpassGain) * before)) break;
     c.sigma = sg;
     c.spread = across_spread(cand);
@@ -897,16 +909,14 @@ WindowSizeChoice choose_track_size(const Tracks& t, const std::vector<MultiLsmIm
   tr.size = large;
   // the views refined at both sizes against the same template: their differences along and across
   std::vector<double> along, across;
-  std::vector<std::vector<SampledView>> cb(rows.size()), cl(rows.size());
+  const auto [cb, cl] = common_views(sb, sl);
   for (size_t i = 0; i < rows.size(); ++i)
-    for (const SampledView& a : sb[i])
-      for (const SampledView& b : sl[i])
-        if (a.tpl == b.tpl && a.image == b.image) {
-          const Vec2 d = b.xy - a.xy;
-          along.push_back(d.dot(a.e));
-          across.push_back(d.x() * a.e.y() - d.y() * a.e.x());
-          cb[i].push_back(a), cl[i].push_back(b);
-        }
+    for (size_t j = 0; j < cb[i].size(); ++j) {
+      const SampledView &a = cb[i][j], &b = cl[i][j];
+      const Vec2 d = b.xy - a.xy;
+      along.push_back(d.dot(a.e));
+      across.push_back(d.x() * a.e.y() - d.y() * a.e.x());
+    }
   tr.common = static_cast<long>(along.size());
   if (along.size() >= 20) {
     const double sa = robust_spread(along), sc = robust_spread(across);
@@ -927,18 +937,8 @@ void use_track_size(const WindowSizeChoice& c, MultiLsmOptions& o) {
 }
 
 std::string describe_track_highpass(const HighpassChoice& h, bool given) {
-  if (given || h.samples == 0 || h.tried_reference.size() != h.tried.size())
-    return describe_highpass_choice(h, "every image", given, "sampled tracks", "spread of their views across the models' epipolar directions",
-                                    "(not estimated: no tracks to sample)");
-  auto px = [](double v) { return std::isfinite(v) ? format_number(std::round(v * 1e4) / 1e4) : std::string("undefined"); };
-  std::string s = h.sigma > 0 ? "local mean (Gaussian of " + format_number(h.sigma) + " px) subtracted from every image before refinement"
-                              : std::string("none");
-  s += " (estimated on " + std::to_string(h.samples) + " sampled tracks: spread of their views across the models' epipolar directions " +
-       px(h.spread_none) + " px unfiltered";
-  for (size_t k = 0; k < h.tried.size(); ++k)
-    s += "; at " + format_number(h.tried[k]) + " px " + px(h.tried_reference[k]) + " -> " + px(h.tried_spread[k]) + " px over the " +
-         std::to_string(h.tried_common[k]) + " views both refined";
-  return s + "; kept where it falls by " + format_number(kTrackHighpassGain * 100) + "%)";
+  return describe_highpass_choice(h, "every image", given, "sampled tracks", "spread of their views across the models' epipolar directions",
+                                  "(not estimated: no tracks to sample)");
 }
 
 }  // namespace tpkit

@@ -78,7 +78,12 @@ std::string describe_highpass_choice(const HighpassChoice& h, const std::string&
   if (given) return s + " (--highpass)";
   if (h.samples == 0) return s + " " + not_estimated;
   s += " (estimated on " + std::to_string(h.samples) + " " + sampled + ": " + measure + " " + px(h.spread_none) + " unfiltered";
-  for (size_t k = 0; k < h.tried.size(); ++k) s += ", " + px(h.tried_spread[k]) + " at " + format_number(h.tried[k]) + " px";
+  const bool paired = h.tried_reference.size() == h.tried.size() && h.tried_common.size() == h.tried.size() && !h.tried.empty();
+  for (size_t k = 0; k < h.tried.size(); ++k)
+    s += paired ? "; at " + format_number(h.tried[k]) + " px " + px(h.tried_reference[k]) + " -> " + px(h.tried_spread[k]) + " over the " +
+                      std::to_string(h.tried_common[k]) + " views both refined"
+                : ", " + px(h.tried_spread[k]) + " at " + format_number(h.tried[k]) + " px";
+  if (paired) s += "; kept where it falls by " + format_number(h.paired_gain * 100) + "%";
   return s + ")";
 }
 

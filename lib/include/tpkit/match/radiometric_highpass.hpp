@@ -39,9 +39,11 @@ struct HighpassChoice {
   std::vector<double> tried; // candidates evaluated besides 0, in order, and their spreads
   std::vector<double> tried_spread;
   // where a candidate is compared with the best before it over the views both accepted
-  // (choose_track_highpass): that one's spread over them, and how many (empty otherwise)
+  // (choose_track_highpass): that one's spread over them, and how many (empty otherwise), and the
+  // relative gain a candidate needed
   std::vector<double> tried_reference;
   std::vector<long> tried_common;
+  double paired_gain = 0;
   long samples = 0;          // matches in the sample (set by the caller)
 };
 
