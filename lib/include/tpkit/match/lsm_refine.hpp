@@ -58,7 +58,7 @@ struct LsmOptions {
   double tolerance = 5e-3;  // pixels, on the update of p2
   // Acceptance of the refined position, by what the fit measures (a rejected refinement is not a lost
   // match: match_keypoints keeps the verified keypoint position, unrefined and marked):
-  double max_shift = 1.5;   // pixels: reject when p2 ends farther than this from its initial value
+  double max_shift = 2.5;   // pixels: reject when p2 ends farther than this from its initial value
   double max_sigma = 0.15;  // pixels: reject when the position's precision from the normal equations is worse
   double min_corr = 0.5;    // reject when the final normalised cross-correlation (the radiometric fit) is lower
   bool l1 = true;           // robust L1 (IRLS); false: plain least squares
